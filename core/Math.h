@@ -1,0 +1,54 @@
+// Vector types and small geometric helpers shared by every module.
+//
+// CPU geometry is double precision (glm::dvec3): irradiance near a light, at
+// grazing angles and at scales from 1e-3 to 1e5 needs it. Only what goes to
+// the GPU is converted to float, after being made relative to a nearby origin.
+#pragma once
+
+#include <glm/glm.hpp>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ml {
+
+using Vec2 = glm::dvec2;
+using Vec3 = glm::dvec3;
+using Vec4 = glm::dvec4;
+using Mat3 = glm::dmat3;
+using Mat4 = glm::dmat4;
+using Rgb = glm::dvec3;  // linear RGB; radiance in W·sr⁻¹·m⁻², irradiance in W·m⁻²
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+inline bool isFinite(const Vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// Axis-aligned bounding box; empty when lo > hi.
+struct Bounds3 {
+    Vec3 lo{kInf};
+    Vec3 hi{-kInf};
+
+    void extend(const Vec3& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+    void extend(const Bounds3& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+    bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+    Vec3 center() const { return 0.5 * (lo + hi); }
+    Vec3 extent() const { return empty() ? Vec3(0.0) : hi - lo; }
+    double diagonal() const { return glm::length(extent()); }
+};
+
+// An orthonormal basis (t, b, n) around a unit vector n (Duff et al. 2017).
+inline void orthonormalBasis(const Vec3& n, Vec3& t, Vec3& b) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double c = n.x * n.y * a;
+    t = Vec3(1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = Vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+// Luminance of linear Rec.709 RGB.
+inline double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
+
+}  // namespace ml
