@@ -1,4 +1,5 @@
 # Called by meshlight_embed_shaders in script mode.
+string(REPLACE "|" ";" FILES "${FILES}")
 set(h "// Generated from GLSL sources; do not edit.\n#pragma once\nnamespace ${NAMESPACE} {\n")
 set(cpp "// Generated from GLSL sources; do not edit.\nnamespace ${NAMESPACE} {\n")
 foreach(f ${FILES})

@@ -1,0 +1,204 @@
+#include "Image.h"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+#include <system_error>
+
+namespace ml {
+
+namespace fs = std::filesystem;
+
+ImageRgb::ImageRgb(int w, int h, const Rgb& fill) : width(w), height(h) {
+    ML_ASSERT(w >= 0 && h >= 0, "size ", w, "x", h);
+    data.resize(3 * pixelCount());
+    for (std::size_t i = 0; i < data.size(); i += 3) {
+        data[i] = float(fill.r);
+        data[i + 1] = float(fill.g);
+        data[i + 2] = float(fill.b);
+    }
+}
+
+ImageRgb boxDownsample(const ImageRgb& image, int factor) {
+    ML_ASSERT(factor >= 1 && image.width % factor == 0 && image.height % factor == 0,
+              "factor ", factor, " for ", image.width, "x", image.height);
+    ImageRgb out(image.width / factor, image.height / factor);
+    // Divide rather than multiply by 1/n: 1/n is inexact unless n is a power of two.
+    const double n = double(factor) * double(factor);
+    for (int y = 0; y < out.height; ++y) {
+        for (int x = 0; x < out.width; ++x) {
+            Rgb sum(0.0);
+            for (int dy = 0; dy < factor; ++dy)
+                for (int dx = 0; dx < factor; ++dx) sum += image.at(x * factor + dx, y * factor + dy);
+            out.set(x, y, sum / n);
+        }
+    }
+    return out;
+}
+
+namespace {
+
+const char* const kSupportedFormats = "use .exr, .hdr or .png";
+
+// The directory a file named by `path` lives in ("." for a bare file name).
+fs::path directoryOf(const std::string& path) {
+    const fs::path dir = fs::path(path).parent_path();
+    return dir.empty() ? fs::path(".") : dir;
+}
+
+void requireOutputDirectory(const std::string& path) {
+    const fs::path dir = directoryOf(path);
+    std::error_code ec;
+    if (!fs::exists(dir, ec))
+        throwInputError(SourceLocation{path}, "output directory '", dir.string(), "' does not exist");
+    if (!fs::is_directory(dir, ec))
+        throwInputError(SourceLocation{path}, "'", dir.string(), "' is not a directory");
+}
+
+// A temporary sibling of the target file. rename() within one directory is
+// atomic on POSIX, so readers of the target (and a crash mid-write) never see
+// a partial image; the destructor removes the temporary unless committed.
+class TempSibling {
+public:
+    explicit TempSibling(const std::string& target) : target_(target) {
+        // pid and a counter keep concurrent writers, in this process or
+        // another, from sharing a temporary.
+        static std::atomic<unsigned> counter{0};
+        const fs::path t(target);
+        path_ = directoryOf(target) /
+                concat(".", t.filename().string(), ".tmp-", ::getpid(), "-", counter++);
+    }
+    TempSibling(const TempSibling&) = delete;
+    TempSibling& operator=(const TempSibling&) = delete;
+    ~TempSibling() {
+        if (!committed_) {
+            std::error_code ignored;  // nothing useful to do if cleanup itself fails
+            fs::remove(path_, ignored);
+        }
+    }
+
+    const fs::path& path() const { return path_; }
+
+    void commit() {
+        std::error_code ec;
+        fs::rename(path_, target_, ec);
+        if (ec) throwInputError(SourceLocation{target_}, "cannot write: ", ec.message());
+        committed_ = true;
+    }
+
+private:
+    std::string target_;
+    fs::path path_;
+    bool committed_ = false;
+};
+
+// OpenImageIO plugin name of each format: the temporary's name has no
+// meaningful extension, so the writer is chosen explicitly.
+const char* oiioFormatName(ImageFormat format) {
+    switch (format) {
+        case ImageFormat::Exr: return "openexr";
+        case ImageFormat::Hdr: return "hdr";
+        case ImageFormat::Png: return "png";
+    }
+    throw std::logic_error(concat("unknown ImageFormat ", int(format)));
+}
+
+// Writes `pixels` (laid out as `spec`, of type `pixelType`) through a temporary.
+void writeAtomically(const std::string& path, ImageFormat format, const OIIO::ImageSpec& spec,
+                     OIIO::TypeDesc pixelType, const void* pixels) {
+    requireOutputDirectory(path);
+    TempSibling temp(path);
+    // Declared after `temp` so that the file is closed before it is removed.
+    auto out = OIIO::ImageOutput::create(oiioFormatName(format));
+    if (!out)
+        throwInputError(SourceLocation{path}, "no ", oiioFormatName(format),
+                        " writer: ", OIIO::geterror());
+    if (!out->open(temp.path().string(), spec) || !out->write_image(pixelType, pixels) ||
+        !out->close())
+        throwInputError(SourceLocation{path}, "cannot write: ", out->geterror());
+    temp.commit();
+}
+
+}  // namespace
+
+ImageFormat outputFormat(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    if (ext.empty())
+        throwInputError(SourceLocation{path}, "no extension to tell the output format (",
+                        kSupportedFormats, ")");
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".exr") return ImageFormat::Exr;
+    if (ext == ".hdr") return ImageFormat::Hdr;
+    if (ext == ".png") return ImageFormat::Png;
+    throwInputError(SourceLocation{path}, "unsupported output format '", ext, "' (",
+                    kSupportedFormats, ")");
+}
+
+void checkOutputPath(const std::string& path) {
+    outputFormat(path);
+    requireOutputDirectory(path);
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throwInputError(SourceLocation{path}, "is a directory");
+    // access() also reports read-only mounts; the effective/real uid
+    // distinction it ignores does not arise for a command-line renderer.
+    const fs::path dir = directoryOf(path);
+    if (::access(dir.c_str(), W_OK) != 0)
+        throwInputError(SourceLocation{path}, "output directory '", dir.string(),
+                        "' is not writable");
+}
+
+void writeImageLinear(const std::string& path, const ImageRgb& image) {
+    const ImageFormat format = outputFormat(path);
+    ML_ASSERT(format != ImageFormat::Png, "'", path, "' is 8-bit: tone map and use writeImage8");
+    ML_ASSERT(image.width > 0 && image.height > 0 && image.data.size() == 3 * image.pixelCount(),
+              image.width, "x", image.height, " image with ", image.data.size(), " floats");
+    // FLOAT rather than HALF: references and their comparisons need the
+    // renderer's full precision (half has 11 bits and overflows at 65504).
+    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
+    spec.attribute("oiio:ColorSpace", "Linear");
+    writeAtomically(path, format, spec, OIIO::TypeDesc::FLOAT, image.data.data());
+}
+
+void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, int width,
+                 int height) {
+    const ImageFormat format = outputFormat(path);
+    ML_ASSERT(format == ImageFormat::Png, "'", path, "' is linear: use writeImageLinear");
+    ML_ASSERT(width > 0 && height > 0 && rgb.size() == 3 * std::size_t(width) * std::size_t(height),
+              width, "x", height, " image with ", rgb.size(), " bytes");
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    writeAtomically(path, format, spec, OIIO::TypeDesc::UINT8, rgb.data());
+}
+
+ImageRgb readImageLinear(const std::string& path) {
+    const SourceLocation where{path};
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throwInputError(where, "cannot read image: ", OIIO::geterror());
+    const std::string format = in->format_name();
+    if (format != "openexr" && format != "hdr")
+        throwInputError(where, "is a ", format, " file; expected linear EXR or HDR");
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.nchannels < 3)
+        throwInputError(where, "has ", spec.nchannels, " channels; expected R, G, B");
+
+    ImageRgb image(spec.width, spec.height);
+    if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, image.data.data()))
+        throwInputError(where, "cannot read image: ", in->geterror());
+    for (std::size_t i = 0; i < image.data.size(); ++i) {
+        if (!std::isfinite(image.data[i])) {
+            const std::size_t pixel = i / 3;
+            throwInputError(where, "pixel (", pixel % std::size_t(image.width), ", ",
+                            pixel / std::size_t(image.width), ") is not finite");
+        }
+    }
+    return image;
+}
+
+}  // namespace ml

@@ -1,0 +1,530 @@
+#include "DirectLightSampler.h"
+
+#include "Jitter.h"
+#include "LightFrustum.h"
+#include "OccluderBvh.h"
+#include "core/Error.h"
+#include "core/reference/Lambert.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/gl/GlObjects.h"
+#include "meshlight_gpu_shaders.h"
+
+#include <chrono>
+
+namespace ml {
+
+DirectMethod parseDirectMethod(const std::string& name) {
+    if (name == "query") return DirectMethod::OcclusionQuery;
+    if (name == "regular") return DirectMethod::Regular;
+    if (name == "jittered") return DirectMethod::Jittered;
+    throw InputError(concat("unknown direct-light method '", name, "' (use query, regular or jittered)"));
+}
+
+const char* directMethodName(DirectMethod m) {
+    switch (m) {
+        case DirectMethod::OcclusionQuery: return "query";
+        case DirectMethod::Regular: return "regular";
+        case DirectMethod::Jittered: return "jittered";
+    }
+    return "?";
+}
+
+DirectEstimator parseDirectEstimator(const std::string& name) {
+    if (name == "plain") return DirectEstimator::Plain;
+    if (name == "cv") return DirectEstimator::ControlVariate;
+    throw InputError(concat("unknown estimator '", name, "' (use plain or cv)"));
+}
+
+const char* directEstimatorName(DirectEstimator e) {
+    return e == DirectEstimator::Plain ? "plain" : "cv";
+}
+
+void DirectSamplerSettings::validate() const {
+    if (imageSize < 4 || imageSize > 1024)
+        throw InputError(concat("image size ", imageSize, " is not in [4, 1024]"));
+    if (bits != 1 && bits != 4 && bits != 8 && bits != 16 && bits != 32)
+        throw InputError(concat("bits per pixel ", bits, " is not one of 1, 4, 8, 16, 32"));
+    if (!(maxHalfAngleDegrees > 10 && maxHalfAngleDegrees < 80))
+        throw InputError(concat("maximum half angle ", maxHalfAngleDegrees, " is not in (10, 80) degrees"));
+    if (!(eyeOffset > 0 && eyeOffset < 1e-2) || !(planeTolerance > 0 && planeTolerance < 1e-2))
+        throw InputError("eye offset and plane tolerance must be in (0, 1e-2) of the scene size");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// GPU triangle corner (std430 vec4): position relative to the buffer's
+// origin; w of a triangle's first corner holds the bits of 1 + the index of
+// the light the face belongs to (0 for non-emitters).
+struct Corner {
+    float x, y, z;
+    uint32_t lightId;
+};
+
+glm::mat4 toFloat(const Mat4& m) { return glm::mat4(m); }
+
+}  // namespace
+
+struct DirectLightSampler::Impl {
+    GlContext& context;
+    const GlApi& gl;
+    const Scene& scene;
+    DirectSamplerSettings settings;
+    bool phaseTiming = false;
+    DirectPhaseTimes times;
+
+    Vec3 origin;        // occluder positions are stored relative to this
+    double sceneSize;   // bounding diagonal
+    OccluderBvh bvh;
+    size_t maxLightTriangles = 0;
+
+    GlProgram coverage;
+    GlBuffer occluderBuffer, lightBuffer;
+    GlVertexArray emptyVao;  // vertices are pulled from the buffers
+    GlTexture visibleBits, lightBits, depth;
+    GlFramebuffer fbo;
+    GlQuery queryLight, queryVisible;
+    struct {
+        GLint clipFromLocal, lightPlane, nearPlane, pixelNdc, cullBackFaces, skipLightId, clipToLightPlane,
+            planeTolerance, seed, imageSize;
+    } loc{};
+
+    // Scratch, reused between samples.
+    std::vector<OccluderBvh::Range> ranges;
+    std::vector<GLint> firsts;
+    std::vector<GLsizei> counts;
+    std::vector<uint32_t> visiblePixels, lightPixels;
+    std::vector<Corner> lightCorners;
+
+    Impl(GlContext& ctx, const Scene& s, const DirectSamplerSettings& set)
+        : context(ctx), gl(ctx.gl()), scene(s), settings(set),
+          origin(s.bounds.center()), sceneSize(std::max(s.bounds.diagonal(), 1e-300)),
+          bvh(allTriangles(s)) {
+        settings.validate();
+        buildBuffers();
+        // One program variant per sampler: the bit count and jitter are
+        // compile-time constants of the fragment stage.
+        const bool jitterOn = settings.method == DirectMethod::Jittered;
+        const int bits = jitterOn ? settings.bits : 1;
+        int sx = 1, sy = 1;
+        jitter::strata(bits, sx, sy);
+        const std::string defines = concat("#define BITS ", bits, "\n#define STRATA_X ", sx,
+                                           "\n#define STRATA_Y ", sy, "\n#define JITTER ",
+                                           jitterOn ? "true" : "false", "\n");
+        coverage = GlProgram(gl, {
+            {GL_VERTEX_SHADER, "direct_coverage.vert", glslSource({shaders::direct_coverage_vert})},
+            {GL_FRAGMENT_SHADER, "direct_coverage.frag",
+             glslSource({defines.c_str(), shaders::common_jitter_glsl, shaders::direct_coverage_frag})},
+        });
+        const GlProgram& p = coverage;
+        loc = {p.uniform("uClipFromLocal"), p.uniform("uLightPlane"),     p.uniform("uNear"),
+               p.uniform("uPixelNdc"),      p.uniform("uCullBackFaces"),  p.uniform("uSkipLightId"),
+               p.uniform("uClipToLightPlane"), p.uniform("uPlaneTolerance"), p.uniform("uSeed"),
+               p.uniform("uImageSize")};
+        buildFramebuffer();
+        queryLight = makeQuery(gl, GL_SAMPLES_PASSED);
+        queryVisible = makeQuery(gl, GL_SAMPLES_PASSED);
+        checkGl(gl, "creating the direct-light sampler");
+    }
+
+    static std::vector<Triangle3> allTriangles(const Scene& s) {
+        std::vector<Triangle3> tris;
+        tris.reserve(s.triangleCount());
+        for (const Mesh& m : s.meshes)
+            for (size_t t = 0; t < m.triangles.size(); ++t) tris.push_back(m.triangle(t));
+        return tris;
+    }
+
+    void buildBuffers() {
+        // Which light (if any) each triangle belongs to, in scene order.
+        std::vector<uint32_t> lightOf;
+        std::vector<size_t> meshStart;
+        for (const Mesh& m : scene.meshes) {
+            meshStart.push_back(lightOf.size());
+            lightOf.resize(lightOf.size() + m.triangles.size(), 0);
+        }
+        for (size_t l = 0; l < scene.lights.size(); ++l) {
+            const AreaLight& light = scene.lights[l];
+            for (uint32_t t : light.triangles) lightOf[meshStart[light.mesh] + t] = uint32_t(l + 1);
+            maxLightTriangles = std::max(maxLightTriangles, light.triangles.size());
+        }
+        const std::vector<Triangle3> tris = allTriangles(scene);
+        std::vector<Corner> corners;
+        corners.reserve(tris.size() * 3);
+        for (uint32_t index : bvh.order()) {
+            for (const Vec3& p : tris[index]) {
+                const glm::vec3 r(p - origin);
+                corners.push_back({r.x, r.y, r.z, lightOf[index]});
+            }
+        }
+        occluderBuffer = makeBuffer(gl, std::max<size_t>(corners.size(), 1) * sizeof(Corner), corners.data());
+        lightBuffer = makeBuffer(gl, std::max<size_t>(maxLightTriangles * 3, 1) * sizeof(Corner), nullptr,
+                                 GL_STREAM_DRAW);
+        emptyVao = makeVertexArray(gl);
+    }
+
+    void buildFramebuffer() {
+        const int n = settings.imageSize;
+        visibleBits = makeTexture2D(gl, GL_R32UI, n, n);
+        lightBits = makeTexture2D(gl, GL_R32UI, n, n);
+        depth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, n, n);
+        GLuint f = 0;
+        gl.CreateFramebuffers(1, &f);
+        fbo = GlFramebuffer(gl, f);
+        gl.NamedFramebufferTexture(f, GL_COLOR_ATTACHMENT0, visibleBits.id(), 0);
+        gl.NamedFramebufferTexture(f, GL_COLOR_ATTACHMENT1, lightBits.id(), 0);
+        gl.NamedFramebufferTexture(f, GL_DEPTH_ATTACHMENT, depth.id(), 0);
+        const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+        gl.NamedFramebufferDrawBuffers(f, 2, buffers);
+        if (gl.CheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            throw std::runtime_error("direct-light sampler: framebuffer incomplete");
+        visiblePixels.resize(size_t(n) * n);
+        lightPixels.resize(size_t(n) * n);
+    }
+
+    // --- one sampling image -------------------------------------------------
+
+    struct ImageResult {
+        double lightWeight = 0;     // Σ weights of samples on the light
+        double occludedWeight = 0;  // Σ weights of those that are occluded
+        uint32_t lightSamples = 0, visibleSamples = 0;
+    };
+
+    // Off-axis projection with z_clip = near and w = d (reversed, infinite
+    // depth: z_ndc = near / d in [0, 1] with glClipControl zero-to-one).
+    static Mat4 projection(const SamplingFrustum& f, double nearDistance) {
+        const double a = 2.0 / (f.rightEdge - f.left), c = -(f.rightEdge + f.left) / (f.rightEdge - f.left);
+        const double b = 2.0 / (f.top - f.bottom), d = -(f.top + f.bottom) / (f.top - f.bottom);
+        Mat4 p(0.0);  // column-major: p[col][row]
+        p[0][0] = a;
+        p[2][0] = c;
+        p[1][1] = b;
+        p[2][1] = d;
+        p[3][2] = nearDistance;
+        p[2][3] = 1.0;
+        return p;
+    }
+    // Camera coordinates (x, y, d) from coordinates relative to `from`.
+    static Mat4 viewFrom(const SamplingFrustum& f, const Vec3& from) {
+        Mat4 v(1.0);
+        for (int col = 0; col < 3; ++col) {
+            v[col][0] = f.right[col];
+            v[col][1] = f.up[col];
+            v[col][2] = f.forward[col];
+        }
+        const Vec3 t = from - f.eye;
+        v[3][0] = glm::dot(f.right, t);
+        v[3][1] = glm::dot(f.up, t);
+        v[3][2] = glm::dot(f.forward, t);
+        return v;
+    }
+
+    ImageResult renderImage(const AreaLight& light, size_t lightIndex, const SamplingFrustum& f,
+                            const Vec3& n, double nearDistance, uint32_t seed, bool planar,
+                            Clock::time_point& t0) {
+        const int size = settings.imageSize;
+        const bool query = settings.method == DirectMethod::OcclusionQuery;
+        const bool jitter = settings.method == DirectMethod::Jittered;
+        const int bits = jitter ? settings.bits : 1;
+        int sx = 1, sy = 1;
+        jitter::strata(bits, sx, sy);
+        const double tol = settings.planeTolerance * sceneSize;
+
+        // Potential occluders: inside the frustum and in front of the light.
+        std::vector<OccluderBvh::Plane> planes = {
+            {f.right - f.left * f.forward, 0}, {f.rightEdge * f.forward - f.right, 0},
+            {f.up - f.bottom * f.forward, 0},  {f.top * f.forward - f.up, 0},
+            {f.forward, -nearDistance}};
+        for (auto& p : planes) p.d += -glm::dot(p.n, f.eye);
+        if (planar) planes.push_back({light.normal, -glm::dot(light.normal, light.centroid) - tol});
+        else {
+            double farthest = 0;
+            for (const Triangle3& t : light.geometry)
+                for (const Vec3& p : t) farthest = std::max(farthest, glm::dot(p - f.eye, f.forward));
+            planes.push_back({-f.forward, glm::dot(f.forward, f.eye) + farthest});
+        }
+        uint32_t drawn = 0;
+        if (settings.cullOccluders) drawn = bvh.cull(planes, ranges);
+        else {
+            ranges.assign(1, {0, uint32_t(bvh.triangleCount())});
+            drawn = uint32_t(bvh.triangleCount());
+        }
+        trianglesDrawn += drawn;
+        firsts.clear();
+        counts.clear();
+        for (const auto& r : ranges) {  // six vertices (a quad) per triangle
+            firsts.push_back(GLint(r.first * 6));
+            counts.push_back(GLsizei(r.count * 6));
+        }
+
+        // The light, relative to the eye in double, then to float: exact
+        // enough for a tiny light far away in a large scene.
+        lightCorners.clear();
+        for (const Triangle3& t : light.geometry)
+            for (const Vec3& p : t) {
+                const glm::vec3 r(p - f.eye);
+                lightCorners.push_back({r.x, r.y, r.z, 0});
+            }
+        gl.NamedBufferSubData(lightBuffer.id(), 0, GLsizeiptr(lightCorners.size() * sizeof(Corner)),
+                              lightCorners.data());
+
+        const Mat4 proj = projection(f, nearDistance);
+        const glm::mat4 clipFromEyeRel = toFloat(proj * viewFrom(f, f.eye));
+        const glm::mat4 clipFromOrigin = toFloat(proj * viewFrom(f, origin));
+        // Light plane in origin-relative coordinates, positive on the eye's side.
+        const glm::vec4 plane(glm::vec3(light.normal), float(glm::dot(light.normal, origin - light.centroid)));
+
+        gl.BindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+        gl.Viewport(0, 0, size, size);
+        // Clears obey the write masks: open them all first.
+        gl.DepthMask(GL_TRUE);
+        gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        const GLuint zero[4] = {0, 0, 0, 0};
+        gl.ClearBufferuiv(GL_COLOR, 0, zero);
+        gl.ClearBufferuiv(GL_COLOR, 1, zero);
+        const float depthClear = 0.0f;  // reversed depth: 0 is infinitely far
+        gl.ClearBufferfv(GL_DEPTH, 0, &depthClear);
+
+        coverage.use();
+        gl.BindVertexArray(emptyVao.id());
+        gl.Uniform1f(loc.nearPlane, float(nearDistance));
+        gl.Uniform1f(loc.pixelNdc, 2.0f / float(size));
+        gl.Uniform1f(loc.planeTolerance, float(tol));
+        gl.Uniform1ui(loc.seed, seed);
+        gl.Uniform1i(loc.imageSize, size);
+        gl.Uniform4f(loc.lightPlane, plane.x, plane.y, plane.z, plane.w);
+        const Clock::time_point t1 = Clock::now();
+        times.setup += seconds(t0, t1);
+
+        ImageResult out;
+        if (query) {
+            renderQuery(light, lightIndex, clipFromEyeRel, clipFromOrigin, planar, out);
+        } else {
+            renderBits(lightIndex, clipFromEyeRel, clipFromOrigin, planar);
+        }
+        Clock::time_point t2 = Clock::now();
+        if (phaseTiming && !query) {
+            gl.Finish();
+            t2 = Clock::now();
+        }
+        times.draw += seconds(t1, t2);
+        if (query) {
+            t0 = t2;
+            return out;
+        }
+
+        gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT0);
+        gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, visiblePixels.data());
+        gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT1);
+        gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, lightPixels.data());
+        const Clock::time_point t3 = Clock::now();
+        times.readback += seconds(t2, t3);
+
+        weigh(f, n, seed, bits, sx, sy, jitter, out);
+        t0 = Clock::now();
+        times.weighting += seconds(t3, t0);
+        return out;
+    }
+
+    void setPassState(bool lightPass, bool planar, size_t lightIndex, const glm::mat4& clipFrom) {
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightPass ? lightBuffer.id() : occluderBuffer.id());
+        gl.UniformMatrix4fv(loc.clipFromLocal, 1, GL_FALSE, &clipFrom[0][0]);
+        gl.Uniform1i(loc.cullBackFaces, lightPass ? 1 : 0);
+        gl.Uniform1ui(loc.skipLightId, lightPass ? 0u : uint32_t(lightIndex + 1));
+        gl.Uniform1i(loc.clipToLightPlane, !lightPass && planar ? 1 : 0);
+    }
+
+    void drawLight() { gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(lightCorners.size() * 2)); }
+
+    void drawOccluders() {
+        if (!counts.empty())
+            gl.MultiDrawArrays(GL_TRIANGLES, firsts.data(), counts.data(), GLsizei(counts.size()));
+    }
+
+    // §4.1.2 / §4.2: light with OR_INVERTED into both images, occluders with
+    // AND into the first. A planar light needs no depth test (occluders are
+    // clipped to its plane exactly, per sample); another needs one.
+    void renderBits(size_t lightIndex, const glm::mat4& clipFromEyeRel, const glm::mat4& clipFromOrigin,
+                    bool planar) {
+        gl.Enable(GL_COLOR_LOGIC_OP);
+        if (planar) gl.Disable(GL_DEPTH_TEST);
+        else {
+            gl.Enable(GL_DEPTH_TEST);
+            gl.DepthFunc(GL_GREATER);
+        }
+        gl.LogicOp(GL_OR_INVERTED);
+        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.DepthMask(planar ? GL_FALSE : GL_TRUE);
+        setPassState(true, planar, lightIndex, clipFromEyeRel);
+        drawLight();
+
+        gl.LogicOp(GL_AND);
+        gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+        gl.DepthMask(GL_FALSE);
+        setPassState(false, planar, lightIndex, clipFromOrigin);
+        drawOccluders();
+        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.Disable(GL_COLOR_LOGIC_OP);
+    }
+
+    // §4.1.1: two occlusion queries, the light alone and the light behind
+    // the occluders; the visible fraction scales the exact unoccluded value.
+    void renderQuery(const AreaLight& light, size_t lightIndex, const glm::mat4& clipFromEyeRel,
+                     const glm::mat4& clipFromOrigin, bool planar, ImageResult& out) {
+        gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+        gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+        gl.Disable(GL_DEPTH_TEST);
+        setPassState(true, planar, lightIndex, clipFromEyeRel);
+        gl.BeginQuery(GL_SAMPLES_PASSED, queryLight.id());
+        drawLight();
+        gl.EndQuery(GL_SAMPLES_PASSED);
+
+        gl.Enable(GL_DEPTH_TEST);
+        gl.DepthFunc(GL_GREATER);
+        gl.DepthMask(GL_TRUE);
+        setPassState(false, planar, lightIndex, clipFromOrigin);
+        drawOccluders();
+        gl.DepthMask(GL_FALSE);
+        setPassState(true, planar, lightIndex, clipFromEyeRel);
+        gl.BeginQuery(GL_SAMPLES_PASSED, queryVisible.id());
+        drawLight();
+        gl.EndQuery(GL_SAMPLES_PASSED);
+        gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.Disable(GL_DEPTH_TEST);
+
+        const Clock::time_point t = Clock::now();
+        GLuint all = 0, visible = 0;
+        gl.GetQueryObjectuiv(queryLight.id(), GL_QUERY_RESULT, &all);
+        gl.GetQueryObjectuiv(queryVisible.id(), GL_QUERY_RESULT, &visible);
+        times.readback += seconds(t, Clock::now());
+        out.lightSamples = all;
+        out.visibleSamples = std::min(visible, all);
+        (void)light;
+    }
+
+    // Σ over samples of cosθ·dω, evaluated at each sample's own jittered
+    // point. In camera coordinates the direction through window point (u, v)
+    // is (u, v, 1), so cosθ·dω/dA = (n·s)/|s|⁴ with |s|² = 1 + u² + v² (eq. 3).
+    void weigh(const SamplingFrustum& f, const Vec3& n, uint32_t seed, int bits, int sx, int sy,
+               bool jitter, ImageResult& out) {
+        const int size = settings.imageSize;
+        const double pw = (f.rightEdge - f.left) / size, ph = (f.top - f.bottom) / size;
+        const double nx = glm::dot(n, f.right), ny = glm::dot(n, f.up), nz = glm::dot(n, f.forward);
+        const double pixelArea = pw * ph / bits;
+        // The control variate needs only the occluded samples' weights; the
+        // plain estimator needs every light sample's.
+        const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate;
+        double lightSum = 0, occludedSum = 0;
+        for (int j = 0; j < size; ++j) {
+            for (int i = 0; i < size; ++i) {
+                const uint32_t pixel = uint32_t(j * size + i);
+                const uint32_t onLight = lightPixels[pixel];
+                if (!onLight) continue;
+                const uint32_t visible = visiblePixels[pixel] & onLight;
+                out.lightSamples += uint32_t(__builtin_popcount(onLight));
+                out.visibleSamples += uint32_t(__builtin_popcount(visible));
+                const uint32_t toWeigh = onlyOccluded ? (onLight & ~visible) : onLight;
+                for (uint32_t m = toWeigh; m; m &= m - 1) {
+                    const uint32_t bit = uint32_t(__builtin_ctz(m));
+                    float ju, jv;
+                    jitter::position(pixel, bit, seed, sx, sy, jitter, ju, jv);
+                    const double u = f.left + (i + double(ju)) * pw;
+                    const double v = f.bottom + (j + double(jv)) * ph;
+                    const double cosine = nx * u + ny * v + nz;
+                    if (cosine <= 0) continue;  // below the receiver's horizon
+                    const double r2 = 1.0 + u * u + v * v;
+                    const double w = cosine / (r2 * r2);
+                    lightSum += w;
+                    if (!(visible >> bit & 1u)) occludedSum += w;
+                }
+            }
+        }
+        out.lightWeight = lightSum * pixelArea;
+        out.occludedWeight = occludedSum * pixelArea;
+    }
+
+    uint32_t trianglesDrawn = 0;
+
+    DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& nIn, uint32_t seed) {
+        ML_ASSERT(lightIndex < scene.lights.size(), "light ", lightIndex);
+        times = {};
+        trianglesDrawn = 0;
+        Clock::time_point t0 = Clock::now();
+        DirectSample result;
+        const AreaLight& light = scene.lights[lightIndex];
+        const Vec3 n = glm::normalize(nIn);
+        if (!isFinite(x) || !isFinite(n)) throw InputError(concat("non-finite receiver point or normal"));
+        const Vec3 eye = x + n * (settings.eyeOffset * sceneSize);
+        const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, n);
+        if (pieces.empty()) {
+            times.setup = seconds(t0, Clock::now());
+            return result;
+        }
+        double exactUnoccluded = 0;
+        for (const Polygon3& p : pieces) exactUnoccluded += cosineSolidAngle(eye, n, p);
+
+        const Vec3 align = light.geometry[0][1] - light.geometry[0][0];
+        const std::vector<SamplingFrustum> frusta = fitFrusta(pieces, eye, align, settings.maxHalfAngleDegrees);
+        // Occluders nearer than this to the eye are not drawn: half the eye's
+        // lift, so only geometry touching the receiver there is lost.
+        const double nearDistance = 0.5 * settings.eyeOffset * sceneSize;
+        double lightWeight = 0, occludedWeight = 0;
+        for (size_t k = 0; k < frusta.size(); ++k) {
+            const ImageResult r = renderImage(light, lightIndex, frusta[k], n, nearDistance,
+                                              jitter::hash(seed + uint32_t(k) * 0x9e3779b9u), light.planar, t0);
+            lightWeight += r.lightWeight;
+            occludedWeight += r.occludedWeight;
+            result.lightSamples += r.lightSamples;
+            result.visibleSamples += r.visibleSamples;
+        }
+        result.frusta = uint32_t(frusta.size());
+        result.trianglesDrawn = trianglesDrawn;
+
+        const Clock::time_point tw = Clock::now();
+        double e = 0;
+        if (settings.method == DirectMethod::OcclusionQuery) {
+            result.unoccluded = exactUnoccluded;
+            e = result.lightSamples ? exactUnoccluded * result.visibleSamples / result.lightSamples : 0.0;
+        } else if (settings.estimator == DirectEstimator::ControlVariate && light.planar) {
+            result.unoccluded = exactUnoccluded;
+            // Unbiased difference; clamped at 0 where the sampled occluded
+            // part exceeds the exact total (a point nearly in umbra).
+            e = result.visibleSamples == 0 ? 0.0 : std::max(0.0, exactUnoccluded - occludedWeight);
+        } else {
+            result.unoccluded = lightWeight;
+            e = lightWeight - occludedWeight;
+        }
+        result.cosineSolidAngle = e;
+        result.irradiance = light.radiance * e;
+        times.weighting += seconds(tw, Clock::now());
+        checkGl(gl, "direct-light sampling");
+        return result;
+    }
+};
+
+DirectLightSampler::DirectLightSampler(GlContext& context, const Scene& scene,
+                                       const DirectSamplerSettings& settings)
+    : impl_(std::make_unique<Impl>(context, scene, settings)) {
+    const GlApi& gl = context.gl();
+    // Reversed depth in [0, 1]: float depth keeps its precision at every
+    // distance, so occluders 1e-4 in front of a light still win.
+    gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    gl.Enable(GL_DEPTH_CLAMP);
+    gl.Disable(GL_CULL_FACE);
+}
+
+DirectLightSampler::~DirectLightSampler() = default;
+
+DirectSample DirectLightSampler::sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed) {
+    return impl_->sample(lightIndex, x, n, seed);
+}
+
+const DirectSamplerSettings& DirectLightSampler::settings() const { return impl_->settings; }
+void DirectLightSampler::setPhaseTiming(bool on) { impl_->phaseTiming = on; }
+const DirectPhaseTimes& DirectLightSampler::lastTimes() const { return impl_->times; }
+
+}  // namespace ml

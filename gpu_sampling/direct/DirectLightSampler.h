@@ -1,0 +1,106 @@
+// Direct irradiance from an area light at a point, sampled by rasterising
+// the light and its potential occluders from that point (§4 of Fournier &
+// Péroche): every scheme of the paper, selectable, so their accuracy and cost
+// can be compared.
+#pragma once
+
+#include "core/Scene.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace ml {
+
+class GlContext;
+
+enum class DirectMethod {
+    OcclusionQuery,  // §4.1.1: count unoccluded light pixels, all weighted alike
+    Regular,         // §4.1.2: one test at each pixel centre, per-pixel weights (eq. 3)
+    Jittered,        // §4.2: N jittered tests per pixel, one bit each (eq. 4-5)
+};
+DirectMethod parseDirectMethod(const std::string& name);  // "query", "regular", "jittered"
+const char* directMethodName(DirectMethod);
+
+// How pixel samples become an irradiance.
+enum class DirectEstimator {
+    // Σ over visible samples of L·cosθ·dω: the paper's estimator.
+    Plain,
+    // Exact unoccluded irradiance (Lambert's closed form) minus the sampled
+    // occluded part: unbiased like Plain, but exact wherever nothing occludes
+    // and with error only along occluder edges. Planar lights only; others
+    // fall back to Plain.
+    ControlVariate,
+};
+DirectEstimator parseDirectEstimator(const std::string& name);  // "plain", "cv"
+const char* directEstimatorName(DirectEstimator);
+
+struct DirectSamplerSettings {
+    DirectMethod method = DirectMethod::Jittered;
+    DirectEstimator estimator = DirectEstimator::ControlVariate;
+    int imageSize = 64;          // pixels per side of a sampling image, typical 32..64
+    int bits = 4;                // jittered tests per pixel: 1, 4, 8, 16 or 32
+    double maxHalfAngleDegrees = 60;  // wider lights are split among cube faces
+    // The sampling camera sits this far above the shading point, along its
+    // normal, as a fraction of the scene's bounding diagonal: 1e-6 is 16× the
+    // float rounding of vertex positions, so a receiver never shadows itself,
+    // and small enough that points 1e-4 of a light's size from it stay accurate.
+    double eyeOffset = 1e-6;
+    // Occluder parts closer to a planar light's plane than this (same unit
+    // as eyeOffset) do not occlude it: geometry coplanar with the light.
+    double planeTolerance = 1e-6;
+    bool cullOccluders = true;   // draw only triangles in the frustum (BVH)
+
+    void validate() const;       // throws InputError on a bad value
+};
+
+// One estimate; repeats with fresh seeds are independent and their mean
+// converges to the exact irradiance.
+struct DirectSample {
+    Rgb irradiance{0.0};           // W·m⁻² at the point
+    double cosineSolidAngle = 0;   // irradiance / radiance: ∫ vis·cosθ dω (sr)
+    double unoccluded = 0;         // the same without occluders (sr)
+    uint32_t lightSamples = 0;     // jittered tests that fell on the light
+    uint32_t visibleSamples = 0;   // of those, not occluded
+    uint32_t frusta = 0;           // sampling images rendered (> 1: light split)
+    uint32_t trianglesDrawn = 0;   // occluder triangles submitted after culling
+
+    // A penumbra: some but not all of the light's samples are visible.
+    bool partiallyVisible() const { return visibleSamples > 0 && visibleSamples < lightSamples; }
+};
+
+// Wall-clock seconds of each phase of the last sample (the paper's Fig. 9).
+struct DirectPhaseTimes {
+    double setup = 0;      // frusta, culling, uniforms (CPU)
+    double draw = 0;       // light and occluders (GPU, up to glFinish)
+    double readback = 0;   // glReadPixels / query results
+    double weighting = 0;  // per-sample weights (CPU)
+    double total() const { return setup + draw + readback + weighting; }
+};
+
+class DirectLightSampler {
+public:
+    // `scene` must outlive the sampler; `context` must be current on the
+    // calling thread for construction and every call.
+    DirectLightSampler(GlContext& context, const Scene& scene, const DirectSamplerSettings& settings);
+    ~DirectLightSampler();
+    DirectLightSampler(const DirectLightSampler&) = delete;
+    DirectLightSampler& operator=(const DirectLightSampler&) = delete;
+
+    // Direct irradiance of light `lightIndex` at `x` with unit normal `n`.
+    // `seed` selects the jitter: derive it from (user seed, vertex, light,
+    // pass) with jitter::seedFor so runs repeat bit for bit.
+    DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed);
+
+    const DirectSamplerSettings& settings() const;
+    // With phase timing on, the sampler waits for the GPU between phases
+    // (glFinish) so each phase is timed alone; slightly slower overall.
+    void setPhaseTiming(bool on);
+    const DirectPhaseTimes& lastTimes() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ml

@@ -1,0 +1,127 @@
+#include "LightFrustum.h"
+
+namespace ml {
+
+Polygon3 clipPolygon(const Polygon3& poly, const Vec3& n, double d) {
+    Polygon3 out;
+    out.reserve(poly.size() + 1);
+    for (size_t i = 0; i < poly.size(); ++i) {
+        const Vec3& a = poly[i];
+        const Vec3& b = poly[(i + 1) % poly.size()];
+        const double fa = glm::dot(n, a) + d;
+        const double fb = glm::dot(n, b) + d;
+        if (fa >= 0) out.push_back(a);
+        if ((fa >= 0) != (fb >= 0)) out.push_back(a + (b - a) * (fa / (fa - fb)));
+    }
+    return out.size() >= 3 ? out : Polygon3{};
+}
+
+std::vector<Polygon3> visibleLightPieces(const AreaLight& light, const Vec3& eye, const Vec3& n) {
+    std::vector<Polygon3> pieces;
+    for (const Triangle3& t : light.geometry) {
+        const Vec3 an = glm::cross(t[1] - t[0], t[2] - t[0]);
+        if (!(glm::dot(an, eye - t[0]) > 0)) continue;  // seen from behind: emits nothing this way
+        Polygon3 p = clipPolygon({t[0], t[1], t[2]}, n, -glm::dot(n, eye));
+        if (!p.empty()) pieces.push_back(std::move(p));
+    }
+    return pieces;
+}
+
+namespace {
+
+// Basis with the given forward and rows along `align` where possible.
+void makeBasis(const Vec3& forward, const Vec3& align, SamplingFrustum& f) {
+    f.forward = forward;
+    Vec3 r = align - glm::dot(align, forward) * forward;
+    if (glm::length(r) < 1e-6 * std::max(glm::length(align), 1e-300)) {
+        Vec3 t, b;
+        orthonormalBasis(forward, t, b);
+        r = t;
+    }
+    f.right = glm::normalize(r);
+    f.up = glm::cross(f.right, f.forward);  // left-handed: right × up = −forward
+}
+
+// Fits the window of `f` (basis set) to the pieces, clipped to `planes`
+// (camera-space half-spaces a·(x,y,d) >= 0). Returns false if nothing is left.
+bool fitWindow(const std::vector<Polygon3>& pieces, const std::vector<Vec3>& planes, SamplingFrustum& f) {
+    double lo[2] = {kInf, kInf}, hi[2] = {-kInf, -kInf};
+    bool any = false;
+    for (const Polygon3& piece : pieces) {
+        Polygon3 cam;
+        for (const Vec3& p : piece) cam.push_back(f.toCamera(p));
+        for (const Vec3& a : planes) {
+            cam = clipPolygon(cam, a, 0.0);
+            if (cam.empty()) break;
+        }
+        for (const Vec3& c : cam) {
+            if (!(c.z > 0)) continue;  // on the eye itself: no direction
+            for (int k = 0; k < 2; ++k) {
+                const double s = c[k] / c.z;
+                lo[k] = std::min(lo[k], s);
+                hi[k] = std::max(hi[k], s);
+            }
+            any = true;
+        }
+    }
+    if (!any || !(hi[0] > lo[0]) || !(hi[1] > lo[1])) return false;
+    // A hair of margin so the light's own edges never sit on the window's.
+    const double mx = 1e-7 * (hi[0] - lo[0]), my = 1e-7 * (hi[1] - lo[1]);
+    f.left = lo[0] - mx;
+    f.rightEdge = hi[0] + mx;
+    f.bottom = lo[1] - my;
+    f.top = hi[1] + my;
+    return true;
+}
+
+}  // namespace
+
+std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, const Vec3& eye,
+                                       const Vec3& alignTo, double maxHalfAngleDegrees) {
+    // Mean direction of the light's corners as seen from the eye.
+    Vec3 sum(0.0);
+    for (const Polygon3& piece : pieces)
+        for (const Vec3& p : piece) {
+            const double len = glm::length(p - eye);
+            if (len > 0) sum += (p - eye) / len;
+        }
+    const double sumLen = glm::length(sum);
+    if (!(sumLen > 0)) return {};
+    const Vec3 axis = sum / sumLen;
+
+    double minCos = 1.0;
+    for (const Polygon3& piece : pieces)
+        for (const Vec3& p : piece) {
+            const double len = glm::length(p - eye);
+            if (len > 0) minCos = std::min(minCos, glm::dot(p - eye, axis) / len);
+        }
+
+    SamplingFrustum f;
+    f.eye = eye;
+    makeBasis(axis, alignTo, f);
+    // Convex pieces inside a cap of half-angle < 90° stay inside it, so the
+    // corners decide.
+    if (minCos > std::cos(glm::radians(maxHalfAngleDegrees))) {
+        const std::vector<Vec3> inFront = {Vec3(0.0, 0.0, 1.0)};
+        if (fitWindow(pieces, inFront, f)) return {f};
+        return {};
+    }
+
+    // Split among the six faces of a cube around the axis; each face is the
+    // pyramid |x| <= d, |y| <= d of its own basis.
+    const SamplingFrustum base = f;
+    const Vec3 dirs[6][2] = {{base.forward, base.right},  {-base.forward, base.right},
+                             {base.right, base.up},       {-base.right, base.up},
+                             {base.up, base.right},       {-base.up, base.right}};
+    const std::vector<Vec3> face = {Vec3(-1, 0, 1), Vec3(1, 0, 1), Vec3(0, -1, 1), Vec3(0, 1, 1)};
+    std::vector<SamplingFrustum> frusta;
+    for (const auto& d : dirs) {
+        SamplingFrustum g;
+        g.eye = eye;
+        makeBasis(d[0], d[1], g);
+        if (fitWindow(pieces, face, g)) frusta.push_back(g);
+    }
+    return frusta;
+}
+
+}  // namespace ml

@@ -1,0 +1,54 @@
+// Where the sampling camera looks: frusta from a shading point fitted to an
+// area light (§4: "a small frustum that fully includes the light source").
+#pragma once
+
+#include "core/Scene.h"
+
+#include <vector>
+
+namespace ml {
+
+// An off-axis pinhole frustum. Camera coordinates of a point p are
+// (x, y, d) = ((p−eye)·right, (p−eye)·up, (p−eye)·forward); the image is the
+// window [left, right] × [bottom, top] on the plane d = 1.
+//
+// The basis is left-handed (right × up = −forward, OpenGL's camera
+// convention), which makes a triangle that is counter-clockwise seen from the
+// eye have a positive clip-space determinant in direct_coverage.geom.
+struct SamplingFrustum {
+    Vec3 eye{0.0};
+    Vec3 forward{0.0, 0.0, 1.0};
+    Vec3 right{1.0, 0.0, 0.0};
+    Vec3 up{0.0, 1.0, 0.0};
+    double left = -1, rightEdge = 1, bottom = -1, top = 1;
+
+    // Camera-space position of a world point.
+    Vec3 toCamera(const Vec3& p) const {
+        const Vec3 v = p - eye;
+        return {glm::dot(v, right), glm::dot(v, up), glm::dot(v, forward)};
+    }
+    // World direction (not normalised) through the window point (u, v).
+    Vec3 direction(double u, double v) const { return forward + u * right + v * up; }
+};
+
+// A convex polygon in 3D and the clipping it needs.
+using Polygon3 = std::vector<Vec3>;
+// Keeps the part of `poly` where n·p + d >= 0 (Sutherland–Hodgman).
+Polygon3 clipPolygon(const Polygon3& poly, const Vec3& n, double d);
+
+// The parts of the light that can send light to a receiver at `eye` with
+// normal `n`: front-facing triangles, each clipped to the receiver's upper
+// half-space (any part below its horizon contributes nothing).
+std::vector<Polygon3> visibleLightPieces(const AreaLight& light, const Vec3& eye, const Vec3& n);
+
+// Frusta covering `pieces` as seen from `eye`. One frustum when every piece is
+// within `maxHalfAngleDegrees` of their mean direction; otherwise the light is
+// split among the faces of a cube around that direction, each face's frustum
+// fitted to the part of the light it sees (a point right next to a large light
+// sees nearly a hemisphere, which no single perspective frustum holds).
+// The frusta never overlap, so their estimates add. `alignTo` (a light edge)
+// orients the single frustum's rows, as in the paper's bench.
+std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, const Vec3& eye,
+                                       const Vec3& alignTo, double maxHalfAngleDegrees);
+
+}  // namespace ml
