@@ -1,0 +1,168 @@
+#include "MeshUtil.h"
+
+#include "Error.h"
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace ml {
+
+namespace {
+
+void checkPerTriangle(const Mesh& mesh, size_t size, const char* what) {
+    if (size != 0 && size != mesh.triangles.size())
+        throw std::invalid_argument(concat("mesh '", mesh.name, "' has ", size, " ", what, " for ",
+                                           mesh.triangles.size(), " triangles"));
+}
+
+void checkIndices(const Mesh& mesh) {
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k)
+            if (mesh.triangles[t][k] >= mesh.positions.size())
+                throw std::invalid_argument(concat("triangle ", t, " of mesh '", mesh.name,
+                                                   "' uses vertex ", mesh.triangles[t][k], " of ",
+                                                   mesh.positions.size()));
+}
+
+// Exact position equality for welding: hashes the bit pattern, with -0 made
+// +0 first so that the hash agrees with operator== (positions are finite here).
+struct PositionHash {
+    size_t operator()(const Vec3& p) const {
+        size_t h = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double v = p[k] + 0.0;
+            uint64_t bits;
+            std::memcpy(&bits, &v, sizeof bits);
+            h ^= std::hash<uint64_t>{}(bits) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+        }
+        return h;
+    }
+};
+
+}  // namespace
+
+size_t removeDegenerateTriangles(Mesh& mesh, double relTol, std::vector<size_t>* removed) {
+    if (!(relTol >= 0 && std::isfinite(relTol)))
+        throw std::invalid_argument(
+            concat("relative tolerance ", relTol, " is not a finite number >= 0"));
+    checkPerTriangle(mesh, mesh.materials.size(), "materials");
+    checkPerTriangle(mesh, mesh.sourceLines.size(), "source lines");
+    checkIndices(mesh);
+
+    Bounds3 bounds;
+    for (const glm::uvec3& tri : mesh.triangles)
+        for (int k = 0; k < 3; ++k)
+            if (isFinite(mesh.positions[tri[k]])) bounds.extend(mesh.positions[tri[k]]);
+    const double minArea = std::pow(relTol * bounds.diagonal(), 2);
+
+    size_t kept = 0;
+    if (removed) removed->clear();
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::uvec3 i = mesh.triangles[t];
+        const Triangle3 p = mesh.triangle(t);
+        const double area = mesh.area(t);
+        const bool degenerate = i.x == i.y || i.y == i.z || i.z == i.x || !isFinite(p[0]) ||
+                                !isFinite(p[1]) || !isFinite(p[2]) || !std::isfinite(area) ||
+                                !(area > minArea);
+        if (degenerate) {
+            if (removed) removed->push_back(t);
+            continue;
+        }
+        mesh.triangles[kept] = mesh.triangles[t];
+        if (!mesh.materials.empty()) mesh.materials[kept] = mesh.materials[t];
+        if (!mesh.sourceLines.empty()) mesh.sourceLines[kept] = mesh.sourceLines[t];
+        ++kept;
+    }
+    const size_t dropped = mesh.triangles.size() - kept;
+    mesh.triangles.resize(kept);
+    if (!mesh.materials.empty()) mesh.materials.resize(kept);
+    if (!mesh.sourceLines.empty()) mesh.sourceLines.resize(kept);
+    return dropped;
+}
+
+void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
+    if (!(creaseAngleDegrees >= 0 && creaseAngleDegrees <= 180))
+        throw std::invalid_argument(
+            concat("crease angle ", creaseAngleDegrees, " degrees is not in [0, 180]"));
+    checkIndices(mesh);
+    const size_t triangleCount = mesh.triangles.size();
+    const size_t cornerCount = 3 * triangleCount;
+
+    // Unit face normal per triangle and interior angle per corner (corner c is
+    // vertex c % 3 of triangle c / 3).
+    std::vector<Vec3> faceNormal(triangleCount);
+    std::vector<double> cornerAngle(cornerCount);
+    for (size_t t = 0; t < triangleCount; ++t) {
+        const Vec3 an = mesh.areaNormal(t);
+        const double len = glm::length(an);
+        if (!(len > 0 && std::isfinite(len)))
+            throw std::invalid_argument(concat("triangle ", t, " of mesh '", mesh.name,
+                                               "' has zero or non-finite area; remove degenerate "
+                                               "triangles before computing normals"));
+        faceNormal[t] = an / len;
+        const Triangle3 p = mesh.triangle(t);
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 e1 = p[(k + 1) % 3] - p[k];
+            const Vec3 e2 = p[(k + 2) % 3] - p[k];
+            // atan2 stays accurate for angles near 0 and pi, where acos does not.
+            cornerAngle[3 * t + k] = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2));
+        }
+    }
+
+    // Corners grouped by welded position, as a compressed list: the corners of
+    // group g are groupCorners[groupStart[g] .. groupStart[g + 1]).
+    std::unordered_map<Vec3, uint32_t, PositionHash> groupOf;
+    std::vector<uint32_t> cornerGroup(cornerCount);
+    for (size_t c = 0; c < cornerCount; ++c) {
+        const Vec3& p = mesh.positions[mesh.triangles[c / 3][c % 3]];
+        cornerGroup[c] = groupOf.emplace(p, uint32_t(groupOf.size())).first->second;
+    }
+    std::vector<size_t> groupStart(groupOf.size() + 1, 0);
+    for (uint32_t g : cornerGroup) ++groupStart[g + 1];
+    for (size_t g = 0; g < groupOf.size(); ++g) groupStart[g + 1] += groupStart[g];
+    std::vector<size_t> groupCorners(cornerCount);
+    {
+        std::vector<size_t> fill(groupStart.begin(), groupStart.end() - 1);
+        for (size_t c = 0; c < cornerCount; ++c) groupCorners[fill[cornerGroup[c]]++] = c;
+    }
+
+    // The tolerance lets triangles of one plane, whose normals differ only by
+    // rounding, share vertices even at a crease angle of 0.
+    const double minCos = std::cos(glm::radians(creaseAngleDegrees)) - 1e-12;
+    std::vector<Vec3> positions, normals;
+    std::vector<glm::uvec3> triangles(triangleCount);
+    for (size_t g = 0; g + 1 < groupStart.size(); ++g) {
+        const size_t groupFirstVertex = positions.size();
+        for (size_t a = groupStart[g]; a < groupStart[g + 1]; ++a) {
+            const size_t corner = groupCorners[a];
+            const Vec3& own = faceNormal[corner / 3];
+            // Summed in the same order for every corner of the group, so two
+            // corners with the same neighbour set get bit-identical normals
+            // and share a vertex below.
+            Vec3 sum(0.0);
+            for (size_t b = groupStart[g]; b < groupStart[g + 1]; ++b) {
+                const size_t other = groupCorners[b];
+                const Vec3& n = faceNormal[other / 3];
+                if (glm::dot(own, n) >= minCos) sum += cornerAngle[other] * n;
+            }
+            // Above 90 degrees opposite faces (a two-sided sheet) can cancel.
+            const double len = glm::length(sum);
+            const Vec3 normal = len > 1e-12 ? sum / len : own;
+
+            size_t v = groupFirstVertex;
+            while (v < normals.size() && normals[v] != normal) ++v;
+            if (v == normals.size()) {
+                positions.push_back(mesh.positions[mesh.triangles[corner / 3][corner % 3]]);
+                normals.push_back(normal);
+            }
+            triangles[corner / 3][corner % 3] = uint32_t(v);
+        }
+    }
+    mesh.positions = std::move(positions);
+    mesh.normals = std::move(normals);
+    mesh.triangles = std::move(triangles);
+}
+
+}  // namespace ml

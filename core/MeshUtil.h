@@ -1,0 +1,44 @@
+// Clean-up and shading-normal generation for triangle meshes, shared by the
+// loaders and the built-in scenes.
+#pragma once
+
+#include "Scene.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace ml {
+
+// Drops the triangles nothing downstream can shade or sample: a repeated
+// vertex index, a non-finite corner, or an area <= (relTol · d)², d being the
+// diagonal of the bounding box of the mesh's referenced finite positions.
+// The test is relative so that it means the same in millimetres and in metres.
+//   relTol:  relative edge tolerance, >= 0; typical 1e-6 (area <= 1e-12 · d²).
+//   removed: when not null, receives the indices the dropped triangles had
+//            before the call, ascending (e.g. to report their sourceLines).
+// Keeps `materials` and `sourceLines` aligned with `triangles` (each may be
+// empty); vertices are left as they are, even when no longer referenced.
+// Returns the number of triangles dropped. Throws std::invalid_argument if
+// relTol is negative or not finite, or a per-triangle array is misaligned.
+size_t removeDegenerateTriangles(Mesh& mesh, double relTol,
+                                 std::vector<size_t>* removed = nullptr);
+
+// Replaces the mesh's vertices by (position, shading normal) pairs.
+// Each corner's normal is the angle-weighted mean of the face normals of the
+// triangles around its position (positions welded by exact equality) whose
+// normal is within creaseAngleDegrees of the corner's own face normal; faces
+// meeting at a sharper angle keep separate vertices. Angle weights make the
+// result independent of how a planar polygon was split into triangles.
+//   creaseAngleDegrees: in [0, 180]; typical 30. 0 gives flat faces (exactly
+//                       coplanar triangles still share vertices), 180 smooths
+//                       everything.
+// Corners with equal position and normal share one vertex; vertices are
+// ordered by the first use of their position; triangle order, `materials` and
+// `sourceLines` are unchanged; unreferenced positions are dropped; existing
+// normals are ignored. Cost grows with the square of the number of triangles
+// around a position. Throws std::invalid_argument for a crease angle outside
+// [0, 180] or a triangle of zero or non-finite area (run
+// removeDegenerateTriangles first).
+void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees);
+
+}  // namespace ml

@@ -1,0 +1,699 @@
+// A small OBJ/MTL parser of our own. OpenMesh's OBJ reader (already a
+// dependency) was not used: it cannot say at which file:line a face or number
+// is wrong, and it does not keep a material per face, both of which the
+// renderer needs (errors users can act on; one material per triangle).
+#include "ObjLoader.h"
+
+#include "core/Error.h"
+#include "core/MeshUtil.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string_view>
+#include <unordered_map>
+
+namespace ml {
+
+namespace {
+
+namespace fs = std::filesystem;
+using std::string_view;
+
+// Triangles with an area <= (1e-6 · mesh diagonal)² are dropped as degenerate.
+constexpr double kDegenerateRelTol = 1e-6;
+
+// One statement: its keyword, the arguments split at blanks, and the raw text
+// after the keyword (names may contain blanks). Comments are removed.
+struct Statement {
+    string_view keyword;
+    std::vector<string_view> args;
+    string_view rest;
+};
+
+bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+string_view trim(string_view s) {
+    while (!s.empty() && isBlank(s.front())) s.remove_prefix(1);
+    while (!s.empty() && isBlank(s.back())) s.remove_suffix(1);
+    return s;
+}
+
+// Splits a line into `out`; returns false for a blank or comment-only line.
+bool splitStatement(string_view line, Statement& out) {
+    line = trim(line.substr(0, line.find('#')));
+    if (line.empty()) return false;
+    out.args.clear();
+    size_t i = 0;
+    while (i < line.size() && !isBlank(line[i])) ++i;
+    out.keyword = line.substr(0, i);
+    out.rest = trim(line.substr(i));
+    while (i < line.size()) {
+        while (i < line.size() && isBlank(line[i])) ++i;
+        const size_t start = i;
+        while (i < line.size() && !isBlank(line[i])) ++i;
+        if (i > start) out.args.push_back(line.substr(start, i - start));
+    }
+    return true;
+}
+
+// The file's lines with their 1-based numbers; LF or CRLF endings, and a
+// UTF-8 byte order mark (written by some Windows exporters) skipped.
+class LineReader {
+public:
+    explicit LineReader(std::string text) : text_(std::move(text)) {
+        if (text_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;
+    }
+    bool next(string_view& line) {
+        if (pos_ >= text_.size()) return false;
+        size_t end = text_.find('\n', pos_);
+        if (end == std::string::npos) end = text_.size();
+        line = string_view(text_).substr(pos_, end - pos_);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        pos_ = end + 1;
+        ++line_;
+        return true;
+    }
+    int line() const { return line_; }
+
+private:
+    std::string text_;
+    size_t pos_ = 0;
+    int line_ = 0;
+};
+
+// Reads a whole file; returns false when it cannot be opened.
+bool readFile(const fs::path& path, std::string& text) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return false;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return false;
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+    return true;
+}
+
+// Parses a whole token as a finite number; `what` names it in errors
+// ("coordinate 'nan' is not a finite number").
+double parseNumber(string_view token, const SourceLocation& at, const char* what) {
+    const char* first = token.data();
+    const char* last = first + token.size();
+    if (first != last && *first == '+') ++first;  // from_chars rejects '+'; some exporters write it
+    double value = 0;
+    const auto [end, ec] = std::from_chars(first, last, value);
+    if (ec == std::errc::result_out_of_range)
+        throwInputError(at, what, " '", token, "' is out of the range of a double");
+    if (ec != std::errc() || end != last || first == last)
+        throwInputError(at, what, " '", token, "' is not a number");
+    if (!std::isfinite(value)) throwInputError(at, what, " '", token, "' is not a finite number");
+    return value;
+}
+
+// Returns false unless the whole token is an integer.
+bool parseInteger(string_view token, long long& value) {
+    const char* last = token.data() + token.size();
+    const auto [end, ec] = std::from_chars(token.data(), last, value);
+    return ec == std::errc() && end == last && !token.empty();
+}
+
+// "1 vertex", "3 vertices"
+std::string count(size_t n, const char* singular, const char* plural) {
+    return concat(n, " ", n == 1 ? singular : plural);
+}
+
+// "the only triangle is degenerate", "all its 3 triangles are degenerate"
+std::string allDegenerate(size_t n, const char* determiner) {
+    return n == 1 ? concat(determiner, " only triangle is degenerate")
+                  : concat("all ", determiner, " ", n, " triangles are degenerate");
+}
+
+// Statements whose value could come from an image; only constants are supported.
+bool isTextureStatement(string_view kw) {
+    return kw.substr(0, 4) == "map_" || kw == "bump" || kw == "disp" || kw == "decal" ||
+           kw == "refl" || kw == "norm";
+}
+
+bool isMaterialStatement(string_view kw) {
+    return isTextureStatement(kw) || kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ns" ||
+           kw == "Ka" || kw == "Ni" || kw == "d" || kw == "Tr" || kw == "illum";
+}
+
+// Names an index kind in errors: "vertex index 9 is out of range (4 vertices ...)".
+struct IndexKind {
+    const char* singular;
+    const char* plural;
+};
+constexpr IndexKind kVertexIndex{"vertex", "vertices"};
+constexpr IndexKind kTexcoordIndex{"texture coordinate", "texture coordinates"};
+constexpr IndexKind kNormalIndex{"normal", "normals"};
+
+// Warnings that would repeat on many lines (an unknown statement, vertex
+// colours) become one per file and kind: the first line and a count.
+class RepeatedWarnings {
+public:
+    void add(const std::string& message, int line) {
+        ++seen_.try_emplace(message, Seen{line, 0}).first->second.count;
+    }
+    void flushInto(const std::string& file, std::vector<std::string>& warnings) {
+        std::vector<std::pair<int, std::string>> ordered;
+        for (const auto& [message, s] : seen_)
+            ordered.emplace_back(s.firstLine,
+                                 s.count > 1 ? concat(message, " (", s.count, " lines)") : message);
+        std::sort(ordered.begin(), ordered.end());
+        for (const auto& [line, text] : ordered)
+            warnings.push_back(SourceLocation{file, line}.str() + ": " + text);
+        seen_.clear();
+    }
+
+private:
+    struct Seen {
+        int firstLine;
+        size_t count;
+    };
+    std::map<std::string, Seen> seen_;
+};
+
+// A triangle as read: global OBJ indices (0-based), -1 for a missing normal.
+struct RawTriangle {
+    std::array<uint32_t, 3> position;
+    std::array<int32_t, 3> normal;
+    uint32_t material;  // index into Scene::materials
+    int line;
+};
+
+struct Group {
+    std::string name;
+    std::vector<RawTriangle> triangles;
+};
+
+struct LibraryMaterial {
+    Material material;
+    SourceLocation definedAt;
+    int sceneIndex = -1;  // set when a face first uses it
+};
+
+class ObjParser {
+public:
+    ObjParser(const std::string& path, const ObjOptions& options)
+        : path_(path), options_(options) {}
+
+    Scene parse();
+
+private:
+    void readStatements();
+    void assembleMeshes();
+
+    // OBJ statements
+    void parseVertex(const Statement& st, const SourceLocation& at);
+    void parseNormal(const Statement& st, const SourceLocation& at);
+    void parseTexcoord(const Statement& st, const SourceLocation& at);
+    void parseFace(const Statement& st, const SourceLocation& at);
+    uint32_t resolveIndex(string_view token, size_t defined, const IndexKind& kind,
+                          const SourceLocation& at) const;
+    void startGroup(string_view name);
+    void useMaterial(string_view name, const SourceLocation& at);
+    uint32_t currentMaterial();
+
+    // MTL
+    void loadMaterialLibrary(string_view name, const SourceLocation& at);
+    void parseMaterialStatement(const Statement& st, const SourceLocation& at, Material& m);
+
+    // Assembly
+    Mesh buildMesh(const Group& group);
+
+    std::string path_;
+    ObjOptions options_;
+    Scene scene_;
+    RepeatedWarnings repeated_;
+
+    std::vector<Vec3> positions_;
+    std::vector<Vec3> normals_;   // unit, or zero when the file's vn has zero length
+    std::vector<int> normalLines_;
+    size_t texcoordCount_ = 0;
+
+    std::vector<Group> groups_;
+    std::unordered_map<std::string, size_t> groupIndex_;
+    size_t currentGroup_ = 0;
+
+    std::map<std::string, LibraryMaterial> library_;
+    std::vector<std::string> libraryFiles_;
+    LibraryMaterial* currentLibraryMaterial_ = nullptr;  // null: no usemtl yet
+    int defaultMaterial_ = -1;
+
+    size_t nonConvexPolygons_ = 0;
+    int firstNonConvexLine_ = 0;
+    size_t degenerateTriangles_ = 0;
+    int firstDegenerateLine_ = 0;
+
+    // Reused across faces to avoid an allocation per line.
+    std::vector<uint32_t> facePositions_;
+    std::vector<int32_t> faceNormals_;
+    std::vector<Vec3> fanNormals_;
+};
+
+Scene ObjParser::parse() {
+    if (!(options_.creaseAngleDegrees >= 0 && options_.creaseAngleDegrees <= 180))
+        throw InputError(concat("crease angle ", options_.creaseAngleDegrees,
+                                " degrees is not in [0, 180]"));
+    scene_.name = path_;
+    readStatements();
+    assembleMeshes();
+    scene_.finalize();
+    return std::move(scene_);
+}
+
+void ObjParser::readStatements() {
+    std::string text;
+    if (!readFile(path_, text)) throwInputError(SourceLocation{path_}, "cannot open OBJ file");
+    startGroup(fs::path(path_).stem().string());
+    LineReader reader(std::move(text));
+    string_view line;
+    Statement st;
+    while (reader.next(line)) {
+        if (!splitStatement(line, st)) continue;
+        const SourceLocation at{path_, reader.line()};
+        const string_view kw = st.keyword;
+        if (kw == "v") parseVertex(st, at);
+        else if (kw == "vn") parseNormal(st, at);
+        else if (kw == "vt") parseTexcoord(st, at);
+        else if (kw == "f") parseFace(st, at);
+        else if (kw == "o" || kw == "g") startGroup(st.rest);
+        else if (kw == "usemtl") useMaterial(st.rest, at);
+        else if (kw == "mtllib")
+            for (string_view file : st.args) loadMaterialLibrary(file, at);
+        else if (kw == "s") continue;  // smoothing groups: the crease angle decides instead
+        else repeated_.add(concat("unknown statement '", kw, "' ignored"), at.line);
+    }
+    repeated_.flushInto(path_, scene_.warnings);
+    if (nonConvexPolygons_ > 0)
+        scene_.warnings.push_back(concat(
+            path_, ": ", count(nonConvexPolygons_, "polygon is", "polygons are"),
+            " not convex as seen from the first corner, so the fan triangulation overlaps",
+            " (first at line ", firstNonConvexLine_, ")"));
+}
+
+// Meshes from the groups: degenerate triangles dropped, normals completed.
+void ObjParser::assembleMeshes() {
+    size_t faceTriangles = 0;
+    for (const Group& g : groups_) faceTriangles += g.triangles.size();
+    if (faceTriangles == 0) throwInputError(SourceLocation{path_}, "no faces (f statements) found");
+
+    std::vector<size_t> trianglesPerMaterial(scene_.materials.size(), 0);
+    std::vector<int> firstLinePerMaterial(scene_.materials.size(), 0);
+    for (const Group& g : groups_)
+        for (const RawTriangle& t : g.triangles)
+            if (trianglesPerMaterial[t.material]++ == 0) firstLinePerMaterial[t.material] = t.line;
+
+    for (const Group& g : groups_) {
+        if (g.triangles.empty()) continue;
+        Mesh mesh = buildMesh(g);
+        if (!mesh.triangles.empty()) scene_.meshes.push_back(std::move(mesh));
+    }
+    if (degenerateTriangles_ > 0)
+        scene_.warnings.push_back(concat(path_, ": dropped ",
+                                         count(degenerateTriangles_, "degenerate triangle",
+                                               "degenerate triangles"),
+                                         " (first at line ", firstDegenerateLine_, ")"));
+
+    // A light whose every triangle was dropped would vanish without a word.
+    std::vector<size_t> keptPerMaterial(scene_.materials.size(), 0);
+    for (const Mesh& m : scene_.meshes)
+        for (uint32_t mat : m.materials) ++keptPerMaterial[mat];
+    for (size_t mat = 0; mat < scene_.materials.size(); ++mat)
+        if (scene_.materials[mat].emissive() && trianglesPerMaterial[mat] > 0 &&
+            keptPerMaterial[mat] == 0)
+            throwInputError(SourceLocation{path_, firstLinePerMaterial[mat]}, "light '",
+                            scene_.materials[mat].name, "' has zero area: ",
+                            allDegenerate(trianglesPerMaterial[mat], "its"));
+    if (scene_.meshes.empty())
+        throwInputError(SourceLocation{path_}, allDegenerate(faceTriangles, "the"));
+}
+
+// OBJ statements ------------------------------------------------------------
+
+void ObjParser::parseVertex(const Statement& st, const SourceLocation& at) {
+    const size_t n = st.args.size();
+    if (n != 3 && n != 4 && n != 6)
+        throwInputError(at, "v has ", count(n, "value", "values"),
+                        ", expected 3 or 4 (x y z [w]) or 6 (x y z r g b)");
+    double xyz[3];
+    for (size_t k = 0; k < n; ++k) {
+        const double value = parseNumber(st.args[k], at, "coordinate");
+        if (k < 3) xyz[k] = value;
+    }
+    if (n == 6) repeated_.add("vertex colours are not supported; ignored", at.line);
+    positions_.emplace_back(xyz[0], xyz[1], xyz[2]);
+}
+
+void ObjParser::parseNormal(const Statement& st, const SourceLocation& at) {
+    if (st.args.size() != 3)
+        throwInputError(at, "vn has ", count(st.args.size(), "value", "values"), ", expected 3");
+    const Vec3 n(parseNumber(st.args[0], at, "normal coordinate"),
+                 parseNumber(st.args[1], at, "normal coordinate"),
+                 parseNumber(st.args[2], at, "normal coordinate"));
+    // hypot does not overflow for large components, so only a true zero fails.
+    const double len = std::hypot(n.x, std::hypot(n.y, n.z));
+    normals_.push_back(len > 0 ? n / len : Vec3(0.0));
+    normalLines_.push_back(at.line);
+}
+
+void ObjParser::parseTexcoord(const Statement& st, const SourceLocation& at) {
+    if (st.args.empty() || st.args.size() > 3)
+        throwInputError(at, "vt has ", count(st.args.size(), "value", "values"),
+                        ", expected 1 to 3");
+    for (string_view a : st.args) parseNumber(a, at, "texture coordinate");
+    ++texcoordCount_;
+}
+
+uint32_t ObjParser::resolveIndex(string_view token, size_t defined, const IndexKind& kind,
+                                 const SourceLocation& at) const {
+    long long i = 0;
+    if (!parseInteger(token, i))
+        throwInputError(at, kind.singular, " index '", token, "' is not an integer");
+    if (i == 0) throwInputError(at, kind.singular, " index 0 is invalid (OBJ indices start at 1)");
+    // Negative indices count back from the last one defined so far (-1 = last).
+    const long long resolved = i > 0 ? i - 1 : static_cast<long long>(defined) + i;
+    if (resolved < 0 || resolved >= static_cast<long long>(defined))
+        throwInputError(at, kind.singular, " index ", i, " is out of range (",
+                        count(defined, kind.singular, kind.plural), " defined so far)");
+    return static_cast<uint32_t>(resolved);
+}
+
+void ObjParser::parseFace(const Statement& st, const SourceLocation& at) {
+    if (st.args.size() < 3)
+        throwInputError(at, "face has ", count(st.args.size(), "vertex", "vertices"),
+                        ", expected at least 3");
+    facePositions_.clear();
+    faceNormals_.clear();
+    for (string_view corner : st.args) {
+        // v, v/vt, v//vn or v/vt/vn
+        std::array<string_view, 3> parts;
+        size_t partCount = 0;
+        for (size_t start = 0;;) {
+            const size_t slash = corner.find('/', start);
+            if (partCount == parts.size())
+                throwInputError(at, "face vertex '", corner,
+                                "' is malformed (expected v, v/vt, v//vn or v/vt/vn)");
+            parts[partCount++] =
+                corner.substr(start, slash == string_view::npos ? slash : slash - start);
+            if (slash == string_view::npos) break;
+            start = slash + 1;
+        }
+        if (parts[0].empty() || (partCount == 3 && parts[2].empty()))
+            throwInputError(at, "face vertex '", corner,
+                            "' is malformed (expected v, v/vt, v//vn or v/vt/vn)");
+        facePositions_.push_back(resolveIndex(parts[0], positions_.size(), kVertexIndex, at));
+        if (partCount >= 2 && !parts[1].empty())
+            resolveIndex(parts[1], texcoordCount_, kTexcoordIndex, at);
+        int32_t normal = -1;
+        if (partCount == 3) {
+            normal =
+                static_cast<int32_t>(resolveIndex(parts[2], normals_.size(), kNormalIndex, at));
+            if (normals_[normal] == Vec3(0.0))
+                throwInputError(at, "normal ", normal + 1, " (line ", normalLines_[normal],
+                                ") has zero length");
+        }
+        faceNormals_.push_back(normal);
+    }
+
+    // A fan from corner 0 is right for convex polygons (and any polygon whose
+    // corners all see corner 0); otherwise some fan triangle faces against
+    // the polygon's vector area, which is the sum of the fan triangles' (taken
+    // relative to corner 0 for precision far from the origin).
+    const size_t n = facePositions_.size();
+    const Vec3& p0 = positions_[facePositions_[0]];
+    fanNormals_.clear();
+    Vec3 polygonNormal(0.0);
+    for (size_t k = 1; k + 1 < n; ++k) {
+        fanNormals_.push_back(glm::cross(positions_[facePositions_[k]] - p0,
+                                         positions_[facePositions_[k + 1]] - p0));
+        polygonNormal += fanNormals_.back();
+    }
+    bool overlaps = false;
+    const uint32_t material = currentMaterial();
+    Group& group = groups_[currentGroup_];
+    for (size_t k = 1; k + 1 < n; ++k) {
+        RawTriangle t;
+        t.position = {facePositions_[0], facePositions_[k], facePositions_[k + 1]};
+        t.normal = {faceNormals_[0], faceNormals_[k], faceNormals_[k + 1]};
+        t.material = material;
+        t.line = at.line;
+        group.triangles.push_back(t);
+        // Rounding may tip a collinear (degenerate) fan triangle either way.
+        if (glm::dot(fanNormals_[k - 1], polygonNormal) <
+            -1e-12 * glm::dot(polygonNormal, polygonNormal))
+            overlaps = true;
+    }
+    if (overlaps && nonConvexPolygons_++ == 0) firstNonConvexLine_ = at.line;
+}
+
+void ObjParser::startGroup(string_view name) {
+    std::string key(name.empty() ? fs::path(path_).stem().string() : std::string(name));
+    auto [it, inserted] = groupIndex_.try_emplace(key, groups_.size());
+    if (inserted) groups_.push_back(Group{key, {}});
+    currentGroup_ = it->second;
+}
+
+void ObjParser::useMaterial(string_view name, const SourceLocation& at) {
+    if (name.empty()) throwInputError(at, "usemtl without a material name");
+    const auto it = library_.find(std::string(name));
+    if (it == library_.end()) {
+        std::string read;
+        for (const std::string& f : libraryFiles_) read += (read.empty() ? "" : ", ") + f;
+        throwInputError(at, "usemtl '", name, "': unknown material (",
+                        read.empty() ? "no mtllib before this line"
+                                     : "material libraries read: " + read,
+                        ")");
+    }
+    currentLibraryMaterial_ = &it->second;
+}
+
+uint32_t ObjParser::currentMaterial() {
+    if (!currentLibraryMaterial_) {
+        if (defaultMaterial_ < 0) {
+            defaultMaterial_ = static_cast<int>(scene_.materials.size());
+            Material m;  // Kd 0.8, not emissive
+            m.name = "default";
+            scene_.materials.push_back(m);
+        }
+        return static_cast<uint32_t>(defaultMaterial_);
+    }
+    // Only materials that faces use enter the scene. library_ is a std::map,
+    // so the pointer stays valid while later libraries are added.
+    LibraryMaterial& lm = *currentLibraryMaterial_;
+    if (lm.sceneIndex < 0) {
+        lm.sceneIndex = static_cast<int>(scene_.materials.size());
+        scene_.materials.push_back(lm.material);
+    }
+    return static_cast<uint32_t>(lm.sceneIndex);
+}
+
+// MTL -------------------------------------------------------------------------
+
+void ObjParser::loadMaterialLibrary(string_view name, const SourceLocation& at) {
+    fs::path file{std::string(name)};
+    if (file.is_relative()) file = fs::path(path_).parent_path() / file;
+    const std::string mtlPath = file.lexically_normal().string();
+    if (std::find(libraryFiles_.begin(), libraryFiles_.end(), mtlPath) != libraryFiles_.end())
+        return;
+    std::string text;
+    if (!readFile(mtlPath, text))
+        throwInputError(at, "cannot open material library '", name, "' (", mtlPath, ")");
+    libraryFiles_.push_back(mtlPath);
+
+    RepeatedWarnings repeated;
+    LibraryMaterial* current = nullptr;
+    LibraryMaterial redefinition;  // parsed (so it is checked) but not used
+    LineReader reader(std::move(text));
+    string_view line;
+    Statement st;
+    while (reader.next(line)) {
+        if (!splitStatement(line, st)) continue;
+        const SourceLocation where{mtlPath, reader.line()};
+        const string_view kw = st.keyword;
+        if (kw == "newmtl") {
+            if (st.rest.empty()) throwInputError(where, "newmtl without a name");
+            const std::string matName(st.rest);
+            auto [it, inserted] = library_.try_emplace(matName);
+            if (inserted) {
+                current = &it->second;
+            } else {
+                scene_.warnings.push_back(concat(where.str(), ": material '", matName,
+                                                 "' is defined again; the definition at ",
+                                                 it->second.definedAt.str(), " is used"));
+                redefinition = LibraryMaterial{};
+                current = &redefinition;
+            }
+            current->material.name = matName;
+            current->definedAt = where;
+        } else if (!isMaterialStatement(kw)) {
+            repeated.add(concat("unknown statement '", kw, "' ignored"), where.line);
+        } else if (!current) {
+            throwInputError(where, kw, " before any newmtl");
+        } else {
+            parseMaterialStatement(st, where, current->material);
+        }
+    }
+    repeated.flushInto(mtlPath, scene_.warnings);
+}
+
+void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation& at, Material& m) {
+    const string_view kw = st.keyword;
+    const std::string valueName = concat(kw, " value");
+    if (isTextureStatement(kw)) {
+        // Options such as "-s 1 1 1" come first; the file name is last.
+        const string_view file = st.args.empty() ? string_view() : st.args.back();
+        static const char* const constants[] = {"Kd", "Ks", "Ke", "Ka", "Ns", "d"};
+        const string_view suffix = kw.substr(0, 4) == "map_" ? kw.substr(4) : string_view();
+        const bool hasConstant = std::any_of(std::begin(constants), std::end(constants),
+                                             [&](const char* c) { return suffix == c; });
+        scene_.warnings.push_back(concat(at.str(), ": texture ", kw, " '", file,
+                                         "' is not supported yet; ",
+                                         hasConstant ? concat("using ", suffix) : "ignored"));
+        return;
+    }
+    if (kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ka") {
+        const size_t n = st.args.size();
+        if (n != 1 && n != 3)
+            throwInputError(at, kw, " has ", count(n, "value", "values"), ", expected 1 or 3");
+        Rgb c;
+        for (int k = 0; k < 3; ++k)
+            c[k] = parseNumber(st.args[n == 1 ? 0 : k], at, valueName.c_str());
+        if (kw == "Ka") return;  // ambient: global illumination computes it
+        if (c.r < 0 || c.g < 0 || c.b < 0)
+            throwInputError(at, kw, " ", c.r, " ", c.g, " ", c.b, " has a negative value");
+        if (kw != "Ke" && (c.r > 1 || c.g > 1 || c.b > 1)) {
+            scene_.warnings.push_back(concat(at.str(), ": ", kw, " ", c.r, " ", c.g, " ", c.b,
+                                             " exceeds 1 (reflects more than it receives); "
+                                             "clamped to 1"));
+            c = glm::min(c, Rgb(1.0));
+        }
+        if (kw == "Kd") m.kd = c;
+        else if (kw == "Ks") m.ks = c;
+        else m.ke = c;
+        return;
+    }
+    // The remaining statements take one value.
+    if (st.args.size() != 1)
+        throwInputError(at, kw, " has ", count(st.args.size(), "value", "values"), ", expected 1");
+    if (kw == "illum") {
+        long long model = 0;
+        if (!parseInteger(st.args[0], model))
+            throwInputError(at, "illum value '", st.args[0], "' is not an integer");
+        if (model > 2)
+            scene_.warnings.push_back(concat(at.str(), ": illum ", model,
+                                             " (reflection, refraction or transparency) is not "
+                                             "supported; rendered as Lambert + Phong"));
+        return;
+    }
+    const double v = parseNumber(st.args[0], at, valueName.c_str());
+    if (kw == "Ns") {
+        if (v < 0) throwInputError(at, "Ns ", v, " is negative");
+        m.ns = v;
+    } else if ((kw == "d" && v < 1) || (kw == "Tr" && v > 0)) {
+        scene_.warnings.push_back(concat(at.str(), ": ", kw, " ", v,
+                                         " (transparency) is not supported; rendered opaque"));
+    }
+    // Ni (index of refraction) matters only for refraction, which illum reports.
+}
+
+// Assembly --------------------------------------------------------------------
+
+Mesh ObjParser::buildMesh(const Group& group) {
+    // The group's triangles over its own vertices, one per OBJ position.
+    Mesh raw;
+    raw.name = group.name;
+    std::vector<std::array<int32_t, 3>> cornerNormals;
+    std::unordered_map<uint32_t, uint32_t> localOf;
+    for (const RawTriangle& t : group.triangles) {
+        glm::uvec3 tri;
+        for (int k = 0; k < 3; ++k) {
+            const auto [it, inserted] =
+                localOf.try_emplace(t.position[k], static_cast<uint32_t>(raw.positions.size()));
+            if (inserted) raw.positions.push_back(positions_[t.position[k]]);
+            tri[k] = it->second;
+        }
+        raw.triangles.push_back(tri);
+        raw.materials.push_back(t.material);
+        raw.sourceLines.push_back(t.line);
+        cornerNormals.push_back(t.normal);
+    }
+
+    std::vector<size_t> removed;
+    removeDegenerateTriangles(raw, kDegenerateRelTol, &removed);
+    for (size_t r : removed) {
+        const int line = group.triangles[r].line;
+        if (degenerateTriangles_++ == 0 || line < firstDegenerateLine_) firstDegenerateLine_ = line;
+    }
+    if (!removed.empty()) {
+        size_t kept = 0, nextRemoved = 0;
+        for (size_t t = 0; t < cornerNormals.size(); ++t) {
+            if (nextRemoved < removed.size() && removed[nextRemoved] == t) ++nextRemoved;
+            else cornerNormals[kept++] = cornerNormals[t];
+        }
+        cornerNormals.resize(kept);
+    }
+
+    // Faces whose corners all have vn keep them (a vertex per position and
+    // normal); the others get computed normals. Triangle order is kept.
+    Mesh out;
+    out.name = group.name;
+    Mesh computed;
+    computed.name = group.name;
+    computed.positions = raw.positions;
+    std::map<std::pair<uint32_t, int32_t>, uint32_t> givenVertex;
+    std::vector<bool> isGiven(raw.triangles.size());
+    for (size_t t = 0; t < raw.triangles.size(); ++t) {
+        const std::array<int32_t, 3>& cn = cornerNormals[t];
+        isGiven[t] = cn[0] >= 0 && cn[1] >= 0 && cn[2] >= 0;
+        if (!isGiven[t]) {
+            computed.triangles.push_back(raw.triangles[t]);
+            continue;
+        }
+        glm::uvec3 tri;
+        for (int k = 0; k < 3; ++k) {
+            const auto [it, inserted] =
+                givenVertex.try_emplace(std::make_pair(raw.triangles[t][k], cn[k]),
+                                        static_cast<uint32_t>(out.positions.size()));
+            if (inserted) {
+                out.positions.push_back(raw.positions[raw.triangles[t][k]]);
+                out.normals.push_back(normals_[cn[k]]);
+            }
+            tri[k] = it->second;
+        }
+        out.triangles.push_back(tri);
+    }
+    if (computed.triangles.empty()) {
+        out.materials = std::move(raw.materials);
+        out.sourceLines = std::move(raw.sourceLines);
+        return out;
+    }
+    computeShadingNormals(computed, options_.creaseAngleDegrees);
+
+    const uint32_t offset = static_cast<uint32_t>(out.positions.size());
+    out.positions.insert(out.positions.end(), computed.positions.begin(), computed.positions.end());
+    out.normals.insert(out.normals.end(), computed.normals.begin(), computed.normals.end());
+    std::vector<glm::uvec3> given = std::move(out.triangles);
+    out.triangles.clear();
+    size_t nextGiven = 0, nextComputed = 0;
+    for (size_t t = 0; t < raw.triangles.size(); ++t)
+        out.triangles.push_back(isGiven[t] ? given[nextGiven++]
+                                           : computed.triangles[nextComputed++] + offset);
+    out.materials = std::move(raw.materials);
+    out.sourceLines = std::move(raw.sourceLines);
+    return out;
+}
+
+}  // namespace
+
+Scene loadObj(const std::string& path, const ObjOptions& options) {
+    return ObjParser(path, options).parse();
+}
+
+}  // namespace ml

@@ -1,0 +1,510 @@
+// OBJ/MTL loading, mesh clean-up and the built-in Cornell box.
+#include "core/Error.h"
+#include "core/MeshUtil.h"
+#include "core/loaders/ObjLoader.h"
+#include "core/scenes/CornellBox.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace ml;
+
+namespace {
+
+std::string dataFile(const std::string& name) {
+    return std::string(MESHLIGHT_TEST_DATA) + "/" + name;
+}
+
+// A fresh folder for files a test writes (CRLF files, one-line error cases).
+fs::path scratchDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path dir = fs::temp_directory_path() / "meshlight_test_loader" /
+                         (std::string(info->test_suite_name()) + "." + info->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string writeFile(const fs::path& dir, const std::string& name, const std::string& text) {
+    const fs::path path = dir / name;
+    std::ofstream(path, std::ios::binary) << text;
+    return path.string();
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+    std::string s;
+    for (const std::string& l : lines) s += l + "\n";
+    return s;
+}
+
+const Mesh& meshNamed(const Scene& scene, const std::string& name) {
+    for (const Mesh& m : scene.meshes)
+        if (m.name == name) return m;
+    throw std::runtime_error("no mesh " + name);
+}
+
+Vec3 triangleCentroid(const Mesh& m, size_t t) {
+    const Triangle3 p = m.triangle(t);
+    return (p[0] + p[1] + p[2]) / 3.0;
+}
+
+void expectNear(const Vec3& actual, const Vec3& expected, double tol) {
+    EXPECT_NEAR(actual.x, expected.x, tol);
+    EXPECT_NEAR(actual.y, expected.y, tol);
+    EXPECT_NEAR(actual.z, expected.z, tol);
+}
+
+// Every corner's shading normal is its triangle's geometric normal.
+void expectFlatNormals(const Mesh& m) {
+    ASSERT_EQ(m.normals.size(), m.positions.size()) << m.name;
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const Vec3 n = glm::normalize(m.areaNormal(t));
+        for (int k = 0; k < 3; ++k) expectNear(m.normals[m.triangles[t][k]], n, 1e-12);
+    }
+}
+
+}  // namespace
+
+// --- Well-formed files -------------------------------------------------------
+
+TEST(ObjLoader, QuadLight) {
+    const std::string path = dataFile("loader_quad_light.obj");
+    const Scene scene = loadObj(path);
+    EXPECT_EQ(scene.name, path);
+    EXPECT_TRUE(scene.warnings.empty()) << joined(scene.warnings);
+    ASSERT_EQ(scene.meshes.size(), 2u);
+    EXPECT_EQ(scene.meshes[0].name, "floor");
+    EXPECT_EQ(scene.meshes[1].name, "lamp");
+    EXPECT_EQ(scene.triangleCount(), 4u);
+    EXPECT_FALSE(scene.camera.has_value());
+
+    // Only the materials faces use enter the scene.
+    ASSERT_EQ(scene.materials.size(), 2u);
+    const Material& white = scene.materials[scene.meshes[0].materials[0]];
+    const Material& lamp = scene.materials[scene.meshes[1].materials[0]];
+    EXPECT_EQ(white.name, "white");
+    EXPECT_EQ(white.kd, Rgb(0.5));
+    EXPECT_FALSE(white.emissive());
+    EXPECT_EQ(lamp.name, "lamp");
+    EXPECT_EQ(lamp.kd, Rgb(0.78));
+    EXPECT_EQ(lamp.ks, Rgb(0.1));
+    EXPECT_EQ(lamp.ns, 20.0);
+    EXPECT_EQ(lamp.ke, Rgb(10, 8, 6));
+
+    ASSERT_EQ(scene.lights.size(), 1u);
+    const AreaLight& light = scene.lights[0];
+    EXPECT_EQ(light.name, "lamp");
+    EXPECT_EQ(light.radiance, Rgb(10, 8, 6));
+    EXPECT_NEAR(light.area, 0.5, 1e-15);
+    expectNear(light.normal, Vec3(0, -1, 0), 1e-15);
+    expectNear(light.centroid, Vec3(1, 1, 0.75), 1e-15);
+    EXPECT_TRUE(light.planar);
+
+    // Face lines are kept per triangle; the floor faces up.
+    EXPECT_EQ(scene.meshes[0].sourceLines, (std::vector<int>{10, 10}));
+    EXPECT_EQ(scene.meshes[1].sourceLines, (std::vector<int>{18, 18}));
+    for (const Vec3& n : scene.meshes[0].normals) EXPECT_EQ(n, Vec3(0, 1, 0));
+}
+
+TEST(ObjLoader, NegativeIndicesAndDefaultMaterial) {
+    const Scene scene = loadObj(dataFile("loader_negative.obj"));
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Mesh& m = scene.meshes[0];
+    EXPECT_EQ(m.name, "loader_negative");  // faces before any o/g
+    ASSERT_EQ(m.triangles.size(), 2u);
+    const Triangle3 a = m.triangle(0), b = m.triangle(1);
+    EXPECT_EQ(a[0], Vec3(0, 0, 0));
+    EXPECT_EQ(a[1], Vec3(1, 0, 0));
+    EXPECT_EQ(a[2], Vec3(1, 1, 0));
+    EXPECT_EQ(b[0], Vec3(0, 0, 1));
+    EXPECT_EQ(b[1], Vec3(1, 0, 1));
+    EXPECT_EQ(b[2], Vec3(1, 1, 1));
+    ASSERT_EQ(scene.materials.size(), 1u);
+    EXPECT_EQ(scene.materials[0].name, "default");
+    EXPECT_EQ(scene.materials[0].kd, Rgb(0.8));
+    EXPECT_TRUE(scene.lights.empty());
+}
+
+TEST(ObjLoader, PolygonsAreFanTriangulated) {
+    const std::string path = dataFile("loader_polygon.obj");
+    const Scene scene = loadObj(path);
+    const Mesh& hexagon = meshNamed(scene, "hexagon");
+    const Mesh& ell = meshNamed(scene, "ell");
+    EXPECT_EQ(hexagon.triangles.size(), 4u);
+    EXPECT_EQ(ell.triangles.size(), 4u);
+    double hexagonArea = 0;
+    for (size_t t = 0; t < hexagon.triangles.size(); ++t) {
+        hexagonArea += hexagon.area(t);
+        EXPECT_GT(hexagon.areaNormal(t).z, 0);
+    }
+    EXPECT_NEAR(hexagonArea, 6 * std::sqrt(3.0), 1e-12);
+    // The L shape is not convex as seen from its first corner: one warning.
+    EXPECT_EQ(scene.warnings,
+              (std::vector<std::string>{
+                  path + ": 1 polygon is not convex as seen from the first corner, so the fan "
+                         "triangulation overlaps (first at line 21)"}));
+}
+
+TEST(ObjLoader, CubeWithoutNormalsSplitsAtCreases) {
+    const Scene scene = loadObj(dataFile("loader_cube.obj"));
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Mesh& m = scene.meshes[0];
+    EXPECT_EQ(m.triangles.size(), 12u);
+    EXPECT_EQ(m.positions.size(), 24u);  // 8 corners x 3 faces at 90 degrees > 30
+    expectFlatNormals(m);
+
+    ObjOptions smooth;
+    smooth.creaseAngleDegrees = 180;
+    const Mesh round = loadObj(dataFile("loader_cube.obj"), smooth).meshes[0];
+    ASSERT_EQ(round.positions.size(), 8u);
+    // Equal angles (90 degrees per face) at every corner: the diagonal.
+    for (size_t v = 0; v < 8; ++v)
+        expectNear(round.normals[v], glm::normalize(round.positions[v] - Vec3(0.5)), 1e-12);
+}
+
+TEST(ObjLoader, GivenNormalsAreUsedPerFace) {
+    const Scene scene = loadObj(dataFile("loader_cube_vn.obj"));
+    const Mesh& m = scene.meshes[0];
+    ASSERT_EQ(m.triangles.size(), 12u);
+    // 8 smooth vertices from vn, plus the top face's 4 with computed normals.
+    EXPECT_EQ(m.positions.size(), 12u);
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const bool top = m.sourceLines[t] == 23;
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = m.triangles[t][k];
+            const Vec3 expected = top ? Vec3(0, 1, 0) : glm::normalize(m.positions[v] - Vec3(0.5));
+            expectNear(m.normals[v], expected, 1e-12);
+        }
+    }
+    // The triangles stay in file order.
+    EXPECT_TRUE(std::is_sorted(m.sourceLines.begin(), m.sourceLines.end()));
+}
+
+TEST(ObjLoader, TessellatedCylinderIsSmooth) {
+    // 64 side quads (5.625 degrees apart), radius 1, height 2, no caps.
+    const int n = 64;
+    std::ostringstream obj;
+    obj.precision(17);
+    for (int i = 0; i < n; ++i) {
+        const double a = 2 * kPi * i / n;
+        obj << "v " << std::cos(a) << " 0 " << -std::sin(a) << "\n";
+        obj << "v " << std::cos(a) << " 2 " << -std::sin(a) << "\n";
+    }
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        obj << "f " << 2 * i + 1 << " " << 2 * j + 1 << " " << 2 * j + 2 << " " << 2 * i + 2
+            << "\n";
+    }
+    const std::string path = writeFile(scratchDir(), "cylinder.obj", obj.str());
+
+    const Mesh m = loadObj(path).meshes[0];
+    EXPECT_EQ(m.positions.size(), size_t(2 * n));  // no vertex split
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+        const Vec3 p = m.positions[v];
+        expectNear(m.normals[v], glm::normalize(Vec3(p.x, 0, p.z)), 1e-12);
+    }
+    ObjOptions sharp;
+    sharp.creaseAngleDegrees = 5;  // below the 5.625 degrees between faces
+    EXPECT_EQ(loadObj(path, sharp).meshes[0].positions.size(), size_t(4 * n));
+}
+
+TEST(ObjLoader, CrlfLineEndings) {
+    // Written here rather than stored: Git may normalise a stored file's line
+    // endings, and the test would silently read LF.
+    const fs::path dir = scratchDir();
+    writeFile(dir, "crlf.mtl", "newmtl lamp\r\nKd 0.5\t# grey\r\nKe 1 2 3\r\n");
+    const std::string path = writeFile(
+        dir, "crlf.obj",
+        "mtllib crlf.mtl\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n\r\ng tri\r\nusemtl lamp\r\n"
+        "f 1 2 3\r\n");
+    const Scene scene = loadObj(path);
+    EXPECT_TRUE(scene.warnings.empty()) << joined(scene.warnings);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    EXPECT_EQ(scene.meshes[0].name, "tri");
+    EXPECT_EQ(scene.meshes[0].sourceLines, (std::vector<int>{8}));
+    EXPECT_EQ(scene.materials[0].name, "lamp");
+    EXPECT_EQ(scene.materials[0].kd, Rgb(0.5));
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_EQ(scene.lights[0].radiance, Rgb(1, 2, 3));
+}
+
+TEST(ObjLoader, ReenteredGroupContinuesItsMesh) {
+    const std::string path = writeFile(scratchDir(), "groups.obj",
+                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                       "g a\nf 1 2 3\ng b\nf 1 3 2\ng a\nf 3 2 1\n");
+    const Scene scene = loadObj(path);
+    ASSERT_EQ(scene.meshes.size(), 2u);
+    EXPECT_EQ(meshNamed(scene, "a").sourceLines, (std::vector<int>{5, 9}));
+    EXPECT_EQ(meshNamed(scene, "b").sourceLines, (std::vector<int>{7}));
+}
+
+TEST(ObjLoader, DegenerateTrianglesDroppedWithOneWarning) {
+    const std::string path = dataFile("loader_degenerate.obj");
+    const Scene scene = loadObj(path);
+    EXPECT_EQ(scene.triangleCount(), 1u);
+    EXPECT_EQ(scene.meshes[0].sourceLines, (std::vector<int>{7}));
+    EXPECT_EQ(scene.warnings, (std::vector<std::string>{
+                                  path + ": dropped 3 degenerate triangles (first at line 8)"}));
+}
+
+TEST(ObjLoader, TexturesAndIgnoredStatementsAreReported) {
+    const std::string obj = dataFile("loader_textures.obj");
+    const std::string mtl =
+        (fs::path(MESHLIGHT_TEST_DATA) / "loader_textures.mtl").lexically_normal().string();
+    const Scene scene = loadObj(obj);
+    const std::vector<std::string> expected = {
+        mtl + ":2: texture map_Kd 'wood.png' is not supported yet; using Kd",
+        mtl + ":3: Kd 1.5 0.5 0.25 exceeds 1 (reflects more than it receives); clamped to 1",
+        mtl + ":4: texture map_Ks 'spec.png' is not supported yet; using Ks",
+        mtl + ":5: texture bump 'bumps.png' is not supported yet; ignored",
+        mtl + ":8: d 0.5 (transparency) is not supported; rendered opaque",
+        mtl + ":9: illum 7 (reflection, refraction or transparency) is not supported; rendered "
+              "as Lambert + Phong",
+        mtl + ":6: unknown statement 'Pr' ignored (2 lines)",
+        obj + ":6: unknown statement 'vp' ignored",
+        obj + ":9: unknown statement 'l' ignored (2 lines)",
+    };
+    EXPECT_EQ(scene.warnings, expected);
+    // The clamped Kd is used; the second library (several per mtllib) supplies the lamp.
+    ASSERT_EQ(scene.materials.size(), 2u);
+    EXPECT_EQ(scene.materials[0].name, "wood");
+    EXPECT_EQ(scene.materials[0].kd, Rgb(1.0, 0.5, 0.25));
+    EXPECT_EQ(scene.lights.size(), 1u);
+}
+
+TEST(ObjLoader, RedefinedMaterialKeepsTheFirst) {
+    const fs::path dir = scratchDir();
+    const std::string first = writeFile(dir, "first.mtl", "newmtl stone\nKd 0.25\n");
+    const std::string second = writeFile(dir, "second.mtl", "\nnewmtl stone\nKd 0.75\n");
+    const std::string path = writeFile(dir, "redefined.obj",
+                                       "mtllib first.mtl second.mtl\nusemtl stone\n"
+                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const Scene scene = loadObj(path);
+    EXPECT_EQ(scene.materials.at(0).kd, Rgb(0.25));
+    EXPECT_EQ(scene.warnings, (std::vector<std::string>{
+                                  second + ":2: material 'stone' is defined again; the definition at " +
+                                  first + ":1 is used"}));
+}
+
+TEST(ObjLoader, VertexColoursAreIgnoredWithAWarning) {
+    const std::string path = writeFile(scratchDir(), "colours.obj",
+                                       "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n");
+    const Scene scene = loadObj(path);
+    EXPECT_EQ(scene.meshes[0].triangle(0)[1], Vec3(1, 0, 0));
+    EXPECT_EQ(scene.warnings, (std::vector<std::string>{
+                                  path + ":1: vertex colours are not supported; ignored (3 lines)"}));
+}
+
+// --- Errors ------------------------------------------------------------------
+
+struct ErrorCase {
+    const char* label;
+    const char* obj;
+    const char* mtl;      // written as case.mtl when not null
+    bool inMtl;           // the error is located in case.mtl
+    int line;             // 0: the whole file
+    const char* keyword;  // must appear in the message
+};
+
+class ObjLoaderError : public ::testing::TestWithParam<ErrorCase> {};
+
+constexpr const char* kTriangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+const ErrorCase kErrorCases[] = {
+    {"missing_mtl", "mtllib nowhere.mtl\n", nullptr, false, 1, "cannot open material library 'nowhere.mtl'"},
+    {"unknown_usemtl", "mtllib case.mtl\nusemtl stone\n", "newmtl wood\n", false, 2, "'stone': unknown material"},
+    {"usemtl_without_mtllib", "usemtl stone\n", nullptr, false, 1, "unknown material"},
+    {"nan", "v 0 0 0\nv 1 0 0\nv nan 1 0\n", nullptr, false, 3, "coordinate 'nan' is not a finite number"},
+    {"inf", "v 0 -inf 0\n", nullptr, false, 1, "coordinate '-inf' is not a finite number"},
+    {"overflow", "v 0 1e999 0\n", nullptr, false, 1, "'1e999' is out of the range"},
+    {"unparsable", "v 0 0 0\nv 1 2 x\n", nullptr, false, 2, "coordinate 'x' is not a number"},
+    {"vertex_values", "v 1 2\n", nullptr, false, 1, "v has 2 values"},
+    {"normal_values", "vn 0 1\n", nullptr, false, 1, "vn has 2 values"},
+    {"index_out_of_range", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", nullptr, false, 4, "vertex index 4 is out of range (3 vertices"},
+    {"negative_out_of_range", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", nullptr, false, 4, "vertex index -4 is out of range"},
+    {"index_zero", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", nullptr, false, 4, "index 0 is invalid"},
+    {"normal_index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n", nullptr, false, 5, "normal index 2 is out of range"},
+    {"texcoord_index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", nullptr, false, 4, "texture coordinate index 1 is out of range"},
+    {"bad_index", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3x\n", nullptr, false, 4, "index '3x' is not an integer"},
+    {"malformed_corner", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/1/1/1\n", nullptr, false, 4, "'3/1/1/1' is malformed"},
+    {"two_vertex_face", "v 0 0 0\nv 1 0 0\nf 1 2\n", nullptr, false, 3, "face has 2 vertices, expected at least 3"},
+    {"zero_normal", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", nullptr, false, 5, "normal 1 (line 4) has zero length"},
+    {"no_faces", "v 0 0 0\nv 1 0 0\n", nullptr, false, 0, "no faces"},
+    {"all_degenerate", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", nullptr, false, 0, "the only triangle is degenerate"},
+    {"light_of_zero_area", "mtllib case.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nusemtl lamp\nf 1 2 4\nf 2 1 4\n",
+     "newmtl lamp\nKe 1 1 1\n", false, 8, "light 'lamp' has zero area: all its 2 triangles are degenerate"},
+    {"kd_values", "mtllib case.mtl\n", "newmtl a\nKd 0.5 0.5\n", true, 2, "Kd has 2 values, expected 1 or 3"},
+    {"ks_values", "mtllib case.mtl\n", "newmtl a\nKs 0.5 0.5 0.5 0.5\n", true, 2, "Ks has 4 values"},
+    {"ke_values", "mtllib case.mtl\n", "# lamp\nnewmtl a\nKe 1 1\n", true, 3, "Ke has 2 values"},
+    {"ns_values", "mtllib case.mtl\n", "newmtl a\nNs 10 20\n", true, 2, "Ns has 2 values, expected 1"},
+    {"ns_negative", "mtllib case.mtl\n", "newmtl a\nNs -1\n", true, 2, "Ns -1 is negative"},
+    {"kd_negative", "mtllib case.mtl\n", "newmtl a\nKd 0.5 -0.1 0.5\n", true, 2, "Kd 0.5 -0.1 0.5 has a negative value"},
+    {"ke_negative", "mtllib case.mtl\n", "newmtl a\nKe -1\n", true, 2, "Ke -1 -1 -1 has a negative value"},
+    {"kd_not_a_number", "mtllib case.mtl\n", "newmtl a\nKd 0.5 abc 0.5\n", true, 2, "Kd value 'abc' is not a number"},
+    {"kd_nan", "mtllib case.mtl\n", "newmtl a\n\nKd nan\n", true, 3, "Kd value 'nan' is not a finite number"},
+    {"illum_not_integer", "mtllib case.mtl\n", "newmtl a\nillum 2.5\n", true, 2, "illum value '2.5' is not an integer"},
+    {"before_newmtl", "mtllib case.mtl\n", "Kd 1 1 1\n", true, 1, "Kd before any newmtl"},
+    {"newmtl_without_name", "mtllib case.mtl\n", "newmtl\n", true, 1, "newmtl without a name"},
+    {"usemtl_without_name", "usemtl   # none\n", nullptr, false, 1, "usemtl without a material name"},
+};
+
+TEST_P(ObjLoaderError, SaysFileLineAndWhat) {
+    const ErrorCase& c = GetParam();
+    const fs::path dir = scratchDir();
+    const std::string obj = writeFile(dir, "case.obj", c.obj);
+    const std::string mtl = c.mtl ? writeFile(dir, "case.mtl", c.mtl) : std::string();
+    const std::string file = c.inMtl ? mtl : obj;
+    const std::string prefix = c.line > 0 ? file + ":" + std::to_string(c.line) + ": " : file + ": ";
+    try {
+        loadObj(obj);
+        FAIL() << "no error for " << c.label;
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind(prefix, 0), 0u) << what;
+        EXPECT_NE(what.find(c.keyword), std::string::npos) << what;
+        EXPECT_EQ(e.where().file, file);
+        EXPECT_EQ(e.where().line, c.line);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, ObjLoaderError, ::testing::ValuesIn(kErrorCases),
+                         [](const ::testing::TestParamInfo<ErrorCase>& info) {
+                             return std::string(info.param.label);
+                         });
+
+TEST(ObjLoader, MissingFile) {
+    const std::string path = scratchDir().string() + "/absent.obj";
+    try {
+        loadObj(path);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), path + ": cannot open OBJ file");
+    }
+}
+
+TEST(ObjLoader, CreaseAngleOutOfRange) {
+    ObjOptions options;
+    options.creaseAngleDegrees = 200;
+    EXPECT_THROW(loadObj(dataFile("loader_cube.obj"), options), InputError);
+}
+
+// --- MeshUtil ----------------------------------------------------------------
+
+TEST(MeshUtil, RemoveDegenerateKeepsPerTriangleDataAligned) {
+    Mesh m;
+    m.name = "strip";
+    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1e-13, 0), Vec3(kInf, 0, 0)};
+    m.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 0, 2}, {0, 1, 4}, {2, 1, 0}};
+    m.materials = {0, 1, 2, 3, 4};
+    m.sourceLines = {10, 11, 12, 13, 14};
+    std::vector<size_t> removed;
+    // The sliver's area (5e-14) is below (1e-6 · diagonal)² = 2e-12.
+    EXPECT_EQ(removeDegenerateTriangles(m, 1e-6, &removed), 3u);
+    EXPECT_EQ(removed, (std::vector<size_t>{1, 2, 3}));
+    EXPECT_EQ(m.triangles.size(), 2u);
+    EXPECT_EQ(m.materials, (std::vector<uint32_t>{0, 4}));
+    EXPECT_EQ(m.sourceLines, (std::vector<int>{10, 14}));
+    // Scale-relative: the same mesh in units 1000 times smaller loses nothing more.
+    for (Vec3& p : m.positions) p *= 1e-3;
+    EXPECT_EQ(removeDegenerateTriangles(m, 1e-6), 0u);
+}
+
+TEST(MeshUtil, ShadingNormalsWeldByPosition) {
+    // Two coplanar triangles given with separate (duplicated) corners weld
+    // into one quad of 4 vertices; a third, folded up by 90 degrees along an
+    // edge, keeps its own.
+    Mesh m;
+    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0),
+                   Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0),
+                   Vec3(1, 0, 0), Vec3(1, 0, 1), Vec3(1, 1, 0)};
+    m.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
+    computeShadingNormals(m, 30);
+    EXPECT_EQ(m.positions.size(), 7u);
+    EXPECT_EQ(m.triangles[0][0], m.triangles[1][0]);
+    EXPECT_EQ(m.triangles[0][2], m.triangles[1][1]);
+    for (size_t t = 0; t < 3; ++t)
+        for (int k = 0; k < 3; ++k)
+            expectNear(m.normals[m.triangles[t][k]], glm::normalize(m.areaNormal(t)), 1e-15);
+    EXPECT_THROW(computeShadingNormals(m, -1), std::invalid_argument);
+}
+
+// --- Built-in Cornell box ----------------------------------------------------
+
+TEST(CornellBox, Geometry) {
+    const Scene scene = makeCornellBox();
+    EXPECT_EQ(scene.name, "cornell");
+    EXPECT_TRUE(scene.warnings.empty());
+    const std::vector<std::string> names = {"floor", "ceiling",    "back",      "left",
+                                            "right", "shortBlock", "tallBlock", "light"};
+    ASSERT_EQ(scene.meshes.size(), names.size());
+    for (size_t i = 0; i < names.size(); ++i) EXPECT_EQ(scene.meshes[i].name, names[i]);
+    // 5 walls x 2 + 2 blocks x 5 faces x 2 + light 2.
+    EXPECT_EQ(scene.triangleCount(), 32u);
+    for (const Mesh& m : scene.meshes) expectFlatNormals(m);
+
+    const Vec3 boxCenter(278, 274.4, 279.6);
+    for (size_t i = 0; i < 5; ++i) {
+        const Mesh& wall = scene.meshes[i];
+        for (size_t t = 0; t < wall.triangles.size(); ++t)
+            EXPECT_GT(glm::dot(wall.areaNormal(t), boxCenter - triangleCentroid(wall, t)), 0)
+                << wall.name << " triangle " << t;
+    }
+    for (size_t i = 5; i < 7; ++i) {
+        const Mesh& block = scene.meshes[i];
+        EXPECT_EQ(block.triangles.size(), 10u);
+        Vec3 center(0.0);
+        for (const Vec3& p : block.positions) center += p / double(block.positions.size());
+        for (size_t t = 0; t < block.triangles.size(); ++t)
+            EXPECT_GT(glm::dot(block.areaNormal(t), triangleCentroid(block, t) - center), 0)
+                << block.name << " triangle " << t;
+    }
+    EXPECT_EQ(scene.materials[meshNamed(scene, "left").materials[0]].kd, Rgb(0.63, 0.065, 0.05));
+    EXPECT_EQ(scene.materials[meshNamed(scene, "right").materials[0]].kd, Rgb(0.14, 0.45, 0.091));
+    EXPECT_EQ(scene.materials[meshNamed(scene, "floor").materials[0]].kd, Rgb(0.725, 0.71, 0.68));
+}
+
+TEST(CornellBox, OneLightFacingDown) {
+    const Scene scene = makeCornellBox();
+    ASSERT_EQ(scene.lights.size(), 1u);
+    const AreaLight& light = scene.lights[0];
+    EXPECT_EQ(scene.meshes[light.mesh].name, "light");
+    EXPECT_NEAR(light.area, 130.0 * 105.0, 1e-9);
+    EXPECT_EQ(light.normal, Vec3(0, -1, 0));
+    EXPECT_EQ(light.radiance, Rgb(17, 12, 4));
+    EXPECT_EQ(scene.materials[light.material].kd, Rgb(0.78));
+    EXPECT_TRUE(light.planar);
+    expectNear(light.centroid, Vec3(278, 548.3, 279.5), 1e-9);
+}
+
+TEST(CornellBox, Camera) {
+    const Scene scene = makeCornellBox();
+    ASSERT_TRUE(scene.camera.has_value());
+    EXPECT_EQ(scene.camera->position, Vec3(278, 273, -800));
+    EXPECT_EQ(scene.camera->target, Vec3(278, 273, 0));
+    EXPECT_EQ(scene.camera->up, Vec3(0, 1, 0));
+    EXPECT_NEAR(scene.camera->fovYDegrees, 39.3077, 1e-4);
+    EXPECT_NO_THROW(scene.camera->validate());
+}
+
+// --- Public scene --------------------------------------------------------------
+
+TEST(ObjLoader, McGuireCornellBox) {
+    const std::string path =
+        std::string(MESHLIGHT_SHARED_SCENES) + "/mcguire-cornellbox/CornellBox-Original.obj";
+    if (!fs::exists(path)) GTEST_SKIP() << path << " is absent";
+    const Scene scene = loadObj(path);
+    EXPECT_TRUE(scene.warnings.empty()) << joined(scene.warnings);
+    EXPECT_EQ(scene.triangleCount(), 36u);
+    ASSERT_EQ(scene.lights.size(), 1u);
+    const AreaLight& light = scene.lights[0];
+    EXPECT_EQ(light.name, "light");
+    EXPECT_EQ(light.radiance, Rgb(17, 12, 4));
+    EXPECT_EQ(light.triangles.size(), 2u);
+    EXPECT_LT(light.normal.y, -0.99);
+}
