@@ -1,10 +1,11 @@
 #include "Image.h"
 
+#include "core/io/AtomicFile.h"
+
 #include <OpenImageIO/imageio.h>
-#include <unistd.h>
+#include <unistd.h>  // access(): is the output directory writable?
 
 #include <algorithm>
-#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -46,57 +47,6 @@ namespace {
 
 const char* const kSupportedFormats = "use .exr, .hdr or .png";
 
-// The directory a file named by `path` lives in ("." for a bare file name).
-fs::path directoryOf(const std::string& path) {
-    const fs::path dir = fs::path(path).parent_path();
-    return dir.empty() ? fs::path(".") : dir;
-}
-
-void requireOutputDirectory(const std::string& path) {
-    const fs::path dir = directoryOf(path);
-    std::error_code ec;
-    if (!fs::exists(dir, ec))
-        throwInputError(SourceLocation{path}, "output directory '", dir.string(), "' does not exist");
-    if (!fs::is_directory(dir, ec))
-        throwInputError(SourceLocation{path}, "'", dir.string(), "' is not a directory");
-}
-
-// A temporary sibling of the target file. rename() within one directory is
-// atomic on POSIX, so readers of the target (and a crash mid-write) never see
-// a partial image; the destructor removes the temporary unless committed.
-class TempSibling {
-public:
-    explicit TempSibling(const std::string& target) : target_(target) {
-        // pid and a counter keep concurrent writers, in this process or
-        // another, from sharing a temporary.
-        static std::atomic<unsigned> counter{0};
-        const fs::path t(target);
-        path_ = directoryOf(target) /
-                concat(".", t.filename().string(), ".tmp-", ::getpid(), "-", counter++);
-    }
-    TempSibling(const TempSibling&) = delete;
-    TempSibling& operator=(const TempSibling&) = delete;
-    ~TempSibling() {
-        if (!committed_) {
-            std::error_code ignored;  // nothing useful to do if cleanup itself fails
-            fs::remove(path_, ignored);
-        }
-    }
-
-    const fs::path& path() const { return path_; }
-
-    void commit() {
-        std::error_code ec;
-        fs::rename(path_, target_, ec);
-        if (ec) throwInputError(SourceLocation{target_}, "cannot write: ", ec.message());
-        committed_ = true;
-    }
-
-private:
-    std::string target_;
-    fs::path path_;
-    bool committed_ = false;
-};
 
 // OpenImageIO plugin name of each format: the temporary's name has no
 // meaningful extension, so the writer is chosen explicitly.
@@ -112,8 +62,8 @@ const char* oiioFormatName(ImageFormat format) {
 // Writes `pixels` (laid out as `spec`, of type `pixelType`) through a temporary.
 void writeAtomically(const std::string& path, ImageFormat format, const OIIO::ImageSpec& spec,
                      OIIO::TypeDesc pixelType, const void* pixels) {
-    requireOutputDirectory(path);
-    TempSibling temp(path);
+    checkOutputDirectory(path);
+    AtomicOutput temp(path);
     // Declared after `temp` so that the file is closed before it is removed.
     auto out = OIIO::ImageOutput::create(oiioFormatName(format));
     if (!out)
@@ -143,7 +93,7 @@ ImageFormat outputFormat(const std::string& path) {
 
 void checkOutputPath(const std::string& path) {
     outputFormat(path);
-    requireOutputDirectory(path);
+    checkOutputDirectory(path);
     std::error_code ec;
     if (fs::is_directory(path, ec)) throwInputError(SourceLocation{path}, "is a directory");
     // access() also reports read-only mounts; the effective/real uid

@@ -278,6 +278,13 @@ struct DirectLightSampler::Impl {
 
         gl.BindFramebuffer(GL_FRAMEBUFFER, fbo.id());
         gl.Viewport(0, 0, size, size);
+        // Reversed depth in [0, 1]: float depth keeps its precision at every
+        // distance, so occluders 1e-4 in front of a light still win. Set per
+        // image: other passes share the context.
+        gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+        gl.Enable(GL_DEPTH_CLAMP);
+        gl.Disable(GL_CULL_FACE);
+        gl.Disable(GL_BLEND);
         // Clears obey the write masks: open them all first.
         gl.DepthMask(GL_TRUE);
         gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -508,14 +515,7 @@ struct DirectLightSampler::Impl {
 
 DirectLightSampler::DirectLightSampler(GlContext& context, const Scene& scene,
                                        const DirectSamplerSettings& settings)
-    : impl_(std::make_unique<Impl>(context, scene, settings)) {
-    const GlApi& gl = context.gl();
-    // Reversed depth in [0, 1]: float depth keeps its precision at every
-    // distance, so occluders 1e-4 in front of a light still win.
-    gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-    gl.Enable(GL_DEPTH_CLAMP);
-    gl.Disable(GL_CULL_FACE);
-}
+    : impl_(std::make_unique<Impl>(context, scene, settings)) {}
 
 DirectLightSampler::~DirectLightSampler() = default;
 

@@ -3,18 +3,13 @@
 // of the pixel the GPU tested.
 #pragma once
 
+#include "core/Random.h"
+
 #include <cstdint>
 
 namespace ml::jitter {
 
-inline uint32_t hash(uint32_t x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
+inline uint32_t hash(uint32_t x) { return hash32(x); }
 
 // Sample `bit` of pixel `pixel` in [0,1)² from the pixel's lower-left corner.
 inline void position(uint32_t pixel, uint32_t bit, uint32_t seed, int strataX, int strataY, bool jitter,
@@ -42,10 +37,6 @@ inline void strata(int bits, int& x, int& y) {
     }
 }
 
-// Mixes a user seed with a sample's identity (vertex, light, pass) into one
-// 32-bit seed, so every repeat draws fresh jitter and runs are reproducible.
-inline uint32_t seedFor(uint32_t userSeed, uint32_t a, uint32_t b = 0, uint32_t c = 0) {
-    return hash(hash(hash(userSeed ^ 0x51ed270bu) ^ a) + 0x68e31da4u * b + 0x1b56c4e9u * c);
-}
+using ml::seedFor;
 
 }  // namespace ml::jitter

@@ -39,6 +39,8 @@ namespace ml {
     X(PFNGLFRONTFACEPROC, FrontFace)                                    \
     X(PFNGLCLIPCONTROLPROC, ClipControl)                                \
     X(PFNGLBLENDFUNCPROC, BlendFunc)                                    \
+    X(PFNGLBLENDEQUATIONPROC, BlendEquation)                            \
+    X(PFNGLBINDTEXTUREUNITPROC, BindTextureUnit)                        \
     X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                            \
     X(PFNGLREADPIXELSPROC, ReadPixels)                                  \
     X(PFNGLREADBUFFERPROC, ReadBuffer)                                  \

@@ -1,0 +1,21 @@
+// The subcommands of the `meshlight` binary. Each parses its own options
+// (see Options.h), returns the process exit code and lets InputError escape
+// for main() to report.
+#pragma once
+
+#include "core/Scene.h"
+
+#include <string>
+#include <vector>
+
+namespace ml {
+
+int runRender(const std::vector<std::string>& args);
+int runProbe(const std::vector<std::string>& args);
+int runBench(const std::vector<std::string>& args);
+
+// A scene argument: "cornell" (the built-in measured Cornell box), "bench"
+// (the paper's §6.1 bench scene) or the path of an OBJ file.
+Scene loadSceneArgument(const std::string& arg);
+
+}  // namespace ml

@@ -1,0 +1,47 @@
+// meshlight: progressive global illumination by multi-mesh caching with
+// hardware sampling (Fournier & Péroche).
+#include "Commands.h"
+#include "core/Error.h"
+
+#include <cstdio>
+#include <exception>
+
+namespace {
+
+const char* kUsage =
+    "usage: meshlight <command> [options]\n"
+    "commands:\n"
+    "  render SCENE   render an image (SCENE: cornell, bench or an OBJ file)\n"
+    "  probe SCENE    direct irradiance at sensor points from a CSV\n"
+    "  bench direct   accuracy against time of the direct-light samplers\n"
+    "Run 'meshlight <command> --help' for its options.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        std::fputs(kUsage, stderr);
+        return 2;
+    }
+    // Line-buffered so the plan and the progress (stderr) interleave in order.
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
+    const std::string command = argv[1];
+    const std::vector<std::string> args(argv + 2, argv + argc);
+    try {
+        if (command == "render") return ml::runRender(args);
+        if (command == "probe") return ml::runProbe(args);
+        if (command == "bench") return ml::runBench(args);
+        if (command == "--help" || command == "-h" || command == "help") {
+            std::fputs(kUsage, stdout);
+            return 0;
+        }
+        std::fprintf(stderr, "meshlight: unknown command '%s'\n%s", command.c_str(), kUsage);
+        return 2;
+    } catch (const ml::InputError& e) {
+        std::fprintf(stderr, "meshlight: error: %s\n", e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "meshlight: failed: %s\n", e.what());
+        return 1;
+    }
+}
