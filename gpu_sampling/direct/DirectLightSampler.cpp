@@ -471,8 +471,12 @@ struct DirectLightSampler::Impl {
             times.setup = seconds(t0, Clock::now());
             return result;
         }
+        // Lambert at the receiver itself, not the lifted eye: where nothing
+        // occludes, the control variate is then exact, with no bias from the lift.
         double exactUnoccluded = 0;
-        for (const Polygon3& p : pieces) exactUnoccluded += cosineSolidAngle(eye, n, p);
+        for (const Triangle3& t : light.geometry)
+            if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0)
+                exactUnoccluded += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
 
         const Vec3 align = light.geometry[0][1] - light.geometry[0][0];
         const std::vector<SamplingFrustum> frusta = fitFrusta(pieces, eye, align, settings.maxHalfAngleDegrees);
