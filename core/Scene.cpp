@@ -1,24 +1,13 @@
 #include "Scene.h"
 
+#include "DisjointSets.h"
 #include "Error.h"
 
 #include <map>
-#include <numeric>
 
 namespace ml {
 
 namespace {
-
-// Union-find over triangle indices.
-struct DisjointSets {
-    std::vector<uint32_t> parent;
-    explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    uint32_t find(uint32_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
-};
 
 struct Vec3Less {
     bool operator()(const Vec3& a, const Vec3& b) const {
@@ -52,7 +41,7 @@ AreaLight makeLight(const Scene& scene, uint32_t meshIndex, uint32_t material,
     light.normal = nlen > 0 ? weightedNormal / nlen : Vec3(0.0);
     // Planar when every vertex lies within 1e-6 of the light's size from the
     // mean plane and every triangle faces the same way.
-    const double tol = 1e-6 * std::max(light.bounds.diagonal(), 1e-300);
+    const double tol = kLightPlanarTolerance * std::max(light.bounds.diagonal(), 1e-300);
     light.planar = nlen > 0;
     for (size_t k = 0; k < tris.size() && light.planar; ++k) {
         const Vec3 an = glm::normalize(mesh.areaNormal(tris[k]));

@@ -49,6 +49,10 @@ struct Mesh {
     double area(size_t t) const { return 0.5 * glm::length(areaNormal(t)); }
 };
 
+// A light is planar when every vertex lies within this fraction of the
+// light's bounding diagonal from its mean plane.
+constexpr double kLightPlanarTolerance = 1e-6;
+
 // A connected set of emissive triangles of one material and one mesh.
 struct AreaLight {
     std::string name;                 // "<material>" or "<material>#k" when a material makes several
@@ -60,7 +64,7 @@ struct AreaLight {
     double area = 0;                  // total area (scene units²)
     Vec3 centroid{0.0};               // area-weighted centroid
     Vec3 normal{0.0};                 // unit area-weighted mean normal (emitting side)
-    bool planar = false;              // every triangle in one plane (within 1e-6 of its size)
+    bool planar = false;              // every triangle in one plane (kLightPlanarTolerance)
     Bounds3 bounds;
 
     // Power emitted, W·(scene unit)²/m² (Φ = π L A for a Lambertian emitter).

@@ -1,6 +1,8 @@
 // The only translation unit that includes CGAL (see core/CMakeLists.txt).
 #include "ExactIrradiance.h"
 
+#include "core/DisjointSets.h"
+
 #include "Lambert.h"
 #include "core/Error.h"
 
@@ -15,7 +17,6 @@
 #include <initializer_list>
 #include <iterator>
 #include <map>
-#include <numeric>
 #include <stdexcept>
 
 namespace ml {
@@ -53,8 +54,6 @@ constexpr double kPyramidMargin = 1e-9;
 // (times min(1, height)) left by rounding along clipped edges: a solid angle
 // of at most this times the merged outline's perimeter over the height.
 constexpr double kRoundingNotch = 1e-14;
-// Same tolerance as Scene::finalize's planarity test.
-constexpr double kPlanarTolerance = 1e-6;
 
 struct TriangleRange {
     const Triangle3* begin;
@@ -124,16 +123,6 @@ bool convexTurn(const Vec2& p, const Vec2& q, const Vec2& r, double tolerance) {
     const Vec2 in = q - p, out = r - q;
     return glm::dot(in, out) > 0 && std::abs(in.x * out.y - in.y * out.x) <= tolerance * glm::length(r - p);
 }
-
-struct DisjointSets {
-    std::vector<uint32_t> parent;
-    explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    uint32_t find(uint32_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
-};
 
 // The vertices of `edges` as one closed loop that turns left (or goes
 // straight, see convexTurn) at every vertex and winds once: a convex polygon
@@ -272,7 +261,7 @@ void requirePlanar(const std::vector<Triangle3>& light) {
     for (size_t k = 0; k < light.size(); ++k)
         for (const Vec3& p : light[k]) {
             const double distance = std::abs(glm::dot(p - centroid, normal));
-            if (distance > kPlanarTolerance * size)
+            if (distance > kLightPlanarTolerance * size)
                 throw std::invalid_argument(concat("exactVisibleCosineSolidAngle: light triangle ", k,
                                                    " has a vertex ", distance,
                                                    " away from the light's plane (light size ", size,
