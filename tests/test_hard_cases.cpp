@@ -138,7 +138,7 @@ Scene transformedBench(double s, const Vec3& t) {
 // --- the worst-case bound ----------------------------------------------------
 
 Vec3 eyeOf(const Scene& scene, const DirectSamplerSettings& s, const Vec3& x, const Vec3& n) {
-    return x + glm::normalize(n) * (s.eyeOffset * scene.bounds.diagonal());
+    return x + glm::normalize(n) * samplingEyeLift(scene.lights[0], x, s.eyeOffset, scene.bounds.diagonal());
 }
 
 std::vector<SamplingFrustum> frustaOf(const Scene& scene, const DirectSamplerSettings& s, const Vec3& x,
@@ -421,16 +421,11 @@ TEST(HardCases, ReceiverJustBelowTheLightsPlane) {
     // The light fills nearly a hemisphere: the sampler splits it among cube
     // faces.
     //
-    // KNOWN FAILURE (reported; the sampler is not ours to change): "outside
-    // the footprint". The eye's lift (1e-6 × the 4.36 diagonal = 4.4e-6) is
-    // 4.4% of the height here. Under the light that does not matter (E is
-    // flat in the height there: the lift moves it by 3e-9), but 2e-4 outside
-    // the footprint the light arrives at grazing angles and E falls from
-    // 0.1658 at the receiver to 0.1537 at the eye (−7.3%): the plain
-    // estimator returns the latter. That breaks the settings' promise that
-    // points 1e-4 of a light's size away "stay accurate", so the lift budget
-    // (1e-3 of Lambert) fails there. (Since the control variate takes
-    // Lambert at the receiver, it is exact there.)
+    // "Outside the footprint" is the sharp one: 2e-4 outside it the light
+    // arrives at grazing angles and E changes by 7% over a lift of 4.4e-6
+    // (the scene-relative lift). The sampler's lift is therefore also held
+    // to 1e-4 of the distance to the light (samplingEyeLift), which keeps
+    // the lift's effect within 1e-3 of Lambert here.
     const Scene scene = makeScene({unitLight(), floorMesh()});
     const double h = 1e-4;
     const std::vector<Receiver> receivers = {{Vec3(0.1, 1 - h, 0.05), kY, "under the centre"},
@@ -694,25 +689,12 @@ TEST(HardCases, FoldedLightIsTheSumOfLambertOverItsTriangles) {
     // other, so the exact value is the sum of Lambert over the triangles
     // facing the receiver.
     //
-    // KNOWN FAILURES (reported; the sampler is not ours to change):
-    // 1. "cv" on this light returns 0 everywhere (exact 0.49 at the floor
-    //    point). DirectLightSampler::Impl::weigh sums only the occluded
-    //    samples' weights whenever the estimator is ControlVariate, but for
-    //    a non-planar light sample() falls back to lightWeight −
-    //    occludedWeight, and lightWeight then holds the occluded samples
-    //    only: the difference is 0 (and `unoccluded` is 0 too).
-    // 2. "plain", jittered with 4 bits: the mean of 32 passes is 0.37% low at
-    //    the floor point (0.48857 ± 0.00009 against 0.49037, 20 standard
-    //    errors) and 0.2% to 0.5% low at the other receivers; with 1 bit,
-    //    or the same two triangles as two planar lights, it is unbiased;
-    //    swapping the triangles' order changes the error (−0.35% → −0.94%,
-    //    256 passes each). Diagnosis:
-    //    for a non-planar light the light pass writes depth, and a fragment's
-    //    depth is its triangle's plane extrapolated to the pixel centre; in a
-    //    pixel that the fold edge crosses, the triangle drawn second fails
-    //    GL_GREATER against the first one's extrapolated depth and loses its
-    //    samples in that pixel. (With 1 bit a pixel holds only one triangle's
-    //    sample, so nothing is lost.)
+    // Two defects this test caught, both fixed in the sampler: the control
+    // variate's occluded-only weighting was applied to non-planar lights
+    // (which fall back to the plain estimator: it returned 0), and the light
+    // pass of a non-planar light lost samples along the fold edge to the
+    // depth test (plain estimates 0.2-1% low with 4 bits). The light's depth
+    // now goes in a pass of its own and its samples as an untested union.
     Mesh light;
     light.name = "folded";
     const Vec3 a(-0.5, 1.0, -0.5), b(0.5, 1.0, -0.5), c(0.5, 1.0, 0.5), e(0.5, 0.5, 0.0);

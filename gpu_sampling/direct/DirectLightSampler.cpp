@@ -330,7 +330,7 @@ struct DirectLightSampler::Impl {
         const Clock::time_point t3 = Clock::now();
         times.readback += seconds(t2, t3);
 
-        weigh(f, n, seed, bits, sx, sy, jitter, out);
+        weigh(f, n, seed, bits, sx, sy, jitter, planar, out);
         t0 = Clock::now();
         times.weighting += seconds(t3, t0);
         return out;
@@ -356,21 +356,30 @@ struct DirectLightSampler::Impl {
     // clipped to its plane exactly, per sample); another needs one.
     void renderBits(size_t lightIndex, const glm::mat4& clipFromEyeRel, const glm::mat4& clipFromOrigin,
                     bool planar) {
-        gl.Enable(GL_COLOR_LOGIC_OP);
-        if (planar) gl.Disable(GL_DEPTH_TEST);
-        else {
+        setPassState(true, planar, lightIndex, clipFromEyeRel);
+        if (!planar) {
+            // The nearest light surface's depth first, on its own: were the
+            // light's samples drawn with the depth test, a triangle behind
+            // another at a pixel's centre would lose its samples along their
+            // shared edge. Its samples then go in as a union, untested.
             gl.Enable(GL_DEPTH_TEST);
             gl.DepthFunc(GL_GREATER);
+            gl.DepthMask(GL_TRUE);
+            gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            drawLight();
+            gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+            gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
         }
+        gl.Disable(GL_DEPTH_TEST);
+        gl.DepthMask(GL_FALSE);
+        gl.Enable(GL_COLOR_LOGIC_OP);
         gl.LogicOp(GL_OR_INVERTED);
-        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        gl.DepthMask(planar ? GL_FALSE : GL_TRUE);
-        setPassState(true, planar, lightIndex, clipFromEyeRel);
         drawLight();
+        if (!planar) gl.Enable(GL_DEPTH_TEST);  // occluders must lie in front of the light
 
         gl.LogicOp(GL_AND);
         gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-        gl.DepthMask(GL_FALSE);
         setPassState(false, planar, lightIndex, clipFromOrigin);
         drawOccluders();
         gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -417,14 +426,14 @@ struct DirectLightSampler::Impl {
     // point. In camera coordinates the direction through window point (u, v)
     // is (u, v, 1), so cosθ·dω/dA = (n·s)/|s|⁴ with |s|² = 1 + u² + v² (eq. 3).
     void weigh(const SamplingFrustum& f, const Vec3& n, uint32_t seed, int bits, int sx, int sy,
-               bool jitter, ImageResult& out) {
+               bool jitter, bool planar, ImageResult& out) {
         const int size = settings.imageSize;
         const double pw = (f.rightEdge - f.left) / size, ph = (f.top - f.bottom) / size;
         const double nx = glm::dot(n, f.right), ny = glm::dot(n, f.up), nz = glm::dot(n, f.forward);
         const double pixelArea = pw * ph / bits;
         // The control variate needs only the occluded samples' weights; the
         // plain estimator needs every light sample's.
-        const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate;
+        const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate && planar;
         double lightSum = 0, occludedSum = 0;
         for (int j = 0; j < size; ++j) {
             for (int i = 0; i < size; ++i) {
@@ -465,7 +474,8 @@ struct DirectLightSampler::Impl {
         const AreaLight& light = scene.lights[lightIndex];
         const Vec3 n = glm::normalize(nIn);
         if (!isFinite(x) || !isFinite(n)) throw InputError(concat("non-finite receiver point or normal"));
-        const Vec3 eye = x + n * (settings.eyeOffset * sceneSize);
+        const double lift = samplingEyeLift(light, x, settings.eyeOffset, sceneSize);
+        const Vec3 eye = x + n * lift;
         const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, n);
         if (pieces.empty()) {
             times.setup = seconds(t0, Clock::now());
@@ -478,11 +488,25 @@ struct DirectLightSampler::Impl {
             if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0)
                 exactUnoccluded += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
 
-        const Vec3 align = light.geometry[0][1] - light.geometry[0][0];
+        // Rows follow the edge of the light's first triangle that is most
+        // across the line of sight, as in the paper's bench (an edge seen
+        // end-on would leave a thin diagonal sliver of used pixels).
+        const Triangle3& first = light.geometry[0];
+        const Vec3 towards = glm::normalize(light.centroid - eye);
+        Vec3 align = first[1] - first[0];
+        double best = -1;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 e = glm::normalize(first[(k + 1) % 3] - first[k]);
+            const double across = glm::length(e - glm::dot(e, towards) * towards);
+            if (across > best + 1e-6) {  // a clear margin: ties resolve the same at any scale
+                best = across;
+                align = e;
+            }
+        }
         const std::vector<SamplingFrustum> frusta = fitFrusta(pieces, eye, align, settings.maxHalfAngleDegrees);
         // Occluders nearer than this to the eye are not drawn: half the eye's
         // lift, so only geometry touching the receiver there is lost.
-        const double nearDistance = 0.5 * settings.eyeOffset * sceneSize;
+        const double nearDistance = std::max(0.5 * lift, 1e-12 * sceneSize);
         double lightWeight = 0, occludedWeight = 0;
         for (size_t k = 0; k < frusta.size(); ++k) {
             const ImageResult r = renderImage(light, lightIndex, frusta[k], n, nearDistance,
@@ -516,6 +540,13 @@ struct DirectLightSampler::Impl {
         return result;
     }
 };
+
+double samplingEyeLift(const AreaLight& light, const Vec3& x, double eyeOffset, double sceneSize) {
+    const Vec3 outside = glm::max(light.bounds.lo - x, x - light.bounds.hi);
+    double distance = glm::length(glm::max(outside, Vec3(0.0)));
+    if (light.planar) distance = std::max(distance, std::abs(glm::dot(x - light.centroid, light.normal)));
+    return std::min(eyeOffset * sceneSize, 1e-4 * distance);
+}
 
 DirectLightSampler::DirectLightSampler(GlContext& context, const Scene& scene,
                                        const DirectSamplerSettings& settings)

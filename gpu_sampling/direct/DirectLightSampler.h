@@ -43,8 +43,9 @@ struct DirectSamplerSettings {
     double maxHalfAngleDegrees = 60;  // wider lights are split among cube faces
     // The sampling camera sits this far above the shading point, along its
     // normal, as a fraction of the scene's bounding diagonal: 1e-6 is 16× the
-    // float rounding of vertex positions, so a receiver never shadows itself,
-    // and small enough that points 1e-4 of a light's size from it stay accurate.
+    // float rounding of vertex positions, so a receiver never shadows itself.
+    // Next to a light the lift is at most 1e-4 of the distance to it, so the
+    // lift changes the answer by no more than about 1e-4 there.
     double eyeOffset = 1e-6;
     // Occluder parts closer to a planar light's plane than this (same unit
     // as eyeOffset) do not occlude it: geometry coplanar with the light.
@@ -77,6 +78,13 @@ struct DirectPhaseTimes {
     double weighting = 0;  // per-sample weights (CPU)
     double total() const { return setup + draw + readback + weighting; }
 };
+
+// How far above a receiver at x the sampling camera sits, along its normal:
+// `eyeOffset` × `sceneSize`, so the receiver's own surface never shadows it,
+// but at most 1e-4 of the distance to the light (a lower bound of it: box
+// and plane distance), so next to a light the lift changes the answer by no
+// more than about 1e-4 of it.
+double samplingEyeLift(const AreaLight& light, const Vec3& x, double eyeOffset, double sceneSize);
 
 class DirectLightSampler {
 public:

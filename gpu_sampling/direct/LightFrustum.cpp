@@ -44,7 +44,8 @@ void makeBasis(const Vec3& forward, const Vec3& align, SamplingFrustum& f) {
 
 // Fits the window of `f` (basis set) to the pieces, clipped to `planes`
 // (camera-space half-spaces a·(x,y,d) >= 0). Returns false if nothing is left.
-bool fitWindow(const std::vector<Polygon3>& pieces, const std::vector<Vec3>& planes, SamplingFrustum& f) {
+bool fitWindow(const std::vector<Polygon3>& pieces, const std::vector<Vec3>& planes, double limit,
+               SamplingFrustum& f) {
     double lo[2] = {kInf, kInf}, hi[2] = {-kInf, -kInf};
     bool any = false;
     for (const Polygon3& piece : pieces) {
@@ -67,10 +68,11 @@ bool fitWindow(const std::vector<Polygon3>& pieces, const std::vector<Vec3>& pla
     if (!any || !(hi[0] > lo[0]) || !(hi[1] > lo[1])) return false;
     // A hair of margin so the light's own edges never sit on the window's.
     const double mx = 1e-7 * (hi[0] - lo[0]), my = 1e-7 * (hi[1] - lo[1]);
-    f.left = lo[0] - mx;
-    f.rightEdge = hi[0] + mx;
-    f.bottom = lo[1] - my;
-    f.top = hi[1] + my;
+    // Cube faces keep to their own face (limit 1): frusta never overlap.
+    f.left = std::max(lo[0] - mx, -limit);
+    f.rightEdge = std::min(hi[0] + mx, limit);
+    f.bottom = std::max(lo[1] - my, -limit);
+    f.top = std::min(hi[1] + my, limit);
     return true;
 }
 
@@ -103,7 +105,7 @@ std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, cons
     // corners decide.
     if (minCos > std::cos(glm::radians(maxHalfAngleDegrees))) {
         const std::vector<Vec3> inFront = {Vec3(0.0, 0.0, 1.0)};
-        if (fitWindow(pieces, inFront, f)) return {f};
+        if (fitWindow(pieces, inFront, kInf, f)) return {f};
         return {};
     }
 
@@ -119,7 +121,7 @@ std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, cons
         SamplingFrustum g;
         g.eye = eye;
         makeBasis(d[0], d[1], g);
-        if (fitWindow(pieces, face, g)) frusta.push_back(g);
+        if (fitWindow(pieces, face, 1.0, g)) frusta.push_back(g);
     }
     return frusta;
 }
