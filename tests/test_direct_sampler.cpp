@@ -22,6 +22,8 @@
 #include "gpu_sampling/direct/OccluderBvh.h"
 #include "gpu_sampling/gl/GlContext.h"
 
+#include "GlTestContext.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -41,12 +43,8 @@ namespace {
 
 using SamplerKey = std::tuple<DirectMethod, DirectEstimator, int, int>;
 
-class GlEnvironment : public ::testing::Environment {
+class GlEnvironment {
 public:
-    static GlContext& context() {
-        if (!context_) context_ = createHeadlessContext(GlBackend::OsMesa);
-        return *context_;
-    }
     static const Scene& bench() {
         static const Scene scene = makeBenchScene();
         return scene;
@@ -65,22 +63,14 @@ public:
             s.estimator = estimator;
             s.imageSize = imageSize;
             s.bits = bits;
-            it = samplers_.emplace(key, std::make_unique<DirectLightSampler>(context(), bench(), s)).first;
+            if (samplers_.empty()) test::GlTestEnvironment::beforeTearDown([] { samplers_.clear(); });
+            it = samplers_.emplace(key, std::make_unique<DirectLightSampler>(test::glContext(), bench(), s)).first;
         }
         return *it->second;
     }
-    void TearDown() override {
-        samplers_.clear();  // before the context they live in
-        context_.reset();
-    }
-
 private:
-    static std::unique_ptr<GlContext> context_;
-    static std::map<SamplerKey, std::unique_ptr<DirectLightSampler>> samplers_;
+    static inline std::map<SamplerKey, std::unique_ptr<DirectLightSampler>> samplers_;
 };
-std::unique_ptr<GlContext> GlEnvironment::context_;
-std::map<SamplerKey, std::unique_ptr<DirectLightSampler>> GlEnvironment::samplers_;
-const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new GlEnvironment);
 
 constexpr auto kQuery = DirectMethod::OcclusionQuery;
 constexpr auto kRegular = DirectMethod::Regular;
@@ -91,7 +81,9 @@ constexpr auto kCv = DirectEstimator::ControlVariate;
 const Vec3 kUp(0, 1, 0);
 
 Vec3 eyePoint(const Vec3& x, const Vec3& n) {
-    return x + glm::normalize(n) * (DirectSamplerSettings{}.eyeOffset * GlEnvironment::bench().bounds.diagonal());
+    const Scene& bench = GlEnvironment::bench();
+    return x + glm::normalize(n) * samplingEyeLift(bench.lights[0], x, DirectSamplerSettings{}.eyeOffset,
+                                                   bench.bounds.diagonal());
 }
 // The exact visible cosine-weighted solid angle at the receiver, and
 // Lambert's value there (nothing occluding).
@@ -605,7 +597,7 @@ TEST(DirectSampler, SameSeedRepeatsBitForBitAndDifferentSeedsDiffer) {
             EXPECT_EQ(a.visibleSamples, b.visibleSamples);
             // A second sampler with the same settings draws the same jitter.
             DirectSamplerSettings settings = s.settings();
-            DirectLightSampler other(GlEnvironment::context(), GlEnvironment::bench(), settings);
+            DirectLightSampler other(test::glContext(), GlEnvironment::bench(), settings);
             const DirectSample c = other.sample(0, r.position, r.normal, 1234);
             EXPECT_EQ(std::memcmp(&a.cosineSolidAngle, &c.cosineSolidAngle, sizeof(double)), 0);
             // In the penumbra, estimates are sums of hundreds of weights at
@@ -627,7 +619,7 @@ TEST(DirectSampler, SettingsAreValidated) {
     s = {};
     s.imageSize = 2;
     EXPECT_THROW(s.validate(), InputError);
-    EXPECT_THROW(DirectLightSampler(GlEnvironment::context(), GlEnvironment::bench(), s), InputError);
+    EXPECT_THROW(DirectLightSampler(test::glContext(), GlEnvironment::bench(), s), InputError);
     EXPECT_THROW(parseDirectMethod("stochastic"), InputError);
     EXPECT_THROW(parseDirectEstimator("mis"), InputError);
     for (auto m : {kQuery, kRegular, kJittered}) EXPECT_EQ(parseDirectMethod(directMethodName(m)), m);

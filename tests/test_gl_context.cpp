@@ -7,6 +7,8 @@
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/gl/GlObjects.h"
 
+#include "GlTestContext.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -22,21 +24,6 @@ namespace {
 // One OSMesa context for the whole binary: creating one costs tens of
 // milliseconds, and a context belongs to the thread that made it (gtest runs
 // every test on the main thread).
-class OsMesaEnvironment : public ::testing::Environment {
-public:
-    static GlContext& context() {
-        if (!context_) context_ = createHeadlessContext(GlBackend::OsMesa);
-        context_->makeCurrent();  // another test may have made its own current
-        return *context_;
-    }
-    void TearDown() override { context_.reset(); }
-
-private:
-    static std::unique_ptr<GlContext> context_;
-};
-std::unique_ptr<GlContext> OsMesaEnvironment::context_;
-const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new OsMesaEnvironment);
-
 bool atLeast45(const GlApi& gl) { return gl.majorVersion > 4 || (gl.majorVersion == 4 && gl.minorVersion >= 5); }
 
 constexpr int kSize = 16;
@@ -135,7 +122,7 @@ void expectLogicOpImage(const GlApi& gl) {
 }
 
 TEST(GlContext, OsMesaIsCore45WithARenderer) {
-    GlContext& context = OsMesaEnvironment::context();
+    GlContext& context = test::glContext();
     const GlApi& gl = context.gl();
     EXPECT_EQ(context.backend(), GlBackend::OsMesa);
     EXPECT_TRUE(atLeast45(gl)) << "version " << gl.majorVersion << "." << gl.minorVersion;
@@ -154,11 +141,11 @@ TEST(GlContext, OsMesaIsCore45WithARenderer) {
 }
 
 TEST(GlContext, IntegerTargetWithLogicOpsGivesExpectedBits) {
-    expectLogicOpImage(OsMesaEnvironment::context().gl());
+    expectLogicOpImage(test::glContext().gl());
 }
 
 TEST(GlContext, CheckGlReportsAnErrorByName) {
-    const GlApi& gl = OsMesaEnvironment::context().gl();
+    const GlApi& gl = test::glContext().gl();
     gl.Enable(GL_TEXTURE_2D);  // not a core-profile capability: GL_INVALID_ENUM
     try {
         checkGl(gl, "enabling a fixed-function capability");
@@ -175,7 +162,7 @@ TEST(GlContext, EglIsCore45WhereADisplayExists) {
     try {
         egl = createHeadlessContext(GlBackend::Egl);
     } catch (const std::exception& e) {
-        OsMesaEnvironment::context();
+        test::glContext();
         GTEST_SKIP() << "no EGL context on this machine: " << e.what();
     }
     EXPECT_EQ(egl->backend(), GlBackend::Egl);
@@ -185,7 +172,7 @@ TEST(GlContext, EglIsCore45WhereADisplayExists) {
     expectLogicOpImage(egl->gl());
     egl.reset();
     // The OSMesa context still works after another back end came and went.
-    expectLogicOpImage(OsMesaEnvironment::context().gl());
+    expectLogicOpImage(test::glContext().gl());
 }
 
 TEST(GlContext, BackendNamesParseAndUnknownOnesAreInputErrors) {

@@ -34,6 +34,8 @@
 #include "gpu_sampling/direct/LightFrustum.h"
 #include "gpu_sampling/gl/GlContext.h"
 
+#include "GlTestContext.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -44,21 +46,6 @@
 using namespace ml;
 
 namespace {
-
-// One GL context for the binary, made on first use.
-class GlEnvironment : public ::testing::Environment {
-public:
-    static GlContext& context() {
-        if (!context_) context_ = createHeadlessContext(GlBackend::OsMesa);
-        return *context_;
-    }
-    void TearDown() override { context_.reset(); }
-
-private:
-    static std::unique_ptr<GlContext> context_;
-};
-std::unique_ptr<GlContext> GlEnvironment::context_;
-const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new GlEnvironment);
 
 const Vec3 kX(1, 0, 0), kY(0, 1, 0), kZ(0, 0, 1);
 
@@ -381,7 +368,7 @@ void expectMatchesExact(const Scene& scene, const std::vector<Receiver>& receive
           std::pair{DirectMethod::Regular, DirectEstimator::ControlVariate},
           std::pair{DirectMethod::Regular, DirectEstimator::Plain}}) {
         const DirectSamplerSettings settings = settingsFor(method, estimator);
-        DirectLightSampler sampler(GlEnvironment::context(), scene, settings);
+        DirectLightSampler sampler(test::glContext(), scene, settings);
         const std::string name = std::string(directMethodName(method)) + "/" + directEstimatorName(estimator);
         for (size_t i = 0; i < receivers.size(); ++i) {
             const Receiver& r = receivers[i];
@@ -476,7 +463,7 @@ TEST(HardCases, LightSeenEdgeOnGivesZeroOrAlmostNothing) {
     for (auto method : {DirectMethod::Jittered, DirectMethod::Regular, DirectMethod::OcclusionQuery})
         for (auto estimator : {DirectEstimator::ControlVariate, DirectEstimator::Plain}) {
             const DirectSamplerSettings s = settingsFor(method, estimator);
-            DirectLightSampler sampler(GlEnvironment::context(), scene, s);
+            DirectLightSampler sampler(test::glContext(), scene, s);
             // In the light's plane, looking at its edge: exactly nothing
             // (the eye moves along n, staying in the plane).
             for (const Vec3& x : {Vec3(2.0, 1.0, 0.0), Vec3(0.7, 1.0, 0.3), Vec3(-3.0, 1.0, -3.0)}) {
@@ -595,14 +582,14 @@ TEST(HardCases, ScaledAndMovedBenchGivesTheSameAnswer) {
 
     for (auto estimator : {DirectEstimator::ControlVariate, DirectEstimator::Plain}) {
         const DirectSamplerSettings s = settingsFor(DirectMethod::Jittered, estimator);
-        DirectLightSampler base(GlEnvironment::context(), reference, s);
+        DirectLightSampler base(test::glContext(), reference, s);
         std::vector<double> expected;
         for (size_t i = 0; i < points.size(); ++i)
             expected.push_back(base.sample(0, points[i].position, points[i].normal, jitter::seedFor(6, uint32_t(i)))
                                    .cosineSolidAngle);
         for (const Variant& v : variants) {
             const Scene scene = transformedBench(v.scale, v.offset);
-            DirectLightSampler sampler(GlEnvironment::context(), scene, s);
+            DirectLightSampler sampler(test::glContext(), scene, s);
             const ExactDirect exact(scene);
             for (size_t i = 0; i < points.size(); ++i) {
                 const Vec3 x = v.scale * points[i].position + v.offset;
@@ -665,7 +652,7 @@ TEST(HardCases, PointsOnOrBehindTheLightReceiveNothing) {
                                              {Vec3(0.3, 1.0 + 1e-9, 0.2), -kY, "a hair above, facing its back"}};
     for (auto method : {DirectMethod::Jittered, DirectMethod::Regular, DirectMethod::OcclusionQuery})
         for (auto estimator : {DirectEstimator::ControlVariate, DirectEstimator::Plain}) {
-            DirectLightSampler sampler(GlEnvironment::context(), scene, settingsFor(method, estimator));
+            DirectLightSampler sampler(test::glContext(), scene, settingsFor(method, estimator));
             for (const Receiver& r : receivers) {
                 const DirectSample d = sampler.sample(0, r.x, r.n, 3);
                 expectFinite(d, where(r));
@@ -724,9 +711,9 @@ TEST(HardCases, FoldedLightIsTheSumOfLambertOverItsTriangles) {
 
     // Without a closed form to subtract, "cv" is the plain estimator: the
     // same value bit for bit.
-    DirectLightSampler cv(GlEnvironment::context(), scene,
+    DirectLightSampler cv(test::glContext(), scene,
                           settingsFor(DirectMethod::Jittered, DirectEstimator::ControlVariate));
-    DirectLightSampler plain(GlEnvironment::context(), scene,
+    DirectLightSampler plain(test::glContext(), scene,
                              settingsFor(DirectMethod::Jittered, DirectEstimator::Plain));
     for (const Receiver& r : receivers) {
         const DirectSample x = cv.sample(0, r.x, r.n, 9), y = plain.sample(0, r.x, r.n, 9);

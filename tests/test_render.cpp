@@ -7,6 +7,8 @@
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/Compositor.h"
 
+#include "GlTestContext.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,11 +17,6 @@
 using namespace ml;
 
 namespace {
-
-GlContext& context() {
-    static std::unique_ptr<GlContext> ctx = createHeadlessContext(GlBackend::OsMesa);
-    return *ctx;
-}
 
 const Scene& cornell() {
     static const Scene scene = makeCornellBox();
@@ -38,7 +35,7 @@ ImageRgb renderWith(const DirectEstimateFn& estimate, uint32_t seed, int passes 
     sampleEveryVertex(cache, estimate, passes, seed);
     std::vector<IrradianceMeshView> views;
     for (size_t l = 0; l < cache.lightCount(); ++l) views.push_back(cache.view(l));
-    Compositor compositor(context(), cornell());
+    Compositor compositor(test::glContext(), cornell());
     CompositorSettings cs;
     cs.width = 64;
     cs.height = 64;
@@ -65,7 +62,7 @@ double relativeRmse(const ImageRgb& x, const ImageRgb& r) {
 }  // namespace
 
 TEST(Render, SameSeedGivesTheSameImageBitForBit) {
-    DirectLightSampler sampler(context(), cornell(), DirectSamplerSettings{});
+    DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ImageRgb a = renderWith(samplerEstimate(sampler), 7);
     const ImageRgb b = renderWith(samplerEstimate(sampler), 7);
     ASSERT_EQ(a.data.size(), b.data.size());
@@ -73,7 +70,7 @@ TEST(Render, SameSeedGivesTheSameImageBitForBit) {
     // And a different seed draws different jitter somewhere in the penumbrae.
     DirectSamplerSettings plain;
     plain.estimator = DirectEstimator::Plain;
-    DirectLightSampler plainSampler(context(), cornell(), plain);
+    DirectLightSampler plainSampler(test::glContext(), cornell(), plain);
     const ImageRgb c = renderWith(samplerEstimate(plainSampler), 7);
     const ImageRgb d = renderWith(samplerEstimate(plainSampler), 8);
     EXPECT_NE(0, std::memcmp(c.data.data(), d.data.data(), c.data.size() * sizeof(float)));
@@ -89,7 +86,7 @@ TEST(Render, JitteredImageMatchesTheExactDirectImage) {
     const ExactDirect exact(cornell());
     const ImageRgb reference = renderWith(
         [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(l, x, n); }, 1);
-    DirectLightSampler sampler(context(), cornell(), DirectSamplerSettings{});
+    DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ImageRgb image = renderWith(samplerEstimate(sampler), 1);
     EXPECT_LT(relativeRmse(image, reference), 0.01);
 
@@ -97,12 +94,12 @@ TEST(Render, JitteredImageMatchesTheExactDirectImage) {
     // it within 2%.
     DirectSamplerSettings plain;
     plain.estimator = DirectEstimator::Plain;
-    DirectLightSampler plainSampler(context(), cornell(), plain);
+    DirectLightSampler plainSampler(test::glContext(), cornell(), plain);
     EXPECT_LT(relativeRmse(renderWith(samplerEstimate(plainSampler), 1, 4), reference), 0.02);
 }
 
 TEST(Render, EveryPixelFiniteAndTheLightShowsItsRadiance) {
-    DirectLightSampler sampler(context(), cornell(), DirectSamplerSettings{});
+    DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ImageRgb image = renderWith(samplerEstimate(sampler), 3);
     for (float v : image.data) ASSERT_TRUE(std::isfinite(v));
     // The brightest pixel is on the light: Le = (17, 12, 4) plus the light's
@@ -120,7 +117,7 @@ TEST(Render, UnoccludedCacheVerticesHoldLambertsValue) {
     // variate's estimate is Lambert's closed form at the receiver itself:
     // equal to rounding (1e-9 relative), whatever the jitter.
     IrradianceCache cache(cornell(), coarseCache());
-    DirectLightSampler sampler(context(), cornell(), DirectSamplerSettings{});
+    DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ExactDirect exact(cornell());
     sampleEveryVertex(cache, samplerEstimate(sampler), 1, 5);
     const IrradianceMeshView view = cache.view(0);

@@ -34,6 +34,16 @@ GlQuery makeQuery(const GlApi& gl, GLenum target) {
 
 namespace {
 
+// The driver's log of a shader or program.
+template <typename GetIv, typename GetLog>
+std::string infoLog(GLuint object, GetIv getiv, GetLog getLog) {
+    GLint len = 0;
+    getiv(object, GL_INFO_LOG_LENGTH, &len);
+    std::string log(size_t(std::max(len, 1)), '\0');
+    getLog(object, len, nullptr, log.data());
+    return log;
+}
+
 GLuint compile(const GlApi& gl, const GlProgram::Stage& s) {
     const GLuint sh = gl.CreateShader(s.type);
     const char* src = s.source.c_str();
@@ -42,10 +52,7 @@ GLuint compile(const GlApi& gl, const GlProgram::Stage& s) {
     GLint ok = 0;
     gl.GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
     if (!ok) {
-        GLint len = 0;
-        gl.GetShaderiv(sh, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        gl.GetShaderInfoLog(sh, len, nullptr, log.data());
+        const std::string log = infoLog(sh, gl.GetShaderiv, gl.GetShaderInfoLog);
         gl.DeleteShader(sh);
         throw std::runtime_error(std::string("shader ") + s.name + " does not compile:\n" + log);
     }
@@ -68,13 +75,7 @@ GlProgram::GlProgram(const GlApi& gl, const std::vector<Stage>& stages) : gl_(&g
     for (GLuint s : shaders) gl.DeleteShader(s);  // flagged; freed with the program
     GLint ok = 0;
     gl.GetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        gl.GetProgramiv(p, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        gl.GetProgramInfoLog(p, len, nullptr, log.data());
-        throw std::runtime_error("program " + names + " does not link:\n" + log);
-    }
+    if (!ok) throw std::runtime_error("program " + names + " does not link:\n" + infoLog(p, gl.GetProgramiv, gl.GetProgramInfoLog));
 }
 
 void GlProgram::use() const { gl_->UseProgram(program_.id()); }
