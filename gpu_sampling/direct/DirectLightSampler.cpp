@@ -65,6 +65,14 @@ struct Corner {
 
 glm::mat4 toFloat(const Mat4& m) { return glm::mat4(m); }
 
+// Set bits of a word, branch-free: without -mpopcnt, __builtin_popcount is a
+// call into libgcc, measurable in the weighting loop.
+inline uint32_t bitCount(uint32_t v) {
+    v = v - ((v >> 1) & 0x55555555u);
+    v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+    return (((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24;
+}
+
 }  // namespace
 
 struct DirectLightSampler::Impl {
@@ -441,8 +449,8 @@ struct DirectLightSampler::Impl {
                 const uint32_t onLight = lightPixels[pixel];
                 if (!onLight) continue;
                 const uint32_t visible = visiblePixels[pixel] & onLight;
-                out.lightSamples += uint32_t(__builtin_popcount(onLight));
-                out.visibleSamples += uint32_t(__builtin_popcount(visible));
+                out.lightSamples += bitCount(onLight);
+                out.visibleSamples += bitCount(visible);
                 const uint32_t toWeigh = onlyOccluded ? (onLight & ~visible) : onLight;
                 for (uint32_t m = toWeigh; m; m &= m - 1) {
                     const uint32_t bit = uint32_t(__builtin_ctz(m));

@@ -38,18 +38,24 @@ void main() {
     float maxInvW = 1.0 / uNear;
     uint unused = BITS >= 32 ? 0u : (0xffffffffu << uint(BITS));
 
-    // Every tested quantity is affine across the pixel, so its extremes are
-    // at the pixel's corners: when all four corners agree, every jittered
-    // point agrees with them and no sample needs hashing. Only pixels on an
-    // edge of the triangle (or of its clipped part) run the per-sample loop.
-    vec3 reach = 0.5 * (abs(bdx) + abs(bdy));
-    if (any(lessThan(vBaryOverW + reach, vec3(0.0)))) discard;  // wholly outside one edge
-    bool c0 = covers(vec2(-0.5, -0.5), bdx, bdy, pdx, pdy, maxInvW);
-    bool c1 = covers(vec2(0.5, -0.5), bdx, bdy, pdx, pdy, maxInvW);
-    bool c2 = covers(vec2(-0.5, 0.5), bdx, bdy, pdx, pdy, maxInvW);
-    bool c3 = covers(vec2(0.5, 0.5), bdx, bdy, pdx, pdy, maxInvW);
+    // Every tested quantity is affine across the pixel, so its extremes over
+    // the pixel are its centre value ± half the sum of its derivatives'
+    // magnitudes: when they all agree, every jittered point agrees with them
+    // and no sample needs hashing. Only pixels on an edge of the triangle (or
+    // of its clipped part) run the per-sample loop.
+    vec3 bReach = 0.5 * (abs(bdx) + abs(bdy));
+    float invW = vBaryOverW.x + vBaryOverW.y + vBaryOverW.z;
+    float wReach = bReach.x + bReach.y + bReach.z;  // bounds the reach of their sum
+    float plane = vPlaneOverW - uPlaneTolerance * invW;
+    float planeReach = 0.5 * (abs(pdx - uPlaneTolerance * (bdx.x + bdx.y + bdx.z)) +
+                              abs(pdy - uPlaneTolerance * (bdy.x + bdy.y + bdy.z)));
+    bool planeOut = uClipToLightPlane && plane + planeReach < 0.0;
+    bool planeIn = !uClipToLightPlane || plane - planeReach >= 0.0;
+    if (any(lessThan(vBaryOverW + bReach, vec3(0.0))) || invW + wReach <= 0.0 || planeOut) discard;
+    bool allInside = all(greaterThanEqual(vBaryOverW - bReach, vec3(0.0))) && invW - wReach > 0.0 &&
+                     invW + wReach <= maxInvW && planeIn;
     uint outside = unused;
-    if (!(c0 && c1 && c2 && c3)) {
+    if (!allInside) {
         uint pixel = uint(gl_FragCoord.y) * uint(uImageSize) + uint(gl_FragCoord.x);
         for (int k = 0; k < BITS; ++k) {
             vec2 o = mlJitter(pixel, uint(k), uSeed, k % STRATA_X, k / STRATA_X, STRATA_X, STRATA_Y, JITTER) - 0.5;

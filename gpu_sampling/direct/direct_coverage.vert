@@ -4,11 +4,11 @@
 // primitive at a time, so this replaced a geometry shader at a third of the cost).
 //
 // The paper dilates triangles by a fixed percentage, which does not guarantee
-// a pixel of margin for every view. Here each triangle is replaced by the
-// screen-space bounding rectangle of its visible part (clipped to the near
-// plane and, for occluders of a planar light, to the light's plane), grown by
-// one pixel on every side: every pixel the triangle touches gets a fragment,
-// whatever the view.
+// a pixel of margin for every view. Here each triangle is replaced by its
+// screen-space bounding rectangle grown by one pixel on every side: every
+// pixel the triangle touches gets a fragment, whatever the view. What lies
+// behind the near plane or the light's plane is cut per sample by the
+// fragment stage.
 //
 // Attributes are passed in homogeneous form (Olano & Greer 1997): for a
 // triangle with clip-space columns M = [x; y; w], the barycentrics divided by
@@ -34,8 +34,6 @@ uniform float uPlaneTolerance;  // distance below which a face counts as on the 
 noperspective out vec3 vBaryOverW;
 noperspective out float vPlaneOverW;
 
-const int kCorner[6] = int[6](0, 1, 2, 2, 1, 3);
-
 void dropTriangle() {
     // All six vertices at one point: zero area, no fragment.
     gl_Position = vec4(-4.0, -4.0, 0.0, 1.0);
@@ -43,58 +41,43 @@ void dropTriangle() {
     vPlaneOverW = 0.0;
 }
 
+// Local arrays indexed by variables become per-lane scratch memory on
+// llvmpipe (many times slower), so everything here is straight-line code.
 void main() {
     int t = gl_VertexID / 6;
-    int corner = kCorner[gl_VertexID - t * 6];
-    vec4 p[3] = vec4[3](uTriangles[3 * t], uTriangles[3 * t + 1], uTriangles[3 * t + 2]);
-    if (uSkipLightId != 0u && floatBitsToUint(p[0].w) == uSkipLightId) { dropTriangle(); return; }
+    int i = gl_VertexID - 6 * t;
+    // Two triangles of a quad: corners 0 1 2, 2 1 3 (bit 0: right, bit 1: top).
+    int corner = i < 3 ? i : (i == 3 ? 2 : (i == 4 ? 1 : 3));
+    vec4 p0 = uTriangles[3 * t], p1 = uTriangles[3 * t + 1], p2 = uTriangles[3 * t + 2];
+    if (uSkipLightId != 0u && floatBitsToUint(p0.w) == uSkipLightId) { dropTriangle(); return; }
 
-    vec3 clip[3];
-    vec3 dist;
-    for (int i = 0; i < 3; ++i) {
-        vec4 c = uClipFromLocal * vec4(p[i].xyz, 1.0);
-        clip[i] = c.xyw;
-        dist[i] = dot(uLightPlane.xyz, p[i].xyz) + uLightPlane.w;
-    }
-    mat3 M = mat3(clip[0], clip[1], clip[2]);
+    vec3 c0 = (uClipFromLocal * vec4(p0.xyz, 1.0)).xyw;
+    vec3 c1 = (uClipFromLocal * vec4(p1.xyz, 1.0)).xyw;
+    vec3 c2 = (uClipFromLocal * vec4(p2.xyz, 1.0)).xyw;
+    vec3 dist = vec3(dot(uLightPlane.xyz, p0.xyz), dot(uLightPlane.xyz, p1.xyz), dot(uLightPlane.xyz, p2.xyz)) +
+                uLightPlane.w;
+    mat3 M = mat3(c0, c1, c2);
     float det = determinant(M);
     // det > 0: counter-clockwise as seen from the eye (see LightFrustum.h for the basis).
     if (det == 0.0 || (uCullBackFaces && det < 0.0)) { dropTriangle(); return; }
 
-    // Clip to w >= near and (optionally) to the light plane, in homogeneous
-    // space, to bound the triangle's visible part on screen.
-    vec4 poly[5];  // xyw, plane distance
-    vec4 next[5];
-    int n = 3;
-    for (int i = 0; i < 3; ++i) poly[i] = vec4(clip[i], dist[i]);
-    for (int plane = 0; plane < 2; ++plane) {
-        if (plane == 1 && !uClipToLightPlane) break;
-        int m = 0;
-        for (int i = 0; i < n; ++i) {
-            vec4 a = poly[i];
-            vec4 b = poly[(i + 1) % n];
-            float fa = plane == 0 ? a.z - uNear : a.w - uPlaneTolerance;
-            float fb = plane == 0 ? b.z - uNear : b.w - uPlaneTolerance;
-            if (fa >= 0.0) next[m++] = a;
-            if ((fa >= 0.0) != (fb >= 0.0) && m < 5) next[m++] = mix(a, b, fa / (fa - fb));
-        }
-        n = m;
-        for (int i = 0; i < n; ++i) poly[i] = next[i];
-        if (n < 3) { dropTriangle(); return; }
-    }
+    // Wholly behind the eye's near plane, or (occluders of a planar light)
+    // wholly behind the light: nothing to draw.
+    vec3 w = vec3(c0.z, c1.z, c2.z);
+    if (all(lessThan(w, vec3(uNear)))) { dropTriangle(); return; }
+    if (uClipToLightPlane && all(lessThan(dist, vec3(uPlaneTolerance)))) { dropTriangle(); return; }
 
-    vec2 lo = vec2(1e30), hi = vec2(-1e30);
-    for (int i = 0; i < n; ++i) {
-        vec2 s = poly[i].xy / poly[i].z;
-        lo = min(lo, s);
-        hi = max(hi, s);
-    }
-    // One pixel of margin, then keep to the image (plus that margin).
+    // Screen bounds, grown by one pixel: of the three corners when all are
+    // in front of the near plane; otherwise (an occluder touching the eye:
+    // rare) the whole image, and the fragment stage's exact tests clip.
     float limit = 1.0 + uPixelNdc;
-    lo = max(lo - uPixelNdc, vec2(-limit));
-    hi = min(hi + uPixelNdc, vec2(limit));
-    if (any(greaterThanEqual(lo, hi))) { dropTriangle(); return; }
-
+    vec2 lo = vec2(-limit), hi = vec2(limit);
+    if (all(greaterThanEqual(w, vec3(uNear)))) {
+        vec2 s0 = c0.xy / c0.z, s1 = c1.xy / c1.z, s2 = c2.xy / c2.z;
+        lo = max(min(min(s0, s1), s2) - uPixelNdc, vec2(-limit));
+        hi = min(max(max(s0, s1), s2) + uPixelNdc, vec2(limit));
+        if (any(greaterThanEqual(lo, hi))) { dropTriangle(); return; }
+    }
     vec2 s = vec2((corner & 1) != 0 ? hi.x : lo.x, (corner & 2) != 0 ? hi.y : lo.y);
     vec3 bw = inverse(M) * vec3(s, 1.0);
     vBaryOverW = bw;
