@@ -73,6 +73,38 @@ inline uint32_t bitCount(uint32_t v) {
     return (((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24;
 }
 
+// Where the samples of one sampling image lie and what each weighs.
+struct SampleGrid {
+    double left, bottom, pw, ph;  // window origin and pixel size at distance 1
+    double nx, ny, nz;            // receiver normal in camera coordinates
+    uint32_t seed;
+    int strataX, strataY;
+    bool jitter;
+
+    SampleGrid(const SamplingFrustum& f, int size, const Vec3& n, uint32_t seed_, int bits, bool jitter_)
+        : left(f.left), bottom(f.bottom), pw((f.rightEdge - f.left) / size), ph((f.top - f.bottom) / size),
+          nx(glm::dot(n, f.right)), ny(glm::dot(n, f.up)), nz(glm::dot(n, f.forward)), seed(seed_),
+          jitter(jitter_) {
+        jitter::strata(bits, strataX, strataY);
+    }
+    // Window position of sample `bit` of pixel (i, j): the point the GPU tested.
+    void point(int i, int j, uint32_t pixel, uint32_t bit, double& u, double& v) const {
+        float ju, jv;
+        jitter::position(pixel, bit, seed, strataX, strataY, jitter, ju, jv);
+        u = left + (i + double(ju)) * pw;
+        v = bottom + (j + double(jv)) * ph;
+    }
+    // cosθ·dω per unit window area at (u, v) (eq. 3): the direction is
+    // (u, v, 1) in camera coordinates, so cosθ / |s|⁴ with |s|² = 1 + u² + v².
+    // Zero below the receiver's horizon.
+    double weight(double u, double v) const {
+        const double cosine = nx * u + ny * v + nz;
+        if (cosine <= 0) return 0;
+        const double r2 = 1.0 + u * u + v * v;
+        return cosine / (r2 * r2);
+    }
+};
+
 }  // namespace
 
 struct DirectLightSampler::Impl {
@@ -230,10 +262,15 @@ struct DirectLightSampler::Impl {
     }
 
     ImageResult renderImage(const AreaLight& light, size_t lightIndex, const SamplingFrustum& f,
-                            const Vec3& n, double nearDistance, uint32_t seed, bool planar,
-                            Clock::time_point& t0) {
+                            const std::vector<Polygon3>& pieces, const Vec3& n, double nearDistance,
+                            uint32_t seed, bool planar, Clock::time_point& t0) {
         const int size = settings.imageSize;
         const bool query = settings.method == DirectMethod::OcclusionQuery;
+        // The control variate on a planar light needs only the occluded
+        // samples on the light. The light's projection is known exactly, so
+        // only the occluders are rasterised; which samples lie on the light
+        // is decided on the CPU (weighAnalytic), at the same jittered points.
+        const bool analyticLight = !query && planar && settings.estimator == DirectEstimator::ControlVariate;
         const bool jitter = settings.method == DirectMethod::Jittered;
         const int bits = jitter ? settings.bits : 1;
         int sx = 1, sy = 1;
@@ -298,7 +335,8 @@ struct DirectLightSampler::Impl {
         gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
         gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
         const GLuint zero[4] = {0, 0, 0, 0};
-        gl.ClearBufferuiv(GL_COLOR, 0, zero);
+        const GLuint ones[4] = {~0u, ~0u, ~0u, ~0u};
+        gl.ClearBufferuiv(GL_COLOR, 0, analyticLight ? ones : zero);
         gl.ClearBufferuiv(GL_COLOR, 1, zero);
         const float depthClear = 0.0f;  // reversed depth: 0 is infinitely far
         gl.ClearBufferfv(GL_DEPTH, 0, &depthClear);
@@ -318,7 +356,7 @@ struct DirectLightSampler::Impl {
         if (query) {
             renderQuery(light, lightIndex, clipFromEyeRel, clipFromOrigin, planar, out);
         } else {
-            renderBits(lightIndex, clipFromEyeRel, clipFromOrigin, planar);
+            renderBits(lightIndex, clipFromEyeRel, clipFromOrigin, planar, analyticLight);
         }
         Clock::time_point t2 = Clock::now();
         if (phaseTiming && !query) {
@@ -333,12 +371,18 @@ struct DirectLightSampler::Impl {
 
         gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT0);
         gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, visiblePixels.data());
-        gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT1);
-        gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, lightPixels.data());
+        if (!analyticLight) {
+            gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT1);
+            gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, lightPixels.data());
+        }
         const Clock::time_point t3 = Clock::now();
         times.readback += seconds(t2, t3);
 
-        weigh(f, n, seed, bits, sx, sy, jitter, planar, out);
+        const SampleGrid grid(f, size, n, seed, bits, jitter);
+        if (analyticLight)
+            weighAnalytic(f, pieces, grid, bits, out);
+        else
+            weigh(grid, bits, planar, out);
         t0 = Clock::now();
         times.weighting += seconds(t3, t0);
         return out;
@@ -363,7 +407,20 @@ struct DirectLightSampler::Impl {
     // AND into the first. A planar light needs no depth test (occluders are
     // clipped to its plane exactly, per sample); another needs one.
     void renderBits(size_t lightIndex, const glm::mat4& clipFromEyeRel, const glm::mat4& clipFromOrigin,
-                    bool planar) {
+                    bool planar, bool analyticLight) {
+        if (analyticLight) {
+            // Occluders only, ANDed into an image of ones.
+            gl.Disable(GL_DEPTH_TEST);
+            gl.DepthMask(GL_FALSE);
+            gl.Enable(GL_COLOR_LOGIC_OP);
+            gl.LogicOp(GL_AND);
+            gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            setPassState(false, planar, lightIndex, clipFromOrigin);
+            drawOccluders();
+            gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+            gl.Disable(GL_COLOR_LOGIC_OP);
+            return;
+        }
         setPassState(true, planar, lightIndex, clipFromEyeRel);
         if (!planar) {
             // The nearest light surface's depth first, on its own: were the
@@ -433,12 +490,8 @@ struct DirectLightSampler::Impl {
     // Σ over samples of cosθ·dω, evaluated at each sample's own jittered
     // point. In camera coordinates the direction through window point (u, v)
     // is (u, v, 1), so cosθ·dω/dA = (n·s)/|s|⁴ with |s|² = 1 + u² + v² (eq. 3).
-    void weigh(const SamplingFrustum& f, const Vec3& n, uint32_t seed, int bits, int sx, int sy,
-               bool jitter, bool planar, ImageResult& out) {
+    void weigh(const SampleGrid& grid, int bits, bool planar, ImageResult& out) {
         const int size = settings.imageSize;
-        const double pw = (f.rightEdge - f.left) / size, ph = (f.top - f.bottom) / size;
-        const double nx = glm::dot(n, f.right), ny = glm::dot(n, f.up), nz = glm::dot(n, f.forward);
-        const double pixelArea = pw * ph / bits;
         // The control variate needs only the occluded samples' weights; the
         // plain estimator needs every light sample's.
         const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate && planar;
@@ -454,21 +507,149 @@ struct DirectLightSampler::Impl {
                 const uint32_t toWeigh = onlyOccluded ? (onLight & ~visible) : onLight;
                 for (uint32_t m = toWeigh; m; m &= m - 1) {
                     const uint32_t bit = uint32_t(__builtin_ctz(m));
-                    float ju, jv;
-                    jitter::position(pixel, bit, seed, sx, sy, jitter, ju, jv);
-                    const double u = f.left + (i + double(ju)) * pw;
-                    const double v = f.bottom + (j + double(jv)) * ph;
-                    const double cosine = nx * u + ny * v + nz;
-                    if (cosine <= 0) continue;  // below the receiver's horizon
-                    const double r2 = 1.0 + u * u + v * v;
-                    const double w = cosine / (r2 * r2);
+                    double u, v;
+                    grid.point(i, j, pixel, bit, u, v);
+                    const double w = grid.weight(u, v);
                     lightSum += w;
                     if (!(visible >> bit & 1u)) occludedSum += w;
                 }
             }
         }
-        out.lightWeight = lightSum * pixelArea;
-        out.occludedWeight = occludedSum * pixelArea;
+        const double sampleArea = grid.pw * grid.ph / bits;
+        out.lightWeight = lightSum * sampleArea;
+        out.occludedWeight = occludedSum * sampleArea;
+    }
+
+    // A convex piece of the light on the window plane: inside where every
+    // edge function a·u + b·v + c >= 0; `reach` is how much an edge function
+    // can change across half a pixel.
+    struct WindowPiece {
+        struct Edge {
+            double a, b, c, reach;
+        };
+        std::vector<Edge> edges;
+        bool contains(double u, double v) const {
+            for (const Edge& e : edges)
+                if (e.a * u + e.b * v + e.c < 0) return false;
+            return true;
+        }
+    };
+
+    std::vector<WindowPiece> windowPieces(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, double pw,
+                                          double ph) const {
+        // The frustum's pyramid in camera space: l <= x/d <= r, b <= y/d <= t.
+        const Vec3 sides[4] = {Vec3(1, 0, -f.left), Vec3(-1, 0, f.rightEdge), Vec3(0, 1, -f.bottom),
+                               Vec3(0, -1, f.top)};
+        std::vector<WindowPiece> out;
+        for (const Polygon3& piece : pieces) {
+            Polygon3 cam;
+            for (const Vec3& p : piece) cam.push_back(f.toCamera(p));
+            for (const Vec3& plane : sides)
+                if (!cam.empty()) cam = clipPolygon(cam, plane, 0.0);
+            if (cam.size() < 3) continue;
+            std::vector<Vec2> q;
+            for (const Vec3& c : cam) q.push_back(Vec2(c.x / c.z, c.y / c.z));
+            double area2 = 0;
+            for (size_t k = 0; k < q.size(); ++k) {
+                const Vec2& a = q[k];
+                const Vec2& b = q[(k + 1) % q.size()];
+                area2 += a.x * b.y - a.y * b.x;
+            }
+            if (area2 == 0) continue;
+            const double sigma = area2 > 0 ? 1.0 : -1.0;
+            WindowPiece wp;
+            for (size_t k = 0; k < q.size(); ++k) {
+                const Vec2& a = q[k];
+                const Vec2 e = q[(k + 1) % q.size()] - a;
+                WindowPiece::Edge edge{-sigma * e.y, sigma * e.x, sigma * (e.y * a.x - e.x * a.y), 0};
+                edge.reach = 0.5 * (std::abs(edge.a) * pw + std::abs(edge.b) * ph);
+                wp.edges.push_back(edge);
+            }
+            out.push_back(std::move(wp));
+        }
+        return out;
+    }
+
+    // Narrows [lo, hi] to the columns i in [0, size) where at0 + slope·i >= 0.
+    static void columnsWhere(double at0, double slope, int size, int& lo, int& hi) {
+        if (slope == 0) {
+            if (at0 < 0) hi = -1;
+            return;
+        }
+        const double root = -at0 / slope;  // where the edge function crosses zero
+        if (slope > 0)
+            lo = std::max(lo, int(std::clamp(std::ceil(root), -1.0, double(size))));
+        else
+            hi = std::min(hi, int(std::clamp(std::floor(root), -1.0, double(size))));
+    }
+
+    // The control variate's weighting when only occluders were rasterised:
+    // which samples lie on the light is decided here, at the same jittered
+    // points, exactly (double precision). Whole pixels are classified from
+    // their centre ± reach (edge functions are affine), so only pixels on the
+    // light's outline test single samples.
+    void weighAnalytic(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, const SampleGrid& grid,
+                       int bits, ImageResult& out) {
+        const int size = settings.imageSize;
+        const double pw = grid.pw, ph = grid.ph;
+        const uint32_t allBits = bits >= 32 ? ~0u : ((1u << bits) - 1u);
+        const std::vector<WindowPiece> light = windowPieces(f, pieces, pw, ph);
+        // Along a row the edge functions are linear in the column, so each
+        // piece's fully covered and touched pixels are two column spans.
+        struct Span {
+            int fullLo, fullHi, anyLo, anyHi;
+        };
+        std::vector<Span> spans(light.size());
+        double occludedSum = 0;
+        for (int j = 0; j < size; ++j) {
+            const double vc = f.bottom + (j + 0.5) * ph;
+            int rowLo = size, rowHi = -1;
+            for (size_t k = 0; k < light.size(); ++k) {
+                Span sp{0, size - 1, 0, size - 1};
+                for (const WindowPiece::Edge& e : light[k].edges) {
+                    // e(i) = e.a·(left + (i + ½)·pw) + e.b·vc + e.c, linear in i.
+                    const double at0 = e.a * (f.left + 0.5 * pw) + e.b * vc + e.c, slope = e.a * pw;
+                    columnsWhere(at0 - e.reach, slope, size, sp.fullLo, sp.fullHi);
+                    columnsWhere(at0 + e.reach, slope, size, sp.anyLo, sp.anyHi);
+                }
+                spans[k] = sp;
+                if (sp.anyLo <= sp.anyHi) {
+                    rowLo = std::min(rowLo, sp.anyLo);
+                    rowHi = std::max(rowHi, sp.anyHi);
+                }
+            }
+            for (int i = rowLo; i <= rowHi; ++i) {
+                bool full = false, partial = false;
+                for (const Span& sp : spans) {
+                    full = full || (i >= sp.fullLo && i <= sp.fullHi);
+                    partial = partial || (i >= sp.anyLo && i <= sp.anyHi);
+                }
+                if (!partial) continue;
+                const uint32_t pixel = uint32_t(j * size + i);
+                uint32_t onLight = allBits;
+                if (!full) {
+                    onLight = 0;
+                    for (int k = 0; k < bits; ++k) {
+                        double u, v;
+                        grid.point(i, j, pixel, uint32_t(k), u, v);
+                        for (const WindowPiece& wp : light)
+                            if (wp.contains(u, v)) {
+                                onLight |= 1u << k;
+                                break;
+                            }
+                    }
+                }
+                const uint32_t occluded = onLight & ~visiblePixels[pixel];
+                out.lightSamples += bitCount(onLight);
+                out.visibleSamples += bitCount(onLight & ~occluded);
+                for (uint32_t m = occluded; m; m &= m - 1) {
+                    double u, v;
+                    grid.point(i, j, pixel, uint32_t(__builtin_ctz(m)), u, v);
+                    occludedSum += grid.weight(u, v);
+                }
+            }
+        }
+        out.occludedWeight = occludedSum * pw * ph / bits;
     }
 
     uint32_t trianglesDrawn = 0;
@@ -517,7 +698,7 @@ struct DirectLightSampler::Impl {
         const double nearDistance = std::max(0.5 * lift, 1e-12 * sceneSize);
         double lightWeight = 0, occludedWeight = 0;
         for (size_t k = 0; k < frusta.size(); ++k) {
-            const ImageResult r = renderImage(light, lightIndex, frusta[k], n, nearDistance,
+            const ImageResult r = renderImage(light, lightIndex, frusta[k], pieces, n, nearDistance,
                                               jitter::hash(seed + uint32_t(k) * 0x9e3779b9u), light.planar, t0);
             lightWeight += r.lightWeight;
             occludedWeight += r.occludedWeight;

@@ -3,6 +3,7 @@
 
 #include <GL/osmesa.h>
 
+#include <cstdlib>
 #include <stdexcept>
 #include <vector>
 
@@ -13,6 +14,13 @@ namespace {
 class OsMesaContext final : public GlContext {
 public:
     OsMesaContext() {
+        // llvmpipe splits rendering into 64×64 tiles over worker threads. A
+        // sampling image is a single tile, so the threads only add hand-offs:
+        // rendering in the calling thread halves the cost of a direct-light
+        // sample (270 -> 147 us on the bench, 2 cores). Large compositor
+        // images lose their parallelism, a small price beside that. Read when
+        // llvmpipe starts; a value the user set is kept.
+        ::setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
         // 4.6 fails on Debian 12's Mesa; 4.5 core is the most it offers.
         const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0,
                                OSMESA_STENCIL_BITS, 0, OSMESA_ACCUM_BITS, 0,
