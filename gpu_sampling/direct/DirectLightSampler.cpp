@@ -128,7 +128,7 @@ struct DirectLightSampler::Impl {
     GlQuery queryLight, queryVisible;
     struct {
         GLint clipFromLocal, lightPlane, nearPlane, pixelNdc, cullBackFaces, skipLightId, clipToLightPlane,
-            planeTolerance, seed, imageSize;
+            planeTolerance, seed, imageSize, horizonPlane;
     } loc{};
 
     // Scratch, reused between samples.
@@ -162,7 +162,7 @@ struct DirectLightSampler::Impl {
         loc = {p.uniform("uClipFromLocal"), p.uniform("uLightPlane"),     p.uniform("uNear"),
                p.uniform("uPixelNdc"),      p.uniform("uCullBackFaces"),  p.uniform("uSkipLightId"),
                p.uniform("uClipToLightPlane"), p.uniform("uPlaneTolerance"), p.uniform("uSeed"),
-               p.uniform("uImageSize")};
+               p.uniform("uImageSize"),     p.uniform("uHorizonPlane")};
         buildFramebuffer();
         queryLight = makeQuery(gl, GL_SAMPLES_PASSED);
         queryVisible = makeQuery(gl, GL_SAMPLES_PASSED);
@@ -283,6 +283,8 @@ struct DirectLightSampler::Impl {
             {f.up - f.bottom * f.forward, 0},  {f.top * f.forward - f.up, 0},
             {f.forward, -nearDistance}};
         for (auto& p : planes) p.d += -glm::dot(p.n, f.eye);
+        // Nothing wholly below the receiver's horizon can hide a direction above it.
+        planes.push_back({n, -glm::dot(n, f.eye)});
         if (planar) planes.push_back({light.normal, -glm::dot(light.normal, light.centroid) - tol});
         else {
             double farthest = 0;
@@ -349,6 +351,8 @@ struct DirectLightSampler::Impl {
         gl.Uniform1ui(loc.seed, seed);
         gl.Uniform1i(loc.imageSize, size);
         gl.Uniform4f(loc.lightPlane, plane.x, plane.y, plane.z, plane.w);
+        const glm::vec4 horizon(glm::vec3(n), float(glm::dot(n, origin - f.eye)));
+        gl.Uniform4f(loc.horizonPlane, horizon.x, horizon.y, horizon.z, horizon.w);
         const Clock::time_point t1 = Clock::now();
         times.setup += seconds(t0, t1);
 

@@ -24,6 +24,7 @@ layout(std430, binding = 0) readonly buffer Triangles { vec4 uTriangles[]; };
 
 uniform mat4 uClipFromLocal;    // projection × view, translation included (computed in double)
 uniform vec4 uLightPlane;       // (n, d): signed distance n·p + d, positive on the eye's side
+uniform vec4 uHorizonPlane;     // the receiver's tangent plane through the eye, positive above
 uniform float uNear;            // near distance; the projection puts z_clip = uNear
 uniform float uPixelNdc;        // one pixel in NDC units (2 / image size)
 uniform bool uCullBackFaces;    // the light emits from its front face only
@@ -66,6 +67,11 @@ void main() {
     vec3 w = vec3(c0.z, c1.z, c2.z);
     if (all(lessThan(w, vec3(uNear)))) { dropTriangle(); return; }
     if (uClipToLightPlane && all(lessThan(dist, vec3(uPlaneTolerance)))) { dropTriangle(); return; }
+    // Wholly below the receiver's horizon (the floor it stands on): hides
+    // nothing above it. Occluders only: the light is clipped to it already.
+    vec3 height = vec3(dot(uHorizonPlane.xyz, p0.xyz), dot(uHorizonPlane.xyz, p1.xyz), dot(uHorizonPlane.xyz, p2.xyz)) +
+                  uHorizonPlane.w;
+    if (!uCullBackFaces && all(lessThanEqual(height, vec3(0.0)))) { dropTriangle(); return; }
 
     // Screen bounds, grown by one pixel: of the three corners when all are
     // in front of the near plane; otherwise (an occluder touching the eye:
