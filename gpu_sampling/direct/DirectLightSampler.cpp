@@ -108,7 +108,6 @@ struct SampleGrid {
 }  // namespace
 
 struct DirectLightSampler::Impl {
-    GlContext& context;
     const GlApi& gl;
     const Scene& scene;
     DirectSamplerSettings settings;
@@ -139,11 +138,13 @@ struct DirectLightSampler::Impl {
     std::vector<Corner> lightCorners;
 
     Impl(GlContext& ctx, const Scene& s, const DirectSamplerSettings& set)
-        : context(ctx), gl(ctx.gl()), scene(s), settings(set),
-          origin(s.bounds.center()), sceneSize(std::max(s.bounds.diagonal(), 1e-300)),
-          bvh(allTriangles(s)) {
+        : Impl(ctx, s, set, allTriangles(s)) {}
+
+    Impl(GlContext& ctx, const Scene& s, const DirectSamplerSettings& set, const std::vector<Triangle3>& tris)
+        : gl(ctx.gl()), scene(s), settings(set), origin(s.bounds.center()),
+          sceneSize(std::max(s.bounds.diagonal(), 1e-300)), bvh(tris) {
         settings.validate();
-        buildBuffers();
+        buildBuffers(tris);
         // One program variant per sampler: the bit count and jitter are
         // compile-time constants of the fragment stage.
         const bool jitterOn = settings.method == DirectMethod::Jittered;
@@ -177,7 +178,7 @@ struct DirectLightSampler::Impl {
         return tris;
     }
 
-    void buildBuffers() {
+    void buildBuffers(const std::vector<Triangle3>& tris) {
         // Which light (if any) each triangle belongs to, in scene order.
         std::vector<uint32_t> lightOf;
         std::vector<size_t> meshStart;
@@ -190,7 +191,6 @@ struct DirectLightSampler::Impl {
             for (uint32_t t : light.triangles) lightOf[meshStart[light.mesh] + t] = uint32_t(l + 1);
             maxLightTriangles = std::max(maxLightTriangles, light.triangles.size());
         }
-        const std::vector<Triangle3> tris = allTriangles(scene);
         std::vector<Corner> corners;
         corners.reserve(tris.size() * 3);
         for (uint32_t index : bvh.order()) {
@@ -273,8 +273,6 @@ struct DirectLightSampler::Impl {
         const bool analyticLight = !query && planar && settings.estimator == DirectEstimator::ControlVariate;
         const bool jitter = settings.method == DirectMethod::Jittered;
         const int bits = jitter ? settings.bits : 1;
-        int sx = 1, sy = 1;
-        jitter::strata(bits, sx, sy);
         const double tol = settings.planeTolerance * sceneSize;
 
         // Potential occluders: inside the frustum and in front of the light.
@@ -309,13 +307,15 @@ struct DirectLightSampler::Impl {
         // The light, relative to the eye in double, then to float: exact
         // enough for a tiny light far away in a large scene.
         lightCorners.clear();
-        for (const Triangle3& t : light.geometry)
-            for (const Vec3& p : t) {
-                const glm::vec3 r(p - f.eye);
-                lightCorners.push_back({r.x, r.y, r.z, 0});
-            }
-        gl.NamedBufferSubData(lightBuffer.id(), 0, GLsizeiptr(lightCorners.size() * sizeof(Corner)),
-                              lightCorners.data());
+        if (!analyticLight) {
+            for (const Triangle3& t : light.geometry)
+                for (const Vec3& p : t) {
+                    const glm::vec3 r(p - f.eye);
+                    lightCorners.push_back({r.x, r.y, r.z, 0});
+                }
+            gl.NamedBufferSubData(lightBuffer.id(), 0, GLsizeiptr(lightCorners.size() * sizeof(Corner)),
+                                  lightCorners.data());
+        }
 
         const Mat4 proj = projection(f, nearDistance);
         const glm::mat4 clipFromEyeRel = toFloat(proj * viewFrom(f, f.eye));
@@ -358,7 +358,7 @@ struct DirectLightSampler::Impl {
 
         ImageResult out;
         if (query) {
-            renderQuery(light, lightIndex, clipFromEyeRel, clipFromOrigin, planar, out);
+            renderQuery(lightIndex, clipFromEyeRel, clipFromOrigin, planar, out);
         } else {
             renderBits(lightIndex, clipFromEyeRel, clipFromOrigin, planar, analyticLight);
         }
@@ -457,8 +457,8 @@ struct DirectLightSampler::Impl {
 
     // §4.1.1: two occlusion queries, the light alone and the light behind
     // the occluders; the visible fraction scales the exact unoccluded value.
-    void renderQuery(const AreaLight& light, size_t lightIndex, const glm::mat4& clipFromEyeRel,
-                     const glm::mat4& clipFromOrigin, bool planar, ImageResult& out) {
+    void renderQuery(size_t lightIndex, const glm::mat4& clipFromEyeRel, const glm::mat4& clipFromOrigin,
+                     bool planar, ImageResult& out) {
         gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
         gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
         gl.Disable(GL_DEPTH_TEST);
@@ -488,7 +488,6 @@ struct DirectLightSampler::Impl {
         times.readback += seconds(t, Clock::now());
         out.lightSamples = all;
         out.visibleSamples = std::min(visible, all);
-        (void)light;
     }
 
     // Σ over samples of cosθ·dω, evaluated at each sample's own jittered

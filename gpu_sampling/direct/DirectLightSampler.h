@@ -28,8 +28,10 @@ enum class DirectEstimator {
     Plain,
     // Exact unoccluded irradiance (Lambert's closed form) minus the sampled
     // occluded part: unbiased like Plain, but exact wherever nothing occludes
-    // and with error only along occluder edges. Planar lights only; others
-    // fall back to Plain.
+    // and with error only along occluder edges. As the light's projection is
+    // known exactly, only the occluders are rasterised; which of their
+    // jittered samples lie on the light is decided on the CPU. Planar lights
+    // only; others fall back to Plain.
     ControlVariate,
 };
 DirectEstimator parseDirectEstimator(const std::string& name);  // "plain", "cv"
