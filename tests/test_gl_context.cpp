@@ -11,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <thread>
+
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -192,6 +195,37 @@ TEST(GlContext, BackendNamesParseAndUnknownOnesAreInputErrors) {
 
 TEST(GlContext, GlfwIsNotAHeadlessBackend) {
     EXPECT_THROW(createHeadlessContext(GlBackend::Glfw), std::runtime_error);
+}
+
+// A window on this thread and headless contexts on a worker beside it, the
+// viewer's arrangement (one thread per context: glvnd will not make an EGL
+// context current on a thread that holds a GLX one). Needs a display: ctest
+// runs it under xvfb-run where that exists.
+TEST(GlContext, WindowBesideHeadlessContextsOnAWorker) {
+    if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no DISPLAY (run under xvfb-run)";
+    WindowOptions options;
+    options.width = 32;
+    options.height = 32;
+    options.visible = false;
+    std::unique_ptr<GlContext> window = createWindowContext(options);
+    EXPECT_EQ(window->backend(), GlBackend::Glfw);
+    EXPECT_NE(window->window(), nullptr);
+    EXPECT_TRUE(atLeast45(window->gl()));
+    std::string workerError;
+    std::thread worker([&] {
+        try {
+            for (GlBackend b : {GlBackend::OsMesa, GlBackend::Egl}) {
+                std::unique_ptr<GlContext> headless = createHeadlessContext(b);
+                if (!atLeast45(headless->gl())) workerError += std::string(glBackendName(b)) + " is not 4.5; ";
+            }
+        } catch (const std::exception& e) {
+            workerError = e.what();
+        }
+    });
+    worker.join();
+    EXPECT_EQ(workerError, "");
+    window->makeCurrent();
+    checkGl(window->gl(), "window context after the worker");
 }
 
 }  // namespace

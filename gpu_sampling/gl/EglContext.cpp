@@ -21,13 +21,23 @@ bool hasClientExtension(const char* name) {
 
 class EglContext final : public GlContext {
 public:
+    // Tries each candidate display in turn (GPU devices first, then Mesa's
+    // surfaceless platform, then the default display) until one gives a
+    // current 4.5 core context: which one works depends on the driver and on
+    // whether an X display is around. Throws with every reason when none does.
     explicit EglContext(bool requireHardware) {
-        try {
-            create(requireHardware);
-        } catch (...) {
-            release();
-            throw;
+        std::string reasons;
+        for (const Candidate& c : candidates(requireHardware)) {
+            try {
+                create(c.display, requireHardware);
+                return;
+            } catch (const std::exception& e) {
+                release();
+                reasons += std::string(reasons.empty() ? "" : "; ") + c.name + ": " + e.what();
+            }
         }
+        throw std::runtime_error("no EGL display gives an OpenGL 4.5 core context (" +
+                                 (reasons.empty() ? std::string("no display") : reasons) + ")");
     }
     ~EglContext() override { release(); }
 
@@ -38,8 +48,37 @@ public:
     GlBackend backend() const override { return GlBackend::Egl; }
 
 private:
-    void create(bool requireHardware) {
-        display_ = openDisplay(requireHardware);
+    struct Candidate {
+        std::string name;
+        EGLDisplay display;
+    };
+
+    static std::vector<Candidate> candidates(bool requireHardware) {
+        std::vector<Candidate> out;
+        auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+            eglGetProcAddress("eglGetPlatformDisplayEXT"));
+        if (getPlatformDisplay && hasClientExtension("EGL_EXT_platform_device")) {
+            auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+            EGLDeviceEXT devices[16];
+            EGLint n = 0;
+            if (queryDevices && queryDevices(16, devices, &n))
+                for (EGLint i = 0; i < n; ++i) {
+                    EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+                    if (d != EGL_NO_DISPLAY) out.push_back({"device " + std::to_string(i), d});
+                }
+        }
+        if (requireHardware) return out;
+        if (getPlatformDisplay && hasClientExtension("EGL_MESA_platform_surfaceless")) {
+            EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+            if (d != EGL_NO_DISPLAY) out.push_back({"surfaceless", d});
+        }
+        EGLDisplay d = eglGetDisplay(EGL_DEFAULT_DISPLAY);
+        if (d != EGL_NO_DISPLAY) out.push_back({"default display", d});
+        return out;
+    }
+
+    void create(EGLDisplay display, bool requireHardware) {
+        display_ = display;
         EGLint major = 0, minor = 0;
         if (!eglInitialize(display_, &major, &minor)) throw std::runtime_error("eglInitialize failed");
         initialized_ = true;
@@ -56,11 +95,11 @@ private:
         context_ = eglCreateContext(display_, count > 0 ? config : EGL_NO_CONFIG_KHR,
                                     EGL_NO_CONTEXT, ctxAttribs);
         if (context_ == EGL_NO_CONTEXT)
-            throw std::runtime_error("EGL could not create an OpenGL 4.5 core context");
+            throw std::runtime_error("cannot create an OpenGL 4.5 core context");
         makeCurrent();
         gl_.load([](const char* name) { return reinterpret_cast<void*>(eglGetProcAddress(name)); });
         if (requireHardware && gl_.renderer.find("llvmpipe") != std::string::npos)
-            throw std::runtime_error("EGL gave a software renderer (" + gl_.renderer + ")");
+            throw std::runtime_error("a software renderer (" + gl_.renderer + ")");
     }
     void release() {
         if (context_ != EGL_NO_CONTEXT) {
@@ -70,31 +109,6 @@ private:
         }
         if (initialized_) eglTerminate(display_);
         initialized_ = false;
-    }
-
-    static EGLDisplay openDisplay(bool requireHardware) {
-        auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-            eglGetProcAddress("eglGetPlatformDisplayEXT"));
-        if (getPlatformDisplay && hasClientExtension("EGL_EXT_platform_device")) {
-            auto queryDevices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(
-                eglGetProcAddress("eglQueryDevicesEXT"));
-            EGLDeviceEXT devices[16];
-            EGLint n = 0;
-            if (queryDevices && queryDevices(16, devices, &n) && n > 0) {
-                for (EGLint i = 0; i < n; ++i) {
-                    EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
-                    if (d != EGL_NO_DISPLAY) return d;
-                }
-            }
-        }
-        if (requireHardware) throw std::runtime_error("no EGL device found");
-        if (getPlatformDisplay && hasClientExtension("EGL_MESA_platform_surfaceless")) {
-            EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-            if (d != EGL_NO_DISPLAY) return d;
-        }
-        EGLDisplay d = eglGetDisplay(EGL_DEFAULT_DISPLAY);
-        if (d == EGL_NO_DISPLAY) throw std::runtime_error("no EGL display");
-        return d;
     }
 
     EGLDisplay display_ = EGL_NO_DISPLAY;
