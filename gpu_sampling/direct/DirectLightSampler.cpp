@@ -408,23 +408,25 @@ struct DirectLightSampler::Impl {
     }
 
     // §4.1.2 / §4.2: light with OR_INVERTED into both images, occluders with
-    // AND into the first. A planar light needs no depth test (occluders are
-    // clipped to its plane exactly, per sample); another needs one.
+    // AND into the first (an image of ones when the light is analytic). A
+    // planar light needs no depth test (occluders are clipped to its plane
+    // exactly, per sample); another needs one.
     void renderBits(size_t lightIndex, const glm::mat4& clipFromEyeRel, const glm::mat4& clipFromOrigin,
                     bool planar, bool analyticLight) {
-        if (analyticLight) {
-            // Occluders only, ANDed into an image of ones.
-            gl.Disable(GL_DEPTH_TEST);
-            gl.DepthMask(GL_FALSE);
-            gl.Enable(GL_COLOR_LOGIC_OP);
-            gl.LogicOp(GL_AND);
-            gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-            setPassState(false, planar, lightIndex, clipFromOrigin);
-            drawOccluders();
-            gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-            gl.Disable(GL_COLOR_LOGIC_OP);
-            return;
-        }
+        if (!analyticLight) drawLightBits(lightIndex, clipFromEyeRel, planar);
+        if (planar) gl.Disable(GL_DEPTH_TEST);
+        else gl.Enable(GL_DEPTH_TEST);  // occluders must lie in front of the light
+        gl.DepthMask(GL_FALSE);
+        gl.Enable(GL_COLOR_LOGIC_OP);
+        gl.LogicOp(GL_AND);
+        gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+        setPassState(false, planar, lightIndex, clipFromOrigin);
+        drawOccluders();
+        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.Disable(GL_COLOR_LOGIC_OP);
+    }
+
+    void drawLightBits(size_t lightIndex, const glm::mat4& clipFromEyeRel, bool planar) {
         setPassState(true, planar, lightIndex, clipFromEyeRel);
         if (!planar) {
             // The nearest light surface's depth first, on its own: were the
@@ -445,14 +447,6 @@ struct DirectLightSampler::Impl {
         gl.Enable(GL_COLOR_LOGIC_OP);
         gl.LogicOp(GL_OR_INVERTED);
         drawLight();
-        if (!planar) gl.Enable(GL_DEPTH_TEST);  // occluders must lie in front of the light
-
-        gl.LogicOp(GL_AND);
-        gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-        setPassState(false, planar, lightIndex, clipFromOrigin);
-        drawOccluders();
-        gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        gl.Disable(GL_COLOR_LOGIC_OP);
     }
 
     // §4.1.1: two occlusion queries, the light alone and the light behind

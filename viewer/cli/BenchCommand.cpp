@@ -25,11 +25,7 @@ int runDirect(const std::vector<std::string>& args) {
     o.flag("quick", "CI size: 20x20 points, fewer configurations and passes, no Water scene");
     o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
     o.value("seed", "N", "jitter seed; the same seed repeats a run bit for bit", std::to_string(defaults.seed));
-    o.parse(args);
-    if (o.helpRequested()) {
-        std::fputs(o.help().c_str(), stdout);
-        return 0;
-    }
+    if (!o.parseOrPrintHelp(args)) return 0;
 
     BenchDirectOptions options;
     options.outDir = o.str("out");

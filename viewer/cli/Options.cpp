@@ -3,6 +3,7 @@
 #include "core/Error.h"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 
@@ -66,6 +67,13 @@ void Options::parse(const std::vector<std::string>& args) {
     }
     if (nextPositional < positionals_.size())
         throw InputError(concat("'", command_, "' needs <", positionals_[nextPositional].first, ">"));
+}
+
+bool Options::parseOrPrintHelp(const std::vector<std::string>& args) {
+    parse(args);
+    if (!helpRequested_) return true;
+    std::fputs(help().c_str(), stdout);
+    return false;
 }
 
 bool Options::has(const std::string& name) const {

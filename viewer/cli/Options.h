@@ -27,6 +27,9 @@ public:
     // Parses argv (after the subcommand). Throws InputError for an unknown
     // option, a missing value, a missing or extra positional argument.
     void parse(const std::vector<std::string>& args);
+    // parse(), then, if --help was given, prints help() to stdout and
+    // returns false: the command has nothing more to do.
+    bool parseOrPrintHelp(const std::vector<std::string>& args);
 
     bool has(const std::string& name) const;
     bool isSet(const std::string& flagName) const { return has(flagName); }
@@ -38,7 +41,6 @@ public:
     Vec3 vec3(const std::string& name) const;   // "X,Y,Z"
 
     std::string help() const;
-    bool helpRequested() const { return helpRequested_; }
 
 private:
     struct Decl {

@@ -84,11 +84,7 @@ int runProbe(const std::vector<std::string>& args) {
     o.value("points", "IN.csv", "sensor points: columns x,y,z,nx,ny,nz");
     o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²)");
     declareDirectOptions(o);
-    o.parse(args);
-    if (o.helpRequested()) {
-        std::fputs(o.help().c_str(), stdout);
-        return 0;
-    }
+    if (!o.parseOrPrintHelp(args)) return 0;
     const std::string out = o.str("out");
     checkOutputDirectory(out);
     const DirectChoice choice = readDirectOptions(o);

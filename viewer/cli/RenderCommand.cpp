@@ -63,11 +63,7 @@ int runRender(const std::vector<std::string>& args) {
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure", std::string("0"));
     o.flag("no-auto-exposure", "do not scale the log-average luminance to middle grey");
     o.value("tonemap", "OP", "aces, reinhard or clamp", std::string("aces"));
-    o.parse(args);
-    if (o.helpRequested()) {
-        std::fputs(o.help().c_str(), stdout);
-        return 0;
-    }
+    if (!o.parseOrPrintHelp(args)) return 0;
 
     // Everything the user can get wrong is checked before any work.
     const std::string out = o.str("out");
