@@ -42,6 +42,50 @@ void dropTriangle() {
     vPlaneOverW = 0.0;
 }
 
+// Grows [lo, hi] by homogeneous point p (x, y, w) if it lies in the
+// frustum's pyramid |x| <= w, |y| <= w (a hair of slack for points computed
+// on its faces).
+void addIfInPyramid(vec3 p, inout vec2 lo, inout vec2 hi) {
+    float slack = 1e-5 * p.z;
+    if (p.z > 0.0 && abs(p.x) <= p.z + slack && abs(p.y) <= p.z + slack) {
+        vec2 s = clamp(p.xy / p.z, vec2(-1.0), vec2(1.0));
+        lo = min(lo, s);
+        hi = max(hi, s);
+    }
+}
+
+// Where edge a-b crosses the pyramid face k·p = 0, if it does.
+void addCrossing(vec3 a, vec3 b, vec3 k, inout vec2 lo, inout vec2 hi) {
+    float fa = dot(k, a), fb = dot(k, b);
+    if ((fa < 0.0) != (fb < 0.0)) addIfInPyramid(mix(a, b, fa / (fa - fb)), lo, hi);
+}
+
+// Screen bounds of the part of triangle (a, b, c) inside the pyramid: its
+// corners inside, its edges' crossings of the four faces, and the pyramid's
+// corner rays that pierce it in front of the eye. Empty (lo > hi) when the
+// triangle misses the pyramid. `inv` is the inverse of [a b c].
+void pyramidBounds(vec3 a, vec3 b, vec3 c, mat3 inv, out vec2 lo, out vec2 hi) {
+    lo = vec2(1e30);
+    hi = vec2(-1e30);
+    addIfInPyramid(a, lo, hi);
+    addIfInPyramid(b, lo, hi);
+    addIfInPyramid(c, lo, hi);
+    const vec3 faces[4] = vec3[4](vec3(-1.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0), vec3(0.0, -1.0, 1.0), vec3(0.0, 1.0, 1.0));
+    for (int f = 0; f < 4; ++f) {  // constant bounds: unrolled
+        addCrossing(a, b, faces[f], lo, hi);
+        addCrossing(b, c, faces[f], lo, hi);
+        addCrossing(c, a, faces[f], lo, hi);
+    }
+    for (int k = 0; k < 4; ++k) {
+        vec2 corner = vec2((k & 1) != 0 ? 1.0 : -1.0, (k & 2) != 0 ? 1.0 : -1.0);
+        vec3 bw = inv * vec3(corner, 1.0);
+        if (all(greaterThanEqual(bw, vec3(0.0))) && bw.x + bw.y + bw.z > 0.0) {
+            lo = min(lo, corner);
+            hi = max(hi, corner);
+        }
+    }
+}
+
 // Local arrays indexed by variables become per-lane scratch memory on
 // llvmpipe (many times slower), so everything here is straight-line code.
 void main() {
@@ -74,16 +118,33 @@ void main() {
     if (!uCullBackFaces && all(lessThanEqual(height, vec3(0.0)))) { dropTriangle(); return; }
 
     // Screen bounds, grown by one pixel: of the three corners when all are
-    // in front of the near plane; otherwise (an occluder touching the eye:
-    // rare) the whole image, and the fragment stage's exact tests clip.
+    // in front of the near plane; otherwise (a wall passing beside or behind
+    // the eye) of the part of the triangle inside the frustum's pyramid,
+    // which is often nothing at all.
     float limit = 1.0 + uPixelNdc;
-    vec2 lo = vec2(-limit), hi = vec2(limit);
+    vec2 lo, hi;
     if (all(greaterThanEqual(w, vec3(uNear)))) {
         vec2 s0 = c0.xy / c0.z, s1 = c1.xy / c1.z, s2 = c2.xy / c2.z;
-        lo = max(min(min(s0, s1), s2) - uPixelNdc, vec2(-limit));
-        hi = min(max(max(s0, s1), s2) + uPixelNdc, vec2(limit));
-        if (any(greaterThanEqual(lo, hi))) { dropTriangle(); return; }
+        lo = min(min(s0, s1), s2);
+        hi = max(max(s0, s1), s2);
+    } else {
+        // The pyramid clip is well conditioned only when the triangle's plane
+        // keeps some distance from the eye (the apex): within 1e-3 of the
+        // triangle's size (a receiver right under a light's edge) float
+        // rounding can lose part of the clipped outline, so the whole image
+        // is kept and the fragment stage's exact tests clip.
+        vec3 normal = cross(c1 - c0, c2 - c0);
+        float size = max(max(length(c1 - c0), length(c2 - c1)), length(c0 - c2));
+        if (abs(det) > 1e-3 * size * length(normal)) {
+            pyramidBounds(c0, c1, c2, inverse(M), lo, hi);
+        } else {
+            lo = vec2(-1.0);
+            hi = vec2(1.0);
+        }
     }
+    lo = max(lo - uPixelNdc, vec2(-limit));
+    hi = min(hi + uPixelNdc, vec2(limit));
+    if (any(greaterThanEqual(lo, hi))) { dropTriangle(); return; }
     vec2 s = vec2((corner & 1) != 0 ? hi.x : lo.x, (corner & 2) != 0 ? hi.y : lo.y);
     vec3 bw = inverse(M) * vec3(s, 1.0);
     vBaryOverW = bw;
