@@ -9,7 +9,7 @@ void declareDirectOptions(Options& o) {
     o.value("method", "NAME", "direct light: jittered, regular, query or exact", std::string("jittered"));
     o.value("estimator", "NAME", "cv (exact unoccluded minus sampled occlusion) or plain", std::string("cv"));
     o.value("image-size", "N", "sampling image side, pixels", std::string("64"));
-    o.value("bits", "N", "jittered tests per pixel: 1, 4, 8, 16 or 32", std::string("4"));
+    o.value("bits", "N", "jittered tests per pixel: 1, 4, 8, 16 or 32", std::string("8"));
     o.value("passes", "K", "estimates averaged per point", std::string("1"));
     o.value("seed", "N", "random seed; the same seed repeats bit for bit", std::string("1"));
     o.value("gl", "BACKEND", "OpenGL back end: auto, osmesa or egl", std::string("auto"));
