@@ -1,5 +1,7 @@
 #include "LightFrustum.h"
 
+#include <cmath>
+
 namespace ml {
 
 Polygon3 clipPolygon(const Polygon3& poly, const Vec3& n, double d) {
@@ -124,6 +126,71 @@ std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, cons
         if (fitWindow(pieces, face, 1.0, g)) frusta.push_back(g);
     }
     return frusta;
+}
+
+std::vector<SamplingFrustum> samplingFrusta(const AreaLight& light, const std::vector<Polygon3>& pieces,
+                                            const Vec3& eye, double maxHalfAngleDegrees) {
+    const Triangle3& first = light.geometry[0];
+    const Vec3 towards = glm::normalize(light.centroid - eye);
+    Vec3 align = first[1] - first[0];
+    double best = -1;
+    for (int k = 0; k < 3; ++k) {
+        const Vec3 e = glm::normalize(first[(k + 1) % 3] - first[k]);
+        const double across = glm::length(e - glm::dot(e, towards) * towards);
+        if (across > best + 1e-6) {  // a clear margin: ties resolve the same at any scale
+            best = across;
+            align = e;
+        }
+    }
+    std::vector<SamplingFrustum> frusta = fitFrusta(pieces, eye, align, maxHalfAngleDegrees);
+    // Along a long thin light's width (its edge most across the line of
+    // sight when seen obliquely), its length runs diagonally through the
+    // window: a thin sliver of used pixels again, ~1/64 of them for a light
+    // 1e-4 wide. Rows follow another edge of the triangle if that at least
+    // halves the window (a clear margin: the bench's square light keeps its
+    // rows).
+    auto windowArea = [](const SamplingFrustum& f) { return (f.rightEdge - f.left) * (f.top - f.bottom); };
+    for (int k = 0; k < 3 && frusta.size() == 1; ++k) {
+        const Vec3 e = glm::normalize(first[(k + 1) % 3] - first[k]);
+        if (e == align) continue;
+        std::vector<SamplingFrustum> other = fitFrusta(pieces, eye, e, maxHalfAngleDegrees);
+        if (other.size() == 1 && windowArea(other[0]) < 0.5 * windowArea(frusta[0])) frusta = std::move(other);
+    }
+    return frusta;
+}
+
+std::vector<WindowPiece> windowPieces(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, double pw,
+                                      double ph) {
+    // The frustum's pyramid in camera space: l <= x/d <= r, b <= y/d <= t.
+    const Vec3 sides[4] = {Vec3(1, 0, -f.left), Vec3(-1, 0, f.rightEdge), Vec3(0, 1, -f.bottom), Vec3(0, -1, f.top)};
+    std::vector<WindowPiece> out;
+    for (const Polygon3& piece : pieces) {
+        Polygon3 cam;
+        for (const Vec3& p : piece) cam.push_back(f.toCamera(p));
+        for (const Vec3& plane : sides)
+            if (!cam.empty()) cam = clipPolygon(cam, plane, 0.0);
+        if (cam.size() < 3) continue;
+        std::vector<Vec2> q;
+        for (const Vec3& c : cam) q.push_back(Vec2(c.x / c.z, c.y / c.z));
+        double area2 = 0;
+        for (size_t k = 0; k < q.size(); ++k) {
+            const Vec2& a = q[k];
+            const Vec2& b = q[(k + 1) % q.size()];
+            area2 += a.x * b.y - a.y * b.x;
+        }
+        if (area2 == 0) continue;
+        const double sigma = area2 > 0 ? 1.0 : -1.0;
+        WindowPiece wp;
+        for (size_t k = 0; k < q.size(); ++k) {
+            const Vec2& a = q[k];
+            const Vec2 e = q[(k + 1) % q.size()] - a;
+            WindowPiece::Edge edge{-sigma * e.y, sigma * e.x, sigma * (e.y * a.x - e.x * a.y), 0};
+            edge.reach = 0.5 * (std::abs(edge.a) * pw + std::abs(edge.b) * ph);
+            wp.edges.push_back(edge);
+        }
+        out.push_back(std::move(wp));
+    }
+    return out;
 }
 
 }  // namespace ml

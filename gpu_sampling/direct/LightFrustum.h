@@ -51,4 +51,35 @@ std::vector<Polygon3> visibleLightPieces(const AreaLight& light, const Vec3& eye
 std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, const Vec3& eye,
                                        const Vec3& alignTo, double maxHalfAngleDegrees);
 
+// The frusta a sampler renders for a light seen from `eye` (its visible
+// pieces): rows follow the edge of the light's first triangle that is most
+// across the line of sight, as in the paper's bench (an edge seen end-on
+// would leave a thin diagonal sliver of used pixels); for a long thin light
+// seen obliquely, another edge of that triangle if it at least halves the
+// window. The raster sampler and its ray-traced peer both use this, so they
+// test the same points.
+std::vector<SamplingFrustum> samplingFrusta(const AreaLight& light, const std::vector<Polygon3>& pieces,
+                                            const Vec3& eye, double maxHalfAngleDegrees);
+
+// A convex piece of the light on a frustum's window plane (depth 1), as
+// edge functions a·u + b·v + c ≥ 0 inside; `reach` is how much an edge
+// function can change within half a pixel (pixel size pw × ph).
+struct WindowPiece {
+    struct Edge {
+        double a, b, c, reach;
+    };
+    std::vector<Edge> edges;
+    bool contains(double u, double v) const {
+        for (const Edge& e : edges)
+            if (e.a * u + e.b * v + e.c < 0) return false;
+        return true;
+    }
+};
+
+// The light's pieces clipped to the frustum's pyramid and projected onto
+// its window (in double): where the control-variate estimator decides
+// which jittered samples lie on the light.
+std::vector<WindowPiece> windowPieces(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, double pw = 0,
+                                      double ph = 0);
+
 }  // namespace ml

@@ -3,10 +3,12 @@
 #include "core/Error.h"
 #include "core/io/AtomicFile.h"
 #include "core/loaders/ObjLoader.h"
+#include "core/raytrace/EmbreeScene.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/BenchScene.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/Jitter.h"
+#include "gpu_sampling/direct/RayTracedLightSampler.h"
 
 #include <algorithm>
 #include <chrono>
@@ -50,11 +52,13 @@ struct Plan {
     int maxPasses;                // K doubles from 1 up to this
     size_t heavyPoints;           // receivers on the 7,200-triangle scene
     size_t waterPoints;           // receivers on the Water scene; 0 skips it
+    int raytraceBits;             // the jittered 64×bits configurations the ray-traced peer repeats
+    size_t raytracePoints;        // bench receivers it is measured at
 };
 
 Plan planFor(const BenchDirectOptions& options) {
-    if (options.quick) return {20, {32, 64}, {1, 4}, 40, 8, 300, 0};
-    return {options.pointsPerSide, {32, 48, 64}, {1, 4, 8}, 200, 32, 2000, 2000};
+    if (options.quick) return {20, {32, 64}, {1, 4}, 40, 8, 300, 0, 4, 100};
+    return {options.pointsPerSide, {32, 48, 64}, {1, 4, 8}, 200, 32, 2000, 2000, 8, 2000};
 }
 
 // --- Configurations --------------------------------------------------------------
@@ -374,6 +378,81 @@ std::vector<ConvergenceRow> runConvergence(GlContext& context, const Scene& scen
     return rows;
 }
 
+// --- The ray-traced peer ------------------------------------------------------------
+
+// The raster sampler's jittered configuration next to the ray-traced sampler
+// (RayTracedLightSampler.h: the same sample points, decided by Embree shadow
+// rays on one CPU core), at equal samples (the same settings and seeds: the
+// same estimates up to rounding, so only the time differs) and at equal
+// time (the ray-traced image size whose time per estimate matches the
+// raster sampler's, from the rays per second measured at equal samples).
+struct RaytraceRow {
+    Config config;          // the raster configuration compared
+    std::string sampler;    // "raster", "rays_equal_samples", "rays_equal_time" (no commas)
+    int imageSize = 0;      // pixels per side of the sampling image
+    double lightSamples = 0;  // mean samples on the light per estimate (rays traced)
+    ErrorStats errors;
+    double total = 0;       // median s per estimate
+};
+
+struct RaytraceTiming {
+    ErrorStats errors;
+    double median = 0, lightSamples = 0;
+};
+
+RaytraceTiming timeRaytrace(const EmbreeScene& rays, const DirectSamplerSettings& settings, const BenchPoints& bench,
+                            const std::vector<size_t>& ids, uint32_t seed) {
+    const RayTracedLightSampler sampler(rays, settings);
+    RaytraceTiming t;
+    std::vector<double> times;
+    double samples = 0;
+    for (size_t id : ids) {
+        const ReceiverPoint& p = bench.points[id];
+        const Clock::time_point t0 = Clock::now();
+        // The raster run's seed for this receiver (measure()): the same jitter.
+        const DirectSample s = sampler.sample(0, p.position, p.normal, jitter::seedFor(seed, uint32_t(id)));
+        times.push_back(secondsSince(t0));
+        t.errors.add(s.cosineSolidAngle, bench.references[id]);
+        samples += s.lightSamples;
+    }
+    t.median = median(times);
+    t.lightSamples = ids.empty() ? 0 : samples / double(ids.size());
+    return t;
+}
+
+std::vector<RaytraceRow> runRaytrace(const Scene& scene, const BenchPoints& bench,
+                                     const std::vector<AccuracyRow>& accuracy, const Plan& plan, uint32_t seed,
+                                     Clock::time_point start) {
+    std::vector<size_t> all(bench.points.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    const std::vector<size_t> ids = spread(all, plan.raytracePoints);
+    const EmbreeScene rays(scene);
+    std::vector<RaytraceRow> rows;
+    for (const AccuracyRow& r : accuracy) {
+        if (r.config.method != DirectMethod::Jittered || r.config.imageSize != 64 || r.config.bits != plan.raytraceBits)
+            continue;
+        std::fprintf(stderr, "[%6.1f s] ray-traced peer: %s\n", secondsSince(start), r.config.label().c_str());
+        RaytraceRow raster{r.config, "raster", r.config.imageSize, 0, {}, r.timing.total};
+        for (size_t id : ids) raster.errors.add(r.timing.estimates[id], bench.references[id]);
+        rows.push_back(raster);
+
+        DirectSamplerSettings settings = r.config.settings();
+        const RaytraceTiming same = timeRaytrace(rays, settings, bench, ids, seed);
+        rows.push_back({r.config, "rays_equal_samples", settings.imageSize, same.lightSamples, same.errors, same.median});
+        rows[rows.size() - 2].lightSamples = same.lightSamples;  // the raster's: the same points on the light
+
+        // Rays per second at equal samples give the image whose estimates
+        // take as long as the raster sampler's (a square image, same bits).
+        const double perRay = same.lightSamples > 0 ? same.median / same.lightSamples : 0.0;
+        const double affordable = perRay > 0 ? r.timing.total / perRay : 0.0;
+        const double fill = same.lightSamples / (64.0 * 64.0 * settings.bits);  // fraction of samples on the light
+        settings.imageSize = std::clamp(int(std::lround(std::sqrt(affordable / std::max(fill, 1e-3) / settings.bits))), 4, 1024);
+        const RaytraceTiming equal = timeRaytrace(rays, settings, bench, ids, seed);
+        rows.push_back({r.config, "rays_equal_time", settings.imageSize, equal.lightSamples, equal.errors, equal.median});
+    }
+    return rows;
+}
+
 // --- Tables ----------------------------------------------------------------------------
 
 // A table printed aligned on stdout and written as CSV from the same cells,
@@ -476,6 +555,16 @@ Table convergenceTable(const std::vector<ConvergenceRow>& rows) {
         t.addRow(std::vector<std::string>{r.config.label(), std::to_string(r.passes),
                                           std::to_string(r.errors.relative.count())} +
                  errorCells(r.errors));
+    return t;
+}
+
+Table raytraceTable(const std::vector<RaytraceRow>& rows) {
+    Table t(std::vector<std::string>{"config", "sampler", "image_size", "light_samples", "points"} + kErrorHeader +
+            std::vector<std::string>{"total_ms"});
+    for (const RaytraceRow& r : rows)
+        t.addRow(std::vector<std::string>{r.config.label(), r.sampler, std::to_string(r.imageSize), num(r.lightSamples),
+                                          std::to_string(r.errors.relative.count())} +
+                 errorCells(r.errors) + std::vector<std::string>{ms(r.total)});
     return t;
 }
 
@@ -648,7 +737,8 @@ std::string efficiencyLine(const std::vector<AccuracyRow>& rows) {
 
 // `heavy`: the rows of the 7,200-triangle scene, checked against its target.
 std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>& accuracy,
-                            const std::vector<SceneTimingRow>& heavy, const std::vector<ConvergenceRow>& convergence) {
+                            const std::vector<SceneTimingRow>& heavy, const std::vector<ConvergenceRow>& convergence,
+                            const std::vector<RaytraceRow>& raytrace) {
     std::ostringstream md;
     md << "# Direct-light sampler bench (Fournier & Péroche §6.1)\n\n"
        << "- OpenGL: " << info.context << "\n"
@@ -689,9 +779,16 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>&
            << ", " << pct(last->errors.relative.mean()) << " % at K = " << last->passes << " (×"
            << num(last->errors.relative.mean() / std::max(first.errors.relative.mean(), 1e-300)) << ")\n";
     }
+    md << "\n## Ray-traced peer (Embree shadow rays through the same sample points, one CPU core)\n\n"
+       << "| config | sampler | image | rays per estimate | mean error % | max error % | ms per estimate |\n"
+       << "|---|---|---|---|---|---|---|\n";
+    for (const RaytraceRow& r : raytrace)
+        md << "| " << r.config.label() << " | " << r.sampler << " | " << r.imageSize << " | " << num(r.lightSamples)
+           << " | " << pct(r.errors.relative.mean()) << " | " << pct(r.errors.relative.max()) << " | " << ms(r.total)
+           << " |\n";
     md << "\nJittered passes are independent, so their mean converges (about 1/√K); every regular pass repeats "
           "the same value, so its error cannot fall.\n\nTables: direct_accuracy.csv, direct_timing_scenes.csv, "
-          "direct_convergence.csv. Times are medians per sample; total_ms is measured without glFinish between "
+          "direct_convergence.csv, direct_raytrace.csv. Times are medians per sample; total_ms is measured without glFinish between "
           "phases (the real cost), timed_total_ms and the phase columns with it.\n";
     return md.str();
 }
@@ -722,6 +819,7 @@ int runBenchDirect(const BenchDirectOptions& options) {
     std::printf("\n");
 
     const std::vector<AccuracyRow> accuracy = runAccuracy(*context, bench, points, plan, options.seed, start);
+    const std::vector<RaytraceRow> raytrace = runRaytrace(bench, points, accuracy, plan, options.seed, start);
 
     const Scene heavy = makeBenchScene(kHeavySubdivisions);
     const int heavySide = int(std::ceil(std::sqrt(double(plan.heavyPoints))));
@@ -764,6 +862,10 @@ int runBenchDirect(const BenchDirectOptions& options) {
     std::printf("\nTimings on larger scenes (median ms per sample; rendered_pct: samples that saw the light;\n"
                 "drawn_triangles: mean occluder triangles drawn after culling).\n\n%s",
                 scenesT.aligned().c_str());
+    const Table raytraceT = raytraceTable(raytrace);
+    std::printf("\nRay-traced peer (Embree shadow rays through the raster sampler's sample points, one core): at "
+                "equal samples (same seeds) and at equal time per estimate; errors over %zu receivers.\n\n%s",
+                raytrace.empty() ? size_t(0) : raytrace.front().errors.relative.count(), raytraceT.aligned().c_str());
     std::printf("\nConvergence: error of the mean of K passes at penumbra receivers "
                 "(exact between %g%% and %g%% of unoccluded).\n\n%s",
                 100 * kPenumbraLow, 100 * kPenumbraHigh, convergenceT.aligned().c_str());
@@ -771,12 +873,13 @@ int runBenchDirect(const BenchDirectOptions& options) {
     writeTextFileAtomically((dir / "direct_accuracy.csv").string(), accuracyT.csv());
     writeTextFileAtomically((dir / "direct_timing_scenes.csv").string(), scenesT.csv());
     writeTextFileAtomically((dir / "direct_convergence.csv").string(), convergenceT.csv());
+    writeTextFileAtomically((dir / "direct_raytrace.csv").string(), raytraceT.csv());
     writePlots(dir, gnuplotScript(accuracy, convergence, points.points.size()));
 
     const RunInfo info{context->describe(), options.quick ? "quick" : "full", options.seed, points.points.size(),
                        points.skipped, secondsSince(start)};
     writeTextFileAtomically((dir / "direct_summary.md").string(),
-                            summaryMarkdown(info, accuracy, heavyRows, convergence));
+                            summaryMarkdown(info, accuracy, heavyRows, convergence, raytrace));
     std::printf("\nRecommended for one pass: %s\nRecommended for progressive refinement: %s\nWall time %.1f s; files in %s\n",
                 recommendationLine(accuracy).c_str(), efficiencyLine(accuracy).c_str(),
                 info.wallSeconds, dir.string().c_str());

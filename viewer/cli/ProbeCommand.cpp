@@ -6,6 +6,9 @@
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/io/AtomicFile.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "gpu_sampling/direct/RayTracedLightSampler.h"
 
 #include <chrono>
 #include <cmath>
@@ -76,6 +79,136 @@ std::string columnName(const std::string& name) {
     return s;
 }
 
+// Whether the user wrote --name (with or without "=value"): Options reports
+// defaults as set, and the CPU methods refuse options they would ignore.
+bool written(const std::vector<std::string>& args, const std::string& name) {
+    for (const std::string& a : args)
+        if (a == "--" + name || a.rfind("--" + name + "=", 0) == 0) return true;
+    return false;
+}
+
+void refuseOptions(const std::vector<std::string>& args, const std::string& method,
+                   std::initializer_list<const char*> names) {
+    for (const char* name : names)
+        if (written(args, name))
+            throw InputError(concat("option --", name, " does not apply to --method ", method));
+}
+
+std::string csvHeader(const Scene& scene) {
+    std::string h = "x,y,z,nx,ny,nz";
+    for (const AreaLight& l : scene.lights) {
+        const std::string c = columnName(l.name);
+        h += ",E_" + c + "_r,E_" + c + "_g,E_" + c + "_b";
+    }
+    return h + ",E_r,E_g,E_b";
+}
+
+void csvRgb(std::ostringstream& csv, const Rgb& c) { csv << "," << c.r << "," << c.g << "," << c.b; }
+
+void csvPoint(std::ostringstream& csv, const SensorPoint& p) {
+    csv << p.position.x << "," << p.position.y << "," << p.position.z << "," << p.normal.x << "," << p.normal.y << ","
+        << p.normal.z;
+}
+
+// --method path: the path tracer's irradiance, direct (per light and in all,
+// the columns every method writes) and indirect, each with its standard error.
+int probePath(const Options& o, const std::vector<std::string>& args, const std::vector<SensorPoint>& points,
+              const Scene& scene, const std::string& out) {
+    refuseOptions(args, "path", {"estimator", "image-size", "bits", "passes", "gl"});
+    PathTracerSettings settings;
+    settings.maxDepth = o.has("max-depth") ? o.integer("max-depth", 1, 1024) : 8;
+    settings.threads = o.has("threads") ? o.integer("threads", 0, 1024) : 0;
+    settings.seed = o.seed("seed");
+    const int spp = o.has("spp") ? o.integer("spp", 2, 1 << 24) : 1024;
+    const EmbreeScene rays(scene);
+    const PathTracer tracer(rays, settings);
+
+    std::ostringstream csv;
+    csv.precision(9);
+    csv << csvHeader(scene) << ",E_se_r,E_se_g,E_se_b,E_indirect_r,E_indirect_g,E_indirect_b,"
+        << "E_indirect_se_r,E_indirect_se_g,E_indirect_se_b,method,samples,max_depth,time_s\n";
+    Progress progress("probe", points.size());
+    double relative = 0;
+    size_t lit = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+        const SensorPoint& p = points[i];
+        const auto t0 = std::chrono::steady_clock::now();
+        const IrradianceEstimate e = tracer.irradiance(p.position, p.normal, spp, uint32_t(i));
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        csvPoint(csv, p);
+        for (const Rgb& l : e.directPerLight) csvRgb(csv, l);
+        csvRgb(csv, e.direct);
+        csvRgb(csv, e.directError);
+        csvRgb(csv, e.indirect);
+        csvRgb(csv, e.indirectError);
+        csv << ",path," << spp << "," << settings.maxDepth << "," << seconds << "\n";
+        const Rgb total = e.direct + e.indirect;
+        if (luminance(total) > 0) {
+            relative += luminance(glm::sqrt(e.directError * e.directError + e.indirectError * e.indirectError)) /
+                        luminance(total);
+            ++lit;
+        }
+        progress.update(i + 1);
+    }
+    progress.finish();
+    writeTextFileAtomically(out, csv.str());
+    std::printf("wrote %s (%zu points, %zu lights, path tracer: %d samples per point, max depth %d, seed %u)\n",
+                out.c_str(), points.size(), scene.lights.size(), spp, settings.maxDepth, settings.seed);
+    if (lit) std::printf("mean relative standard error of the total irradiance: %.3g %% over %zu lit points\n",
+                         100 * relative / double(lit), lit);
+    return 0;
+}
+
+// --method raytrace: the ray-traced peer of the jittered sampler (same
+// frusta, jitter and estimators, Embree shadow rays instead of rasterising).
+int probeRaytrace(const Options& o, const std::vector<std::string>& args, const std::vector<SensorPoint>& points,
+                  const Scene& scene, const std::string& out) {
+    refuseOptions(args, "raytrace", {"gl", "spp", "max-depth", "threads"});
+    DirectSamplerSettings settings;
+    settings.method = DirectMethod::Jittered;
+    settings.estimator = parseDirectEstimator(o.str("estimator"));
+    settings.imageSize = o.integer("image-size", 4, 1024);
+    settings.bits = o.integer("bits", 1, 32);
+    settings.validate();
+    const int passes = o.integer("passes", 1, 1 << 20);
+    const uint32_t seed = o.seed("seed");
+    const EmbreeScene rays(scene);
+    const RayTracedLightSampler sampler(rays, settings);
+
+    std::ostringstream csv;
+    csv.precision(9);
+    csv << csvHeader(scene) << ",method,samples,time_s\n";
+    Progress progress("probe", points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+        const SensorPoint& p = points[i];
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<Rgb> perLight(scene.lights.size(), Rgb(0.0));
+        for (size_t l = 0; l < scene.lights.size(); ++l) {
+            // The raster sampler's seeds, so both draw the same jitter.
+            for (int k = 0; k < passes; ++k)
+                perLight[l] += sampler.sample(l, p.position, p.normal,
+                                              seedFor(seed, uint32_t(i), uint32_t(l), uint32_t(k))).irradiance;
+            perLight[l] /= double(passes);
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        Rgb total(0.0);
+        csvPoint(csv, p);
+        for (const Rgb& e : perLight) {
+            csvRgb(csv, e);
+            total += e;
+        }
+        csvRgb(csv, total);
+        csv << ",raytrace," << passes * int(scene.lights.size()) << "," << seconds << "\n";
+        progress.update(i + 1);
+    }
+    progress.finish();
+    writeTextFileAtomically(out, csv.str());
+    std::printf("wrote %s (%zu points, %zu lights, raytrace %dx%d, %d bits/pixel, %s estimator, %d %s)\n",
+                out.c_str(), points.size(), scene.lights.size(), settings.imageSize, settings.imageSize,
+                settings.bits, directEstimatorName(settings.estimator), passes, passes == 1 ? "pass" : "passes");
+    return 0;
+}
+
 }  // namespace
 
 int runProbe(const std::vector<std::string>& args) {
@@ -84,9 +217,23 @@ int runProbe(const std::vector<std::string>& args) {
     o.value("points", "IN.csv", "sensor points: columns x,y,z,nx,ny,nz");
     o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²)");
     declareDirectOptions(o);
+    // The CPU references (--method path: the path tracer; --method raytrace:
+    // the jittered sampler with shadow rays) and their own options.
+    o.value("spp", "N", "--method path: cosine-weighted directions per point, each with one sample of every "
+                        "light (default 1024)");
+    o.value("max-depth", "D", "--method path: 1 = direct light only, D = direct + D-1 indirect bounces (default 8)");
+    o.value("threads", "T", "--method path: worker threads, 0 = every core (default 0)");
     if (!o.parseOrPrintHelp(args)) return 0;
     const std::string out = o.str("out");
     checkOutputDirectory(out);
+    const std::string methodName = o.str("method");
+    if (methodName == "path" || methodName == "raytrace") {
+        const std::vector<SensorPoint> points = readPoints(o.str("points"));
+        const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+        for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        return methodName == "path" ? probePath(o, args, points, scene, out) : probeRaytrace(o, args, points, scene, out);
+    }
+    refuseOptions(args, methodName, {"spp", "max-depth", "threads"});
     const DirectChoice choice = readDirectOptions(o);
     const std::vector<SensorPoint> points = readPoints(o.str("points"));
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));

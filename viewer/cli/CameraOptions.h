@@ -1,0 +1,15 @@
+// The view options `render` and `reference` share (so their images compare
+// pixel for pixel), declared and read in one place.
+#pragma once
+
+#include "Options.h"
+#include "core/Scene.h"
+
+namespace ml {
+
+// --width, --height, --camera-pos, --camera-target, --camera-up, --fov.
+void declareViewOptions(Options& options);
+// The scene's camera (or a framing one) with the options applied; validated.
+Camera cameraFromOptions(const Options& options, const Scene& scene, double aspect);
+
+}  // namespace ml
