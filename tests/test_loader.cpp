@@ -301,6 +301,25 @@ TEST(ObjLoader, VertexColoursAreIgnoredWithAWarning) {
                                   path + ":1: vertex colours are not supported; ignored (3 lines)"}));
 }
 
+TEST(ObjLoader, TinyAndHugeNormalsBecomeUnit) {
+    // Caught by the fuzz target's unit-normal check (tests/fuzz) on a
+    // hand-written input: a vn of subnormal components was divided by a
+    // length with only a few significant bits, and came out 3e-5 off unit
+    // length. Each normal must be unit to rounding (1e-15) and point where
+    // the file says: the subnormal components themselves hold only ~11
+    // significant bits (4.9e-324 steps), hence 1e-3 there.
+    const std::string path = writeFile(scratchDir(), "normals.obj",
+                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                       "vn 1e-320 3e-321 0\nvn 1e308 -1e308 1e308\nvn 0 0 5e-324\n"
+                                       "f 1//1 2//2 3//3\n");
+    const Mesh m = loadObj(path).meshes.at(0);
+    ASSERT_EQ(m.normals.size(), 3u);
+    for (const Vec3& n : m.normals) EXPECT_NEAR(glm::length(n), 1.0, 1e-15);
+    expectNear(m.normals[m.triangles[0][0]], glm::normalize(Vec3(1.0, 0.3, 0.0)), 1e-3);
+    expectNear(m.normals[m.triangles[0][1]], glm::normalize(Vec3(1.0, -1.0, 1.0)), 1e-15);
+    expectNear(m.normals[m.triangles[0][2]], Vec3(0.0, 0.0, 1.0), 1e-15);
+}
+
 // --- Errors ------------------------------------------------------------------
 
 struct ErrorCase {

@@ -76,7 +76,7 @@ struct Compositor::Impl {
         checkGl(gl, "creating the compositor");
     }
 
-    GlFramebuffer framebuffer(std::initializer_list<GLuint> colors, GLuint depth) {
+    GlFramebuffer framebuffer(std::initializer_list<GLuint> colors, GLuint depth, bool stencil = false) {
         GLuint f = 0;
         gl.CreateFramebuffers(1, &f);
         GlFramebuffer fb(gl, f);
@@ -86,7 +86,7 @@ struct Compositor::Impl {
             gl.NamedFramebufferTexture(f, att, c, 0);
             buffers.push_back(att);
         }
-        if (depth) gl.NamedFramebufferTexture(f, GL_DEPTH_ATTACHMENT, depth, 0);
+        if (depth) gl.NamedFramebufferTexture(f, stencil ? GL_DEPTH_STENCIL_ATTACHMENT : GL_DEPTH_ATTACHMENT, depth, 0);
         gl.NamedFramebufferDrawBuffers(f, GLsizei(buffers.size()), buffers.data());
         if (gl.CheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
             throw std::runtime_error("compositor: framebuffer incomplete");
@@ -119,9 +119,9 @@ struct Compositor::Impl {
         GlTexture irradianceSum = makeTexture2D(gl, GL_RGBA32F, w, h);
         GlTexture radiance = makeTexture2D(gl, GL_RGBA32F, w, h);
         GlTexture sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        GlTexture cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
+        GlTexture cacheDepth = makeTexture2D(gl, GL_DEPTH32F_STENCIL8, w, h);
         GlFramebuffer gbufferFb = framebuffer({reflectance.id(), emission.id()}, sceneDepth.id());
-        GlFramebuffer irradianceFb = framebuffer({irradianceSum.id()}, cacheDepth.id());
+        GlFramebuffer irradianceFb = framebuffer({irradianceSum.id()}, cacheDepth.id(), true);
         GlFramebuffer radianceFb = framebuffer({radiance.id()}, 0);
 
         gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -165,7 +165,8 @@ struct Compositor::Impl {
             describeFloats(gl, vao.id(), buffer.id(), {3, 3});
             gl.BindVertexArray(vao.id());
             gl.DepthMask(GL_TRUE);
-            gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+            gl.StencilMask(0xff);
+            gl.ClearBufferfi(GL_DEPTH_STENCIL, 0, farDepth, 0);
             gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
             gl.DepthFunc(GL_GREATER);
             gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(vertices.size()));
@@ -173,7 +174,22 @@ struct Compositor::Impl {
             gl.DepthMask(GL_FALSE);
             gl.DepthFunc(GL_EQUAL);
             gl.Enable(GL_BLEND);
+            // A cache triangle holds the irradiance of its front (CCW) side; a
+            // surface lit from both sides has a second, reversed copy for its
+            // back (IrradianceCache). The depth pass above took both sides, so
+            // a back seen without a copy stays unlit instead of showing what
+            // lies behind it.
+            gl.Enable(GL_CULL_FACE);
+            gl.CullFace(GL_BACK);
+            gl.FrontFace(GL_CCW);
+            // Coincident surfaces (two copies of a floor) tie in depth: only
+            // the first fragment of a sub-pixel adds its irradiance.
+            gl.Enable(GL_STENCIL_TEST);
+            gl.StencilFunc(GL_EQUAL, 0, 0xff);
+            gl.StencilOp(GL_KEEP, GL_KEEP, GL_INCR);
             gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(vertices.size()));
+            gl.Disable(GL_STENCIL_TEST);
+            gl.Disable(GL_CULL_FACE);
             gl.Disable(GL_BLEND);
         }
         gl.DepthMask(GL_TRUE);

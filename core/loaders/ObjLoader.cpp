@@ -200,8 +200,8 @@ struct LibraryMaterial {
 
 class ObjParser {
 public:
-    ObjParser(const std::string& path, const ObjOptions& options)
-        : path_(path), options_(options) {}
+    ObjParser(const std::string& path, const ObjOptions& options, const ObjFileReader& read)
+        : path_(path), options_(options), read_(read) {}
 
     Scene parse();
 
@@ -229,6 +229,7 @@ private:
 
     std::string path_;
     ObjOptions options_;
+    const ObjFileReader& read_;
     Scene scene_;
     RepeatedWarnings repeated_;
 
@@ -270,7 +271,7 @@ Scene ObjParser::parse() {
 
 void ObjParser::readStatements() {
     std::string text;
-    if (!readFile(path_, text)) throwInputError(SourceLocation{path_}, "cannot open OBJ file");
+    if (!read_(path_, text)) throwInputError(SourceLocation{path_}, "cannot open OBJ file");
     startGroup(fs::path(path_).stem().string());
     LineReader reader(std::move(text));
     string_view line;
@@ -357,9 +358,11 @@ void ObjParser::parseNormal(const Statement& st, const SourceLocation& at) {
     const Vec3 n(parseNumber(st.args[0], at, "normal coordinate"),
                  parseNumber(st.args[1], at, "normal coordinate"),
                  parseNumber(st.args[2], at, "normal coordinate"));
-    // hypot does not overflow for large components, so only a true zero fails.
-    const double len = std::hypot(n.x, std::hypot(n.y, n.z));
-    normals_.push_back(len > 0 ? n / len : Vec3(0.0));
+    // Scaled by its largest component first: that neither overflows for huge
+    // components nor loses digits for subnormal ones (whose length has only
+    // a few significant bits), so only a true zero fails.
+    const double largest = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+    normals_.push_back(largest > 0 ? glm::normalize(n / largest) : Vec3(0.0));
     normalLines_.push_back(at.line);
 }
 
@@ -503,7 +506,7 @@ void ObjParser::loadMaterialLibrary(string_view name, const SourceLocation& at) 
     if (std::find(libraryFiles_.begin(), libraryFiles_.end(), mtlPath) != libraryFiles_.end())
         return;
     std::string text;
-    if (!readFile(mtlPath, text))
+    if (!read_(mtlPath, text))
         throwInputError(at, "cannot open material library '", name, "' (", mtlPath, ")");
     libraryFiles_.push_back(mtlPath);
 
@@ -693,7 +696,11 @@ Mesh ObjParser::buildMesh(const Group& group) {
 }  // namespace
 
 Scene loadObj(const std::string& path, const ObjOptions& options) {
-    return ObjParser(path, options).parse();
+    return loadObj(path, options, [](const std::string& file, std::string& text) { return readFile(file, text); });
+}
+
+Scene loadObj(const std::string& path, const ObjOptions& options, const ObjFileReader& read) {
+    return ObjParser(path, options, read).parse();
 }
 
 }  // namespace ml

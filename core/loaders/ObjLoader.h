@@ -3,6 +3,7 @@
 
 #include "core/Scene.h"
 
+#include <functional>
 #include <string>
 
 namespace ml {
@@ -45,5 +46,16 @@ struct ObjOptions {
 // material whose faces are all degenerate, a file without faces, and a crease
 // angle outside [0, 180].
 Scene loadObj(const std::string& path, const ObjOptions& options = {});
+
+// Where loadObj's files come from: fills `text` with the whole file at `path`
+// and returns true, or returns false when it cannot be opened.
+using ObjFileReader = std::function<bool(const std::string& path, std::string& text)>;
+
+// The same, with the OBJ and every MTL library read through `read` rather
+// than from the file system (tests and the fuzzer serve them from memory).
+// `read` gets `path` for the OBJ and, for an MTL, the path loadObj would open:
+// relative names joined to the OBJ's folder, lexically normalised. Errors
+// name the same paths and lines as for files.
+Scene loadObj(const std::string& path, const ObjOptions& options, const ObjFileReader& read);
 
 }  // namespace ml

@@ -31,6 +31,10 @@ namespace ml {
     X(PFNGLCLEARDEPTHPROC, ClearDepth)                                  \
     X(PFNGLCLEARBUFFERUIVPROC, ClearBufferuiv)                          \
     X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                            \
+    X(PFNGLCLEARBUFFERFIPROC, ClearBufferfi)                            \
+    X(PFNGLSTENCILFUNCPROC, StencilFunc)                                \
+    X(PFNGLSTENCILOPPROC, StencilOp)                                    \
+    X(PFNGLSTENCILMASKPROC, StencilMask)                                \
     X(PFNGLDEPTHFUNCPROC, DepthFunc)                                    \
     X(PFNGLDEPTHMASKPROC, DepthMask)                                    \
     X(PFNGLCOLORMASKIPROC, ColorMaski)                                  \
