@@ -2,8 +2,11 @@
 
 #include "core/Error.h"
 #include "core/Random.h"
-#include "detail/CacheMesh.h"
+#include "detail/CacheImpl.h"
 
+#include <array>
+#include <cstring>
+#include <map>
 #include <queue>
 
 namespace ml {
@@ -15,16 +18,164 @@ using detail::toVec3;
 void CacheSettings::validate() const {
     if (!(maxEdgeFraction > 1e-5 && maxEdgeFraction <= 1.0))
         throw InputError(concat("cache maximum edge fraction ", maxEdgeFraction, " is not in (1e-5, 1]"));
+    if (!(minEdgeFraction > 1e-7 && minEdgeFraction <= maxEdgeFraction))
+        throw InputError(concat("cache minimum edge fraction ", minEdgeFraction, " is not in (1e-7, ",
+                                maxEdgeFraction, "] (the maximum edge fraction)"));
+    if (!(minEdgePixels >= 0 && minEdgePixels <= 1e4))
+        throw InputError(concat("cache minimum edge size ", minEdgePixels, " pixels is not in [0, 1e4]"));
+    if (!(splitTolerance > 0 && splitTolerance < 1))
+        throw InputError(concat("cache split tolerance ", splitTolerance, " is not in (0, 1)"));
+    if (!(noiseTolerance > 0 && noiseTolerance < 1))
+        throw InputError(concat("cache noise tolerance ", noiseTolerance, " is not in (0, 1)"));
+    if (maxSamplesPerVertex < 1) throw InputError("cache: at least one sample per vertex");
+    if (!(singleSampleNoise >= 0 && singleSampleNoise < 1))
+        throw InputError(concat("cache single-sample noise ", singleSampleNoise, " is not in [0, 1)"));
+    if (maxVertices < 3) throw InputError(concat("cache vertex budget ", maxVertices, " is below 3"));
+    if (maxMemoryBytes < (size_t(1) << 16))
+        throw InputError(concat("cache memory budget ", maxMemoryBytes, " bytes is below 64 KiB"));
 }
 
+namespace detail {
+
 namespace {
+
+// FNV-1a, 64 bits: a fingerprint, not a defence against forgery.
+struct Fnv64 {
+    uint64_t h = 0xcbf29ce484222325ull;
+    void bytes(const void* p, size_t n) {
+        const auto* b = static_cast<const unsigned char*>(p);
+        for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
+    }
+    void f64(double v) { bytes(&v, sizeof v); }
+    void u64(uint64_t v) { bytes(&v, sizeof v); }
+    void vec(const Vec3& v) { f64(v.x), f64(v.y), f64(v.z); }
+};
+
+}  // namespace
+
+uint64_t sceneFingerprint(const Scene& scene) {
+    Fnv64 f;
+    f.u64(scene.meshes.size());
+    for (const Mesh& m : scene.meshes) {
+        f.u64(m.positions.size());
+        for (const Vec3& p : m.positions) f.vec(p);
+        for (const Vec3& n : m.normals) f.vec(n);
+        f.u64(m.triangles.size());
+        f.bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
+        f.bytes(m.materials.data(), m.materials.size() * sizeof(uint32_t));
+    }
+    for (const Material& mat : scene.materials) {
+        f.vec(mat.kd), f.vec(mat.ks), f.f64(mat.ns), f.vec(mat.ke);
+    }
+    f.u64(scene.lights.size());
+    return f.h;
+}
+
+uint64_t settingsFingerprint(const CacheSettings& s) {
+    Fnv64 f;
+    f.f64(s.maxEdgeFraction), f.f64(s.minEdgeFraction), f.f64(s.minEdgePixels);
+    f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
+    f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
+    return f.h;
+}
+
+double edgeLength(const CacheTriMesh& mesh, CacheTriMesh::VertexHandle a, CacheTriMesh::VertexHandle b) {
+    return (mesh.point(a) - mesh.point(b)).norm();
+}
+
+CacheTriMesh::VertexHandle splitAtMidpoint(CacheTriMesh& mesh, CacheTriMesh::EdgeHandle e) {
+    const auto h = mesh.halfedge_handle(e, 0);
+    const auto a = mesh.from_vertex_handle(h), b = mesh.to_vertex_handle(h);
+    Vec3 n = toVec3(mesh.normal(a)) + toVec3(mesh.normal(b));
+    // Opposite normals at the ends (a knife edge): keep one side's.
+    n = glm::length(n) > 1e-9 ? glm::normalize(n) : toVec3(mesh.normal(a));
+    const auto mid = mesh.split(e, 0.5 * (mesh.point(a) + mesh.point(b)));
+    mesh.set_normal(mid, toOm(n));
+    return mid;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::CacheState;
 
 // Copies every object into one mesh. A face OpenMesh refuses (a complex
 // edge or vertex: non-manifold input) gets vertices of its own, so nothing
 // is lost; the count is reported by the caller.
-size_t buildBaseMesh(const Scene& scene, CacheTriMesh& mesh) {
+// Whether an object is closed: with its vertices welded by position (they
+// are split at creases), every edge is shared by an even number of its
+// triangles. The inside of a closed object is never seen nor lit.
+bool isClosed(const Mesh& m) {
+    std::map<std::array<double, 3>, uint32_t> weld;
+    std::vector<uint32_t> id(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v)
+        id[v] = weld.emplace(std::array<double, 3>{m.positions[v].x, m.positions[v].y, m.positions[v].z},
+                             uint32_t(weld.size()))
+                    .first->second;
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = id[t[k]], b = id[t[(k + 1) % 3]];
+            uses[{std::min(a, b), std::max(a, b)}]++;
+        }
+    for (const auto& [edge, n] : uses)
+        if (n % 2) return false;
+    return true;
+}
+
+// Whether some light lies behind triangle t's plane and emits towards it:
+// then its back is lit, and needs a cache of its own.
+bool litFromBehind(const Scene& scene, const Mesh& m, size_t t) {
+    const Triangle3 p = m.triangle(t);
+    const Vec3 n = glm::normalize(m.areaNormal(t));
+    const double eps = 1e-6 * scene.bounds.diagonal();
+    for (const AreaLight& light : scene.lights)
+        for (const Triangle3& lt : light.geometry) {
+            const Vec3 ln = glm::cross(lt[1] - lt[0], lt[2] - lt[0]);
+            if (!(glm::dot(ln, n) > 0)) continue;  // emits away from the plane's back
+            for (const Vec3& q : lt)
+                if (glm::dot(q - p[0], n) < -eps) return true;
+        }
+    return false;
+}
+
+size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheTriMesh& mesh, size_t& backFaces) {
     size_t detached = 0;
-    for (const Mesh& m : scene.meshes) {
+    backFaces = 0;
+    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+        if (skip[mi]) continue;
+        const Mesh& m = scene.meshes[mi];
+        // Surfaces lit from both sides (open objects with a light behind)
+        // get a reversed copy, facing the other way, with vertices of its own.
+        if (!isClosed(m)) {
+            std::map<uint32_t, CacheTriMesh::VertexHandle> back;
+            for (size_t t = 0; t < m.triangles.size(); ++t) {
+                if (!litFromBehind(scene, m, t) || !(m.area(t) > 0)) continue;
+                CacheTriMesh::VertexHandle h[3];
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t v = m.triangles[t][k];
+                    auto it = back.find(v);
+                    if (it == back.end()) {
+                        it = back.emplace(v, mesh.add_vertex(toOm(m.positions[v]))).first;
+                        mesh.set_normal(it->second, toOm(-m.normals[v]));
+                    }
+                    h[k] = it->second;
+                }
+                if (mesh.add_face(h[0], h[2], h[1]).is_valid()) {
+                    ++backFaces;
+                    continue;
+                }
+                for (int k = 0; k < 3; ++k) {  // non-manifold: vertices of its own
+                    const uint32_t v = m.triangles[t][k];
+                    h[k] = mesh.add_vertex(toOm(m.positions[v]));
+                    mesh.set_normal(h[k], toOm(-m.normals[v]));
+                }
+                mesh.add_face(h[0], h[2], h[1]);
+                ++backFaces;
+                ++detached;
+            }
+        }
         std::vector<CacheTriMesh::VertexHandle> handles(m.positions.size());
         for (size_t v = 0; v < m.positions.size(); ++v) {
             handles[v] = mesh.add_vertex(toOm(m.positions[v]));
@@ -45,8 +196,10 @@ size_t buildBaseMesh(const Scene& scene, CacheTriMesh& mesh) {
     return detached;
 }
 
-// Longest-edge bisection until no edge exceeds maxLength. Splitting an edge
-// splits both faces beside it, so the mesh stays conforming (no T-vertex).
+// Longest-edge bisection until no edge exceeds maxLength. Edges are split
+// longest first, so each split edge is the longest of both faces beside it
+// (the bisection keeps angles bounded below) and, as splitting an edge
+// splits both faces, the mesh stays conforming (no T-vertex).
 void bisectLongEdges(CacheTriMesh& mesh, double maxLength) {
     using Entry = std::pair<double, int>;  // (length, edge index)
     std::priority_queue<Entry> queue;
@@ -60,12 +213,7 @@ void bisectLongEdges(CacheTriMesh& mesh, double maxLength) {
         queue.pop();
         const CacheTriMesh::EdgeHandle e(idx);
         if (std::abs(mesh.calc_edge_length(e) - len) > 1e-12 * len) continue;  // stale entry
-        const auto h = mesh.halfedge_handle(e, 0);
-        const auto a = mesh.from_vertex_handle(h), b = mesh.to_vertex_handle(h);
-        Vec3 n = toVec3(mesh.normal(a)) + toVec3(mesh.normal(b));
-        n = glm::length(n) > 0 ? glm::normalize(n) : toVec3(mesh.normal(a));
-        const auto mid = mesh.split(e, 0.5 * (mesh.point(a) + mesh.point(b)));
-        mesh.set_normal(mid, toOm(n));
+        const auto mid = detail::splitAtMidpoint(mesh, e);
         for (auto ve : mesh.ve_range(mid)) push(ve);
         // The faces' far edges keep their lengths; only the new edges can be long.
     }
@@ -73,65 +221,89 @@ void bisectLongEdges(CacheTriMesh& mesh, double maxLength) {
 
 }  // namespace
 
-struct IrradianceCache::Impl {
-    struct LightMesh {
-        CacheTriMesh mesh;
-        std::vector<Rgb> sum;
-        std::vector<uint32_t> count;
-    };
-    std::vector<LightMesh> lights;
-    size_t detachedFaces = 0;
-};
-
 IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings)
     : impl_(std::make_unique<Impl>()) {
     settings.validate();
+    CacheState& s = impl_->state;
+    s.settings = settings;
+    s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
+    s.sceneFingerprint = detail::sceneFingerprint(scene);
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
+    const double maxEdge = settings.maxEdgeFraction * s.diagonal;
+    std::vector<bool> gridded(scene.meshes.size(), false);
+    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+        const Mesh& m = scene.meshes[mi];
+        if (!decideGridCache(m, maxEdge).useGrid) continue;
+        gridded[mi] = true;
+        detail::GridObject g;
+        g.mesh = uint32_t(mi);
+        g.positions = m.positions;
+        g.normals = m.normals;
+        g.triangles = m.triangles;
+        for (size_t t = 0; t < m.triangles.size(); ++t) g.area += m.area(t);
+        GridCacheSettings gs;
+        gs.cellSize = maxEdge;
+        g.grid = std::make_shared<const GridCache>(m, gs);
+        g.firstSample = uint32_t(s.gridSamples);
+        s.gridSamples += g.grid->sampleCount();
+        s.grids.push_back(std::move(g));
+    }
     CacheTriMesh base;
-    impl_->detachedFaces = buildBaseMesh(scene, base);
-    bisectLongEdges(base, settings.maxEdgeFraction * scene.bounds.diagonal());
-    impl_->lights.resize(scene.lights.size());
-    for (Impl::LightMesh& lm : impl_->lights) {
+    s.detachedFaces = buildBaseMesh(scene, gridded, base, s.backFaces);
+    bisectLongEdges(base, maxEdge);
+    s.meshes.resize(scene.lights.size());
+    for (detail::LightMesh& lm : s.meshes) {
         lm.mesh = base;
-        lm.sum.assign(base.n_vertices(), Rgb(0.0));
-        lm.count.assign(base.n_vertices(), 0);
+        lm.stats.assign(base.n_vertices(), {});
+        lm.gridStats.assign(s.gridSamples, {});
     }
 }
 
 IrradianceCache::~IrradianceCache() = default;
 
-size_t IrradianceCache::lightCount() const { return impl_->lights.size(); }
-size_t IrradianceCache::vertexCount(size_t l) const { return impl_->lights.at(l).mesh.n_vertices(); }
-size_t IrradianceCache::triangleCount(size_t l) const { return impl_->lights.at(l).mesh.n_faces(); }
+const CacheSettings& IrradianceCache::settings() const { return impl_->state.settings; }
+size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size(); }
+size_t IrradianceCache::vertexCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_vertices(); }
+size_t IrradianceCache::triangleCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_faces(); }
+uint64_t IrradianceCache::totalSamples() const { return impl_->state.samples; }
+uint64_t IrradianceCache::rounds() const { return impl_->state.rounds; }
+
+size_t IrradianceCache::backFaceCount() const { return impl_->state.backFaces; }
+size_t IrradianceCache::gridObjectCount() const { return impl_->state.grids.size(); }
+
+size_t IrradianceCache::totalVertices() const {
+    size_t n = 0;
+    for (const detail::LightMesh& lm : impl_->state.meshes) n += lm.mesh.n_vertices();
+    return n;
+}
 
 Vec3 IrradianceCache::position(size_t l, size_t v) const {
-    return toVec3(impl_->lights.at(l).mesh.point(CacheTriMesh::VertexHandle(int(v))));
+    return toVec3(impl_->state.meshes.at(l).mesh.point(CacheTriMesh::VertexHandle(int(v))));
 }
 Vec3 IrradianceCache::normal(size_t l, size_t v) const {
-    return toVec3(impl_->lights.at(l).mesh.normal(CacheTriMesh::VertexHandle(int(v))));
+    return toVec3(impl_->state.meshes.at(l).mesh.normal(CacheTriMesh::VertexHandle(int(v))));
 }
 
-void IrradianceCache::addSample(size_t l, size_t v, const Rgb& e) {
-    Impl::LightMesh& lm = impl_->lights.at(l);
-    ML_ASSERT(v < lm.sum.size(), "vertex ", v);
-    ML_ASSERT(isFinite(e), "non-finite irradiance at vertex ", v, " of light ", l);
-    lm.sum[v] += e;
-    lm.count[v] += 1;
+void IrradianceCache::addSample(size_t l, size_t v, const VertexSample& sample) {
+    ML_ASSERT(l < impl_->state.meshes.size() && v < impl_->state.meshes[l].stats.size(), "vertex ", v, " of light ", l);
+    detail::addVertexSample(impl_->state, l, v, sample);
 }
 
 IrradianceMeshView IrradianceCache::view(size_t l) const {
-    const Impl::LightMesh& lm = impl_->lights.at(l);
+    const detail::LightMesh& lm = impl_->state.meshes.at(l);
     IrradianceMeshView out;
     const size_t n = lm.mesh.n_vertices();
     out.positions.reserve(n);
     out.normals.reserve(n);
+    out.irradiance.reserve(n);
+    out.samples.reserve(n);
     for (auto v : lm.mesh.vertices()) {
         out.positions.push_back(toVec3(lm.mesh.point(v)));
         out.normals.push_back(toVec3(lm.mesh.normal(v)));
-        const uint32_t c = lm.count[size_t(v.idx())];
-        out.irradiance.push_back(c ? lm.sum[size_t(v.idx())] / double(c) : Rgb(0.0));
-        out.samples.push_back(c);
+        const detail::VertexStats& st = lm.stats[size_t(v.idx())];
+        out.irradiance.push_back(st.mean());
+        out.samples.push_back(st.count);
     }
     out.triangles.reserve(lm.mesh.n_faces());
     for (auto f : lm.mesh.faces()) {
@@ -140,25 +312,159 @@ IrradianceMeshView IrradianceCache::view(size_t l) const {
         for (auto v : lm.mesh.fv_range(f)) t[k++] = uint32_t(v.idx());
         out.triangles.push_back(t);
     }
+    // Grid-cached objects: their own triangles, irradiance interpolated from
+    // the grid's samples; a vertex counts the samples of its heaviest one.
+    std::vector<Rgb> sampleMeans, vertexValues;
+    for (const detail::GridObject& g : impl_->state.grids) {
+        const uint32_t first = uint32_t(out.positions.size());
+        sampleMeans.clear();
+        for (size_t k = 0; k < g.grid->sampleCount(); ++k) sampleMeans.push_back(lm.gridStats[g.firstSample + k].mean());
+        g.grid->interpolate(sampleMeans, vertexValues);
+        const auto& offsets = g.grid->weightOffsets();
+        for (size_t v = 0; v < g.positions.size(); ++v) {
+            out.positions.push_back(g.positions[v]);
+            out.normals.push_back(g.normals[v]);
+            out.irradiance.push_back(vertexValues[v]);
+            size_t heaviest = offsets[v];
+            for (size_t k = offsets[v]; k < offsets[v + 1]; ++k)
+                if (g.grid->weights()[k] > g.grid->weights()[heaviest]) heaviest = k;
+            out.samples.push_back(lm.gridStats[g.firstSample + g.grid->weightSamples()[heaviest]].count);
+        }
+        for (const glm::uvec3& t : g.triangles) out.triangles.push_back(t + glm::uvec3(first));
+    }
     return out;
+}
+
+size_t IrradianceCache::bytesPerVertex() {
+    // Array kernel, per vertex: a point, a normal, a status and an outgoing
+    // halfedge; a triangle mesh has about 3 edges (6 halfedges of 4 indices,
+    // an edge status) and 2 faces (a halfedge and a status) per vertex; plus
+    // the sample sums.
+    return sizeof(OpenMesh::Vec3d) * 2 + sizeof(int) * 2 + 6 * 4 * sizeof(int) + 3 * sizeof(int) +
+           2 * 2 * sizeof(int) + sizeof(detail::VertexStats);
 }
 
 size_t IrradianceCache::memoryBytes() const {
     size_t bytes = 0;
-    for (const Impl::LightMesh& lm : impl_->lights) {
+    for (const detail::LightMesh& lm : impl_->state.meshes) {
         const CacheTriMesh& m = lm.mesh;
-        // Array kernel: per vertex a point, a normal, a status and an
-        // outgoing halfedge; per halfedge 4 indices; per edge a status; per
-        // face a halfedge and a status; plus the sample accumulators.
         bytes += m.n_vertices() * (sizeof(OpenMesh::Vec3d) * 2 + sizeof(int) * 2);
         bytes += m.n_halfedges() * sizeof(int) * 4 + m.n_edges() * sizeof(int) + m.n_faces() * sizeof(int) * 2;
-        bytes += lm.sum.size() * sizeof(Rgb) + lm.count.size() * sizeof(uint32_t);
+        bytes += lm.stats.capacity() * sizeof(detail::VertexStats);
+        bytes += lm.gridStats.capacity() * sizeof(detail::VertexStats);
     }
+    for (const detail::GridObject& g : impl_->state.grids) bytes += g.grid->memoryBytes();
     return bytes;
 }
 
+namespace detail {
+
+VertexSample sampleVertex(const DirectSampleFn& fn, const LightMesh& lm, size_t light, size_t v, uint32_t seed) {
+    const auto vh = CacheTriMesh::VertexHandle(int(v));
+    const Vec3 x = toVec3(lm.mesh.point(vh)), n = toVec3(lm.mesh.normal(vh));
+    const uint32_t count = lm.stats[v].count;
+    try {
+        return fn(light, x, n, seedFor(seed, uint32_t(v), uint32_t(light), count));
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw std::runtime_error(concat("sampling failed at vertex ", v, " of light ", light, "'s cache mesh, sample ",
+                                        count, " (point ", x.x, ",", x.y, ",", x.z, "; normal ", n.x, ",", n.y, ",",
+                                        n.z, "): ", e.what()));
+    }
+}
+
+}  // namespace detail
+
+size_t IrradianceCache::sampleUnsampled(const DirectSampleFn& fn, uint32_t seed,
+                                        const std::function<void(size_t, size_t)>& progress) {
+    const size_t todo = detail::unsampledCount(impl_->state);
+    size_t done = 0;
+    detail::sampleUnsampled(impl_->state, fn, seed, todo, [&] {
+        if (progress && (++done % 256 == 0 || done == todo)) progress(done, todo);
+    });
+    return todo;
+}
+
+namespace detail {
+
+size_t unsampledCount(const CacheState& s) {
+    size_t n = 0;
+    for (const LightMesh& lm : s.meshes) {
+        for (const VertexStats& st : lm.stats) n += st.count == 0;
+        for (const VertexStats& st : lm.gridStats) n += st.count == 0;
+    }
+    return n;
+}
+
+size_t sampleUnsampled(CacheState& s, const DirectSampleFn& fn, uint32_t seed, size_t budget,
+                       const std::function<void()>& each) {
+    size_t done = 0;
+    for (size_t l = 0; l < s.meshes.size() && done < budget; ++l) {
+        LightMesh& lm = s.meshes[l];
+        for (size_t v = 0; v < lm.stats.size() && done < budget; ++v) {
+            if (lm.stats[v].count) continue;
+            addVertexSample(s, l, v, sampleVertex(fn, lm, l, v, seed));
+            ++done;
+            if (each) each();
+        }
+        for (size_t g = 0; g < lm.gridStats.size() && done < budget; ++g) {
+            if (lm.gridStats[g].count) continue;
+            addGridSample(s, l, g, sampleGrid(fn, s, l, g, seed));
+            ++done;
+            if (each) each();
+        }
+    }
+    return done;
+}
+
+void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& sample) {
+    ML_ASSERT(isFinite(sample.irradiance), "non-finite irradiance at vertex ", v, " of light ", l);
+    ML_ASSERT(sample.visibility >= 0 && sample.visibility <= 1, "visibility ", sample.visibility, " at vertex ",
+              v, " of light ", l);
+    s.meshes[l].stats.at(v).add(sample);
+    s.samples += 1;
+}
+
+void addGridSample(CacheState& s, size_t l, size_t g, const VertexSample& sample) {
+    ML_ASSERT(isFinite(sample.irradiance), "non-finite irradiance at grid sample ", g, " of light ", l);
+    ML_ASSERT(sample.visibility >= 0 && sample.visibility <= 1, "visibility ", sample.visibility,
+              " at grid sample ", g, " of light ", l);
+    s.meshes[l].gridStats.at(g).add(sample);
+    s.samples += 1;
+}
+
+const GridObject& gridOf(const CacheState& s, size_t g) {
+    for (const GridObject& o : s.grids)
+        if (g >= o.firstSample && g < o.firstSample + o.grid->sampleCount()) return o;
+    ML_ASSERT(false, "grid sample ", g, " of ", s.gridSamples);
+    return s.grids.front();
+}
+
+VertexSample sampleGrid(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t g, uint32_t seed) {
+    const GridObject& o = gridOf(s, g);
+    const size_t k = g - o.firstSample;
+    const Vec3 x = o.grid->samplePosition(k), n = o.grid->sampleNormal(k);
+    const uint32_t count = s.meshes[light].gridStats[g].count;
+    try {
+        return fn(light, x, n, seedFor(seed, kGridSeedBase + uint32_t(g), uint32_t(light), count));
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw std::runtime_error(concat("sampling failed at grid sample ", k, " of object ", o.mesh, " for light ",
+                                        light, ", sample ", count, " (point ", x.x, ",", x.y, ",", x.z, "): ",
+                                        e.what()));
+    }
+}
+
+}  // namespace detail
+
 void sampleEveryVertex(IrradianceCache& cache, const DirectEstimateFn& estimate, int passes, uint32_t seed,
                        const std::function<void(size_t, size_t)>& progress) {
+    // Irradiance only: without visibility, every sample counts as unoccluded.
+    const DirectSampleFn fn = [&](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
+        return VertexSample{estimate(l, x, n, s), 1.0, false};
+    };
     size_t total = 0, done = 0;
     for (size_t l = 0; l < cache.lightCount(); ++l) total += cache.vertexCount(l);
     for (size_t l = 0; l < cache.lightCount(); ++l) {
@@ -166,7 +472,7 @@ void sampleEveryVertex(IrradianceCache& cache, const DirectEstimateFn& estimate,
             for (int p = 0; p < passes; ++p) {
                 try {
                     const uint32_t s = seedFor(seed, uint32_t(v), uint32_t(l), uint32_t(p));
-                    cache.addSample(l, v, estimate(l, cache.position(l, v), cache.normal(l, v), s));
+                    cache.addSample(l, v, fn(l, cache.position(l, v), cache.normal(l, v), s));
                 } catch (const InputError&) {
                     throw;
                 } catch (const std::exception& e) {

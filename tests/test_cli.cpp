@@ -152,3 +152,63 @@ TEST_F(Cli, ProbeAgreesWithExactAndRejectsBadPoints) {
     EXPECT_NE(bad.output.find("bad.csv:3:"), std::string::npos) << bad.output;
     EXPECT_FALSE(fs::exists(path("o.csv")));
 }
+
+TEST_F(Cli, ProgressiveRenderLogsSnapshotsAndResumesFromItsCache) {
+    write("scene.mtl", kQuadMtl);
+    write("scene.obj", kQuadObj);
+    const std::string common = path("scene.obj") + " --width 24 --height 24 --supersample 1 --cache-edge 0.25";
+    // A sample budget: the run repeats exactly whatever the machine's speed.
+    CommandResult r = run("render " + common + " --samples 400 --every 0.01 --log " + path("log.csv") +
+                          " --snapshots " + path("snaps") + " --cache " + path("scene.mlc") + " --out " +
+                          path("a.exr"));
+    ASSERT_EQ(0, r.status) << r.output;
+    EXPECT_TRUE(fs::exists(path("a.exr")));
+    EXPECT_TRUE(fs::exists(path("scene.mlc")));
+    std::ifstream log(path("log.csv"));
+    std::string header, row;
+    std::getline(log, header);
+    EXPECT_EQ(0u, header.find("seconds,frame,rounds,vertices,samples,estimated_error")) << header;
+    size_t rows = 0;
+    while (std::getline(log, row)) ++rows;
+    EXPECT_GE(rows, 1u);  // at least the final row
+    // Resuming: the cache file is read back and refined further.
+    r = run("render " + common + " --samples 800 --cache " + path("scene.mlc") + " --out " + path("b.exr"));
+    ASSERT_EQ(0, r.status) << r.output;
+    EXPECT_NE(r.output.find("resumed from"), std::string::npos) << r.output;
+    // A corrupt cache file is refused before any output is written, and kept.
+    write("bad.mlc", "MESHLIGHT-CACHE\nnot really");
+    r = run("render " + common + " --samples 400 --cache " + path("bad.mlc") + " --out " + path("c.exr"));
+    EXPECT_EQ(2, r.status) << r.output;
+    EXPECT_NE(r.output.find("bad.mlc"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(path("c.exr")));
+    EXPECT_TRUE(fs::exists(path("bad.mlc")));
+}
+
+TEST_F(Cli, WalkthroughWritesOneImagePerCameraAndRejectsBadPaths) {
+    write("scene.mtl", kQuadMtl);
+    write("scene.obj", kQuadObj);
+    write("path.csv", "# px,py,pz,tx,ty,tz,ux,uy,uz,fov\n0,1,4,0,0,0,0,1,0,40\n1,1,4,0,0,0,0,1,0,40\n");
+    const std::string common = path("scene.obj") + " --width 16 --height 16 --supersample 1 --cache-edge 0.25";
+    CommandResult r = run("render " + common + " --samples 300 --camera-path " + path("path.csv") + " --out " +
+                          path("view_##.png"));
+    ASSERT_EQ(0, r.status) << r.output;
+    EXPECT_TRUE(fs::exists(path("view_00.png")));
+    EXPECT_TRUE(fs::exists(path("view_01.png")));
+    // A pattern without #### would overwrite one file.
+    r = run("render " + common + " --camera-path " + path("path.csv") + " --out " + path("view.png"));
+    EXPECT_EQ(2, r.status) << r.output;
+    // A bad line is named with its file and line.
+    write("bad.csv", "0,1,4,0,0,0,0,1,0,40\n0,1,4,0,0,0,0,1,0\n");
+    r = run("render " + common + " --camera-path " + path("bad.csv") + " --out " + path("v_#.png"));
+    EXPECT_EQ(2, r.status) << r.output;
+    EXPECT_NE(r.output.find("bad.csv:2"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(path("v_0.png")));
+}
+
+TEST_F(Cli, PlanPrintsWhatWouldBeSimulated) {
+    const CommandResult r = run("plan cornell");
+    ASSERT_EQ(0, r.status) << r.output;
+    EXPECT_NE(r.output.find("light 'light'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("specular: no pass"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("grid cache"), std::string::npos) << r.output;
+}

@@ -13,6 +13,12 @@ namespace ml {
 int runRender(const std::vector<std::string>& args);
 int runProbe(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
+int runPlan(const std::vector<std::string>& args);
+int runReference(const std::vector<std::string>& args);
+
+// Where `reference` writes the standard error of its image OUT: the same
+// folder and extension, ".noise" before it ("ref.exr" -> "ref.noise.exr").
+std::string referenceNoisePath(const std::string& out);
 
 // A scene argument: "cornell" (the built-in measured Cornell box), "bench"
 // (the paper's §6.1 bench scene) or the path of an OBJ file.

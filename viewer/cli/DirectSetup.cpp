@@ -3,6 +3,8 @@
 #include "core/Error.h"
 #include "core/reference/ExactIrradiance.h"
 
+#include <algorithm>
+
 namespace ml {
 
 void declareDirectOptions(Options& o) {
@@ -51,16 +53,46 @@ DirectEstimators::DirectEstimators(const Scene& scene, const DirectChoice& choic
 DirectEstimators::~DirectEstimators() = default;
 
 DirectEstimateFn DirectEstimators::estimate() {
-    if (exact_)
-        return [this](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact_->irradiance(light, x, n); };
     return [this](size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
-        const DirectSample s = sampler_->sample(light, x, n, seed);
-        const DirectPhaseTimes& t = sampler_->lastTimes();
-        totals_.setup += t.setup;
-        totals_.draw += t.draw;
-        totals_.readback += t.readback;
-        totals_.weighting += t.weighting;
-        return s.irradiance;
+        return sampleOne(light, x, n, seed).irradiance;
+    };
+}
+
+DirectSampleFn DirectEstimators::sample() {
+    return [this](size_t light, const Vec3& x, const Vec3& n, uint32_t seed) { return sampleOne(light, x, n, seed); };
+}
+
+VertexSample DirectEstimators::sampleOne(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
+    // Visible fraction of the light's cosine-weighted solid angle; a point
+    // that sees none of the light (behind it) counts as fully visible: no
+    // shadow boundary passes there.
+    auto fraction = [](double visible, double unoccluded) {
+        return unoccluded > 0 ? std::clamp(visible / unoccluded, 0.0, 1.0) : 1.0;
+    };
+    if (exact_) {
+        const double unoccluded = exact_->unoccludedCosineSolidAngle(light, x, n);
+        const double visible = exact_->cosineSolidAngle(light, x, n);
+        const double v = fraction(visible, unoccluded);
+        return {visible * scene_.lights[light].radiance, v, v > 1e-9 && v < 1 - 1e-9};
+    }
+    const DirectSample s = sampler_->sample(light, x, n, seed);
+    const DirectPhaseTimes& t = sampler_->lastTimes();
+    totals_.setup += t.setup;
+    totals_.draw += t.draw;
+    totals_.readback += t.readback;
+    totals_.weighting += t.weighting;
+    return {s.irradiance, fraction(s.cosineSolidAngle, s.unoccluded), s.partiallyVisible()};
+}
+
+CacheWorker::SamplerFactory directSamplerFactory(const Scene& scene, const DirectChoice& choice,
+                                                 std::shared_ptr<DirectPhaseTimes> totals) {
+    return [&scene, choice, totals]() -> DirectSampleFn {
+        auto estimators = std::make_shared<DirectEstimators>(scene, choice, false);
+        return [estimators, totals](size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
+            const VertexSample s = estimators->sampleOne(light, x, n, seed);
+            *totals = estimators->totals();
+            return s;
+        };
     };
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "Options.h"
+#include "cache/CacheWorker.h"
 #include "cache/IrradianceCache.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/gl/GlContext.h"
@@ -36,11 +37,17 @@ public:
     ~DirectEstimators();
 
     DirectEstimateFn estimate();
+    // The same estimates with what the sampler saw of the light (visible
+    // fraction, penumbra), for the cache's refinement.
+    DirectSampleFn sample();
     GlContext* context() const { return context_.get(); }
     // Seconds spent per phase over every call so far (GPU methods).
     const DirectPhaseTimes& totals() const { return totals_; }
 
+    VertexSample sampleOne(size_t light, const Vec3& x, const Vec3& n, uint32_t seed);
+
 private:
+
     const Scene& scene_;
     DirectChoice choice_;
     std::unique_ptr<GlContext> context_;
@@ -48,5 +55,12 @@ private:
     std::unique_ptr<ExactDirect> exact_;
     DirectPhaseTimes totals_;
 };
+
+// Makes, on the thread that calls it (the cache worker), a GL context and
+// sampler of its own, or the exact reference, and returns its estimates.
+// Phase times are added to `totals` on that thread; read them after the
+// worker has been joined.
+CacheWorker::SamplerFactory directSamplerFactory(const Scene& scene, const DirectChoice& choice,
+                                                 std::shared_ptr<DirectPhaseTimes> totals);
 
 }  // namespace ml

@@ -1,46 +1,114 @@
-// meshlight render: the first image. Direct light from every area light,
-// sampled at the vertices of the cache meshes, composited and tone-mapped.
+// meshlight render: progressive rendering. A worker thread refines and
+// samples the cache meshes while this thread composites snapshots of them:
+// for a time budget, an error target or a number of samples, one image or a
+// walkthrough of many, with snapshots, a log and a resumable cache file.
+#include "CameraOptions.h"
 #include "Commands.h"
 #include "DirectSetup.h"
+#include "Plan.h"
 #include "Progress.h"
+#include "cache/CacheWorker.h"
 #include "cache/IrradianceCache.h"
+#include "core/CameraPath.h"
 #include "core/Error.h"
 #include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"
+#include "core/io/AtomicFile.h"
 #include "viewer/Compositor.h"
 #include "viewer/ToneMap.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <thread>
 
 namespace ml {
 
 namespace {
 
-Camera cameraFromOptions(const Options& o, const Scene& scene, double aspect) {
-    Camera c = scene.cameraOrDefault(aspect);
-    if (o.has("camera-pos")) c.position = o.vec3("camera-pos");
-    if (o.has("camera-target")) c.target = o.vec3("camera-target");
-    if (o.has("camera-up")) c.up = o.vec3("camera-up");
-    if (o.has("fov")) c.fovYDegrees = o.number("fov", 1e-3, 179.0);
-    c.validate();
-    return c;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+
+// When to stop refining for one image.
+struct StopRule {
+    std::optional<double> seconds;     // --time
+    std::optional<double> error;       // --until-error
+    uint64_t samples = 0;              // --samples (0: none); ends the worker itself
+    std::string describe() const {
+        std::string s;
+        auto add = [&](const std::string& part) { s += (s.empty() ? "" : ", or ") + part; };
+        if (seconds) add(concat(*seconds, " s"));
+        if (error) add(concat("an estimated error of ", *error));
+        if (samples) add(concat(samples, " samples"));
+        add("convergence");
+        return s;
+    }
+};
+
+// "frames/view_####.png" → "frames/view_0007.png".
+std::string framePath(const std::string& pattern, size_t frame) {
+    const size_t at = pattern.find('#');
+    size_t end = at;
+    while (end < pattern.size() && pattern[end] == '#') ++end;
+    std::string number = std::to_string(frame);
+    if (number.size() < end - at) number.insert(0, end - at - number.size(), '0');
+    return pattern.substr(0, at) + number + pattern.substr(end);
 }
 
-// What will be simulated, and why: printed before any work.
-void printPlan(const Scene& scene, const DirectChoice& choice, bool directOnly) {
-    std::printf("plan:\n");
-    for (const AreaLight& l : scene.lights)
-        std::printf("  light '%s': %zu triangles, area %.6g, %s; direct light by %s\n", l.name.c_str(),
-                    l.triangles.size(), l.area, l.planar ? "planar" : "not planar",
-                    choice.describe().c_str());
-    if (scene.lights.empty()) std::printf("  no emissive material (Ke > 0): the image is black\n");
-    std::printf("  indirect light: not simulated (%s)\n",
-                directOnly ? "--direct-only" : "the indirect gather is not implemented yet; direct light only");
-    if (scene.hasGlossy())
-        std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"
-                    " they render as Lambertian\n");
-    else
-        std::printf("  specular: no pass (no material has Ks > 0)\n");
+class ImageWriter {
+public:
+    ImageWriter(const ToneMapSettings& tone) : tone_(tone) {}
+    void write(const std::string& path, const ImageRgb& image) const {
+        if (outputFormat(path) == ImageFormat::Png)
+            writeImage8(path, toneMap(image, tone_), image.width, image.height);
+        else
+            writeImageLinear(path, image);
+    }
+
+private:
+    ToneMapSettings tone_;
+};
+
+// The --log rows, kept in memory and written whole at the end.
+class ConvergenceLog {
+public:
+    ConvergenceLog(size_t lights, bool reference) : reference_(reference) {
+        out_ << "seconds,frame,rounds,vertices,samples,estimated_error";
+        if (reference) out_ << ",rmse,relative_rmse";
+        for (size_t l = 0; l < lights; ++l) out_ << ",light" << l << "_vertices,light" << l << "_samples";
+        out_ << "\n";
+    }
+    void add(double seconds, size_t frame, const CacheSnapshot& s, const ImageRgb* image, const ImageRgb* ref) {
+        out_ << seconds << "," << frame << "," << s.rounds << "," << s.vertices << "," << s.samples << ","
+             << s.estimatedError;
+        if (reference_) out_ << "," << rmse(*image, *ref) << "," << relativeRmse(*image, *ref);
+        for (const IrradianceMeshView& m : s.direct) {
+            uint64_t samples = 0;
+            for (uint32_t c : m.samples) samples += c;
+            out_ << "," << m.positions.size() << "," << samples;
+        }
+        out_ << "\n";
+    }
+    std::string text() const { return out_.str(); }
+
+private:
+    bool reference_;
+    std::ostringstream out_;
+};
+
+// One line of progress: redrawn in place on a terminal, else one line per
+// call (the caller calls it at snapshot times).
+void printStatus(const CacheSnapshot& s, double seconds, const std::string& what, bool done) {
+    static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+    std::fprintf(stderr, "%s%s %.1f s: %zu vertices, %llu samples, estimated error %.3g%%%s", terminal ? "\r" : "",
+                 what.c_str(), seconds, s.vertices, static_cast<unsigned long long>(s.samples),
+                 100 * s.estimatedError, terminal && !done ? "   " : "\n");
+    std::fflush(stderr);
 }
 
 }  // namespace
@@ -48,17 +116,25 @@ void printPlan(const Scene& scene, const DirectChoice& choice, bool directOnly) 
 int runRender(const std::vector<std::string>& args) {
     Options o("render");
     o.positional("scene", "cornell, bench or an OBJ file");
-    o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped)",
+    o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped); with --camera-path a "
+                           "pattern whose #### becomes the frame number",
             std::string("meshlight.png"));
-    o.value("width", "W", "image width, pixels", std::string("512"));
-    o.value("height", "H", "image height, pixels", std::string("512"));
-    o.value("camera-pos", "X,Y,Z", "camera position (default: the scene's camera or a framing one)");
-    o.value("camera-target", "X,Y,Z", "point the camera looks at");
-    o.value("camera-up", "X,Y,Z", "camera up vector");
-    o.value("fov", "DEG", "vertical field of view, degrees");
+    declareViewOptions(o);
+    o.value("camera-path", "FILE", "walkthrough: one image per line (px,py,pz,tx,ty,tz,ux,uy,uz,fov), all from one "
+                                   "cache that keeps refining; --time and --until-error apply per image");
     o.flag("direct-only", "direct light only (the only light simulated so far)");
+    o.value("time", "S", "refine for S seconds of wall-clock time, then write the image");
+    o.value("until-error", "E", "stop once the cache's estimated error is below E (default 0.02 when neither "
+                                "--time nor --samples is given)");
+    o.value("samples", "N", "stop after N irradiance samples in all: a budget that repeats on any machine");
+    o.value("snapshots", "DIR", "also write an image every --every seconds into DIR");
+    o.value("every", "S", "seconds between snapshots and log rows", std::string("1"));
+    o.value("log", "FILE.csv", "a row per snapshot: seconds, vertices and samples per mesh, estimated error");
+    o.value("reference", "REF.exr", "with --log: add RMSE and relative RMSE against this image");
+    o.value("cache", "FILE", "resume from this cache file if it exists, save the cache to it at the end");
+    o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
     declareDirectOptions(o);
-    o.value("cache-edge", "F", "cache mesh edges at most F × the scene diagonal", std::string("0.015625"));
+    declareCacheOptions(o);
     o.value("supersample", "S", "S×S sub-pixels per pixel (box filter)", std::string("4"));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure", std::string("0"));
     o.flag("no-auto-exposure", "do not scale the log-average luminance to middle grey");
@@ -67,62 +143,163 @@ int runRender(const std::vector<std::string>& args) {
 
     // Everything the user can get wrong is checked before any work.
     const std::string out = o.str("out");
-    checkOutputPath(out);
-    const ImageFormat format = outputFormat(out);
+    const bool walkthrough = o.has("camera-path");
+    if (walkthrough && out.find('#') == std::string::npos)
+        throw InputError(concat("--out '", out, "': with --camera-path it must contain #### for the frame number"));
+    checkOutputPath(walkthrough ? framePath(out, 0) : out);
     CompositorSettings comp;
     comp.width = o.integer("width", 1, 16384);
     comp.height = o.integer("height", 1, 16384);
     comp.supersample = o.integer("supersample", 1, 16);
     comp.validate();
     const DirectChoice choice = readDirectOptions(o);
-    CacheSettings cacheSettings;
-    cacheSettings.maxEdgeFraction = o.number("cache-edge", 1e-5, 1.0);
-    cacheSettings.validate();
+    if (choice.passes != 1)
+        throw InputError("render samples each vertex as often as its noise asks: --passes is for probe; "
+                         "use --samples, --time or --until-error");
+    const CacheSettings cacheSettings = readCacheSettings(o);
     ToneMapSettings tone;
     tone.exposureEV = o.number("exposure", -50, 50);
     tone.autoExposure = !o.isSet("no-auto-exposure");
     tone.op = parseToneOperator(o.str("tonemap"));
+    StopRule stop;
+    if (o.has("time")) stop.seconds = o.number("time", 0, 1e7);
+    if (o.has("until-error")) stop.error = o.number("until-error", 1e-9, 1);
+    if (o.has("samples")) stop.samples = uint64_t(o.number("samples", 1, 1e15));
+    if (!stop.seconds && !stop.error && !stop.samples) stop.error = 0.02;
+    const double every = o.number("every", 0.01, 1e6);
+    const std::string snapshotsDir = o.has("snapshots") ? o.str("snapshots") : "";
+    if (!snapshotsDir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(snapshotsDir, ec);
+        if (ec || !std::filesystem::is_directory(snapshotsDir))
+            throw InputError(concat("--snapshots '", snapshotsDir, "': cannot make the folder"));
+    }
+    const std::string logPath = o.has("log") ? o.str("log") : "";
+    if (!logPath.empty()) checkOutputDirectory(logPath);
+    if (o.has("reference") && logPath.empty()) throw InputError("--reference needs --log, where the errors go");
+    ImageRgb reference;
+    if (o.has("reference")) {
+        reference = readImageLinear(o.str("reference"));
+        if (reference.width != comp.width || reference.height != comp.height)
+            throw InputError(concat(o.str("reference"), ": the reference is ", reference.width, "x",
+                                    reference.height, ", the render ", comp.width, "x", comp.height));
+    }
+    const std::string cachePath = o.has("cache") ? o.str("cache") : "";
+    if (!cachePath.empty()) checkOutputDirectory(cachePath);
+    WorkerSettings workerSettings;
+    workerSettings.seed = choice.seed;
+    workerSettings.maxSamples = stop.samples;
+    workerSettings.publishSeconds = o.number("publish", 0, 3600);
 
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    const Camera camera = cameraFromOptions(o, scene, double(comp.width) / comp.height);
+    const double aspect = double(comp.width) / comp.height;
+    const std::vector<Camera> cameras =
+        walkthrough ? loadCameraPath(o.str("camera-path")) : std::vector<Camera>{cameraFromOptions(o, scene, aspect)};
     std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights\n", scene.name.c_str(), scene.meshes.size(),
                 scene.triangleCount(), scene.lights.size());
-    printPlan(scene, choice, o.isSet("direct-only"));
+    printPlan(scene, choice, cacheSettings, o.isSet("direct-only"));
+    std::printf("  stop refining each image at %s\n", stop.describe().c_str());
 
-    DirectEstimators estimators(scene, choice, true);
-    std::printf("OpenGL: %s\n", estimators.context()->describe().c_str());
     IrradianceCache cache(scene, cacheSettings);
-    size_t vertices = 0;
-    for (size_t l = 0; l < cache.lightCount(); ++l) vertices += cache.vertexCount(l);
-    std::printf("cache: %zu vertices over %zu light meshes, %.1f MB\n", vertices, cache.lightCount(),
-                cache.memoryBytes() / 1e6);
+    if (!cachePath.empty() && std::filesystem::exists(cachePath)) {
+        cache.load(cachePath);  // refuses a truncated, corrupt or mismatched file
+        std::printf("cache: resumed from %s: %zu vertices, %llu samples, %llu rounds\n", cachePath.c_str(),
+                    cache.totalVertices(), static_cast<unsigned long long>(cache.totalSamples()),
+                    static_cast<unsigned long long>(cache.rounds()));
+    } else {
+        std::printf("cache: %zu vertices over %zu light meshes to start with, %.1f MB\n", cache.totalVertices(),
+                    cache.lightCount(), cache.memoryBytes() / 1e6);
+    }
 
-    Progress progress("direct light", vertices);
-    sampleEveryVertex(cache, estimators.estimate(), choice.passes, choice.seed,
-                      [&](size_t done, size_t) { progress.update(done); });
-    progress.finish();
-    const auto t1 = std::chrono::steady_clock::now();
+    std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
+    std::printf("OpenGL: %s\n", context->describe().c_str());
+    Compositor compositor(*context, scene);
+    const ImageWriter writer(tone);
+    ConvergenceLog log(scene.lights.size(), o.has("reference"));
 
-    std::vector<IrradianceMeshView> views;
-    for (size_t l = 0; l < cache.lightCount(); ++l) views.push_back(cache.view(l));
-    Compositor compositor(*estimators.context(), scene);
-    const ImageRgb image = compositor.render(camera, views, comp);
-    if (format == ImageFormat::Png)
-        writeImage8(out, toneMap(image, tone), image.width, image.height);
-    else
-        writeImageLinear(out, image);
-    const auto t2 = std::chrono::steady_clock::now();
+    auto phases = std::make_shared<DirectPhaseTimes>();
+    CacheWorker worker(cache, directSamplerFactory(scene, choice, phases), workerSettings);
+    worker.setView(RefinementView{cameras.front(), comp.width, comp.height});
+    CacheWorker::Reader reader = worker.reader();
+    const auto start = Clock::now();
+    worker.start();
 
-    const double sampling = std::chrono::duration<double>(t1 - t0).count();
-    const DirectPhaseTimes& p = estimators.totals();
-    std::printf("sampling: %.2f s (%.1f us per vertex and light; GPU phases: setup %.2f s, draw %.2f s, "
-                "readback %.2f s, weighting %.2f s)\n",
-                sampling, vertices ? sampling / double(vertices * size_t(choice.passes)) * 1e6 : 0.0, p.setup,
-                p.draw, p.readback, p.weighting);
-    std::printf("compositing and writing: %.2f s\nwrote %s (%dx%d)\n",
-                std::chrono::duration<double>(t2 - t1).count(), out.c_str(), image.width, image.height);
+    size_t snapshotIndex = 0;
+    double nextTick = every;
+    auto render = [&](const CacheSnapshot& s, const Camera& camera) { return compositor.render(camera, s.direct, comp); };
+    auto tick = [&](const CacheSnapshot& s, size_t frame) {
+        const double seconds = secondsSince(start);
+        ImageRgb image;
+        if (!snapshotsDir.empty() || o.has("reference")) image = render(s, cameras[frame]);
+        if (!snapshotsDir.empty()) {
+            char name[96];
+            std::snprintf(name, sizeof name, "snapshot_%04zu%s.%s", snapshotIndex,
+                          walkthrough ? concat("_frame", frame).c_str() : "",
+                          outputFormat(out) == ImageFormat::Png ? "png" : "exr");
+            writer.write((std::filesystem::path(snapshotsDir) / name).string(), image);
+        }
+        ++snapshotIndex;
+        if (!logPath.empty()) log.add(seconds, frame, s, &image, o.has("reference") ? &reference : nullptr);
+        printStatus(s, seconds, walkthrough ? concat("frame ", frame) : std::string("refining"), false);
+    };
+
+    for (size_t frame = 0; frame < cameras.size(); ++frame) {
+        if (frame > 0) worker.setView(RefinementView{cameras[frame], comp.width, comp.height});
+        const auto frameStart = Clock::now();
+        // Only snapshots published after this frame's view count for it.
+        const CacheSnapshot* first = reader.acquire();
+        const uint64_t versionAtStart = first ? first->version : 0;
+        for (;;) {
+            worker.rethrowIfFailed();
+            const CacheSnapshot* s = reader.acquire();
+            const bool fresh = s && s->version > versionAtStart;
+            if (worker.finished()) break;
+            if (fresh && s->converged) break;
+            if (fresh && stop.error && s->estimatedError <= *stop.error) break;
+            if (stop.seconds && secondsSince(frameStart) >= *stop.seconds) break;
+            if (s && secondsSince(start) >= nextTick) {
+                tick(*s, frame);
+                nextTick = secondsSince(start) + every;
+            }
+            // Poll at 20 Hz, or sooner when a deadline is near.
+            double wait = std::max(0.0, std::min(0.05, nextTick - secondsSince(start)));
+            if (stop.seconds) wait = std::min(wait, std::max(0.0, *stop.seconds - secondsSince(frameStart)));
+            worker.waitForVersion((s ? s->version : 0) + 1, wait);
+        }
+        if (frame + 1 < cameras.size()) {
+            const CacheSnapshot* s = reader.acquire();
+            writer.write(framePath(out, frame), render(*s, cameras[frame]));
+            std::printf("frame %zu: %.2f s, %zu vertices; wrote %s\n", frame, secondsSince(frameStart), s->vertices,
+                        framePath(out, frame).c_str());
+        }
+    }
+    // The last image is made from everything the worker did, so it stops first.
+    worker.stop();
+    worker.rethrowIfFailed();
+    const CacheSnapshot* final = reader.acquire();
+    ML_ASSERT(final, "the worker published no snapshot");
+    const double refineSeconds = secondsSince(start);
+    const size_t lastFrame = cameras.size() - 1;
+    const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
+    const ImageRgb image = render(*final, cameras[lastFrame]);
+    if (!logPath.empty()) log.add(refineSeconds, lastFrame, *final, &image, o.has("reference") ? &reference : nullptr);
+    printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);
+    writer.write(lastPath, image);
+    if (!logPath.empty()) writeTextFileAtomically(logPath, log.text());
+    if (!cachePath.empty()) cache.save(cachePath);
+
+    const DirectPhaseTimes& p = *phases;
+    std::printf("refinement: %.2f s, %llu rounds, %zu vertices, %llu samples (%.1f us each; GPU phases: setup %.2f s, "
+                "draw %.2f s, readback %.2f s, weighting %.2f s), estimated error %.3g%%%s\n",
+                refineSeconds, static_cast<unsigned long long>(final->rounds), final->vertices,
+                static_cast<unsigned long long>(final->samples),
+                final->samples ? refineSeconds / double(final->samples) * 1e6 : 0.0, p.setup, p.draw, p.readback,
+                p.weighting, 100 * final->estimatedError, final->converged ? " (converged)" : "");
+    std::printf("cache: %.1f MB (%zu bytes per vertex)%s\n", cache.memoryBytes() / 1e6, IrradianceCache::bytesPerVertex(),
+                cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());
+    std::printf("total %.2f s; wrote %s (%dx%d)\n", secondsSince(t0), lastPath.c_str(), image.width, image.height);
     return 0;
 }
 

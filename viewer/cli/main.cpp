@@ -12,8 +12,15 @@ const char* kUsage =
     "usage: meshlight <command> [options]\n"
     "commands:\n"
     "  render SCENE   render an image (SCENE: cornell, bench or an OBJ file)\n"
+    "  plan SCENE     what a render of SCENE would simulate, and why\n"
     "  probe SCENE    direct irradiance at sensor points from a CSV\n"
+    "  reference SCENE --spp N --out REF.exr\n"
+    "                 path-traced reference image (and REF.noise.exr, its standard error)\n"
     "  bench direct   accuracy against time of the direct-light samplers\n"
+    "  bench scaling  how cost grows with triangles and with lights\n"
+    "  bench convergence\n"
+    "                 progressive image against the exact one and the path tracer, in time\n"
+    "  bench report   run the benches and write one HTML page of their results\n"
     "Run 'meshlight <command> --help' for its options.\n";
 
 }  // namespace
@@ -30,7 +37,9 @@ int main(int argc, char** argv) {
     try {
         if (command == "render") return ml::runRender(args);
         if (command == "probe") return ml::runProbe(args);
+        if (command == "plan") return ml::runPlan(args);
         if (command == "bench") return ml::runBench(args);
+        if (command == "reference") return ml::runReference(args);
         if (command == "--help" || command == "-h" || command == "help") {
             std::fputs(kUsage, stdout);
             return 0;

@@ -1,0 +1,107 @@
+// Refinement and sampling on a worker thread, with immutable, versioned
+// snapshots for the renderer.
+//
+// The worker owns the cache while it runs: it alone refines and samples it,
+// and after each round (at most every `publishSeconds`) it publishes a
+// snapshot, a complete copy of every light's mesh. Renderers read snapshots
+// through a SnapshotExchange reader: no lock on the render path, never a
+// torn read. The sampler is made on the worker thread by a factory, so a GL
+// context lives and dies on the thread that uses it.
+#pragma once
+
+#include "IrradianceCache.h"
+#include "SnapshotExchange.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace ml {
+
+struct CacheSnapshot {
+    uint64_t version = 0;             // 1, 2, ... in publication order
+    double seconds = 0;               // worker time since start()
+    std::vector<IrradianceMeshView> direct;  // one per light, in the scene's order
+    size_t vertices = 0;              // over all meshes
+    std::vector<size_t> verticesPerMesh;
+    uint64_t samples = 0;             // estimates taken, all meshes
+    uint64_t rounds = 0;
+    double estimatedError = 0;        // IrradianceCache::estimatedError at publication
+    bool converged = false;           // the last round found nothing to do
+};
+
+struct WorkerSettings {
+    uint32_t seed = 1;
+    // Estimates per refinement round; 0 picks one from the cache size (a
+    // thirty-second of its vertices, 256 to 16,384), so scoring the edges
+    // stays a small part of each round.
+    size_t roundBudget = 0;
+    // Snapshots are published after a round at most this often (seconds);
+    // always after the first and the last round.
+    double publishSeconds = 0.25;
+    // Stop on your own after this many estimates in all (0: no limit); a
+    // budget in samples makes a run repeat whatever the machine's speed.
+    uint64_t maxSamples = 0;
+
+    void validate() const;
+};
+
+class CacheWorker {
+public:
+    // Returns the sampler, made on the worker thread; what it captures is
+    // released on that thread too.
+    using SamplerFactory = std::function<DirectSampleFn()>;
+
+    // `cache` must outlive the worker and not be touched while it runs.
+    CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings);
+    ~CacheWorker();  // stops and joins
+    CacheWorker(const CacheWorker&) = delete;
+    CacheWorker& operator=(const CacheWorker&) = delete;
+
+    void start();
+    void pause();
+    void resume();
+    // Asks the worker to finish its round, publish, and end; joins it.
+    void stop();
+    bool paused() const { return paused_.load(); }
+    // The worker has ended: stopped, out of samples, or failed.
+    bool finished() const { return finished_.load(); }
+    // The camera to serve: refined first, and no finer than its pixels.
+    void setView(const std::optional<RefinementView>& view);
+
+    using Reader = SnapshotExchange<CacheSnapshot>::Reader;
+    // One per reading thread; see SnapshotExchange.
+    Reader reader() { return snapshots_.reader(); }
+
+    // Rethrows, on the calling thread, what ended the worker if it failed:
+    // the message names the light, vertex and point where it happened.
+    void rethrowIfFailed() const;
+    // Blocks until a snapshot with version ≥ `version` exists or the worker
+    // has ended; false on timeout.
+    bool waitForVersion(uint64_t version, double timeoutSeconds);
+
+private:
+    void run();
+    void publish(double seconds, bool converged, const std::optional<RefinementView>& view);
+
+    IrradianceCache& cache_;
+    SamplerFactory factory_;
+    WorkerSettings settings_;
+    SnapshotExchange<CacheSnapshot> snapshots_;
+    std::thread thread_;
+
+    mutable std::mutex mutex_;  // control only: pause, view, failure, waits
+    std::condition_variable wake_;
+    std::atomic<bool> paused_{false}, stopping_{false}, finished_{false};
+    std::optional<RefinementView> view_;
+    bool viewChanged_ = false;
+    std::exception_ptr failure_;
+    uint64_t published_ = 0;
+};
+
+}  // namespace ml

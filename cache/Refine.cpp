@@ -1,0 +1,435 @@
+// Adaptive refinement of the cache meshes: scoring edges and vertices,
+// conforming longest-edge bisection, resampling.
+//
+// What an edge's score means. Irradiance is displayed through exposure and
+// a tone curve; people see relative steps (Weber), not absolute ones, and
+// nothing in the dark. So every vertex's irradiance is mapped to a display
+// level t = 2x/(1+x), x = luminance / white, where white is the irradiance
+// the tone curve maps to about 1 (4× the scene's mean: auto exposure puts the
+// log-average at 0.18 of white). Then for edge (a, b):
+//  - on a smooth signal, linear interpolation misses the midpoint by about
+//    h²f''/8, while a vertex's residual against the plane fitted to its
+//    neighbours' values is about h²f''/2 (zero for any linear signal): the
+//    predicted midpoint error is a quarter of the larger residual of its
+//    ends, relative to the local level;
+//  - where visibility is partial at an end (the sampler's bits saw a
+//    penumbra) or jumps between the ends, the signal may be a step, and the
+//    midpoint error is up to half the difference of the ends.
+// An edge is split while that predicted error exceeds the split tolerance
+// and it is longer than the minimum size; its priority is the error times
+// its length (what a viewer sees scales with both), 10× lower outside the
+// view when one is given. A vertex is resampled while the standard error of
+// its mean (from its samples' spread) exceeds the noise tolerance; one
+// sample is trusted unless it saw a penumbra (outside penumbrae the control-
+// variate sampler is exact).
+#include "IrradianceCache.h"
+
+#include "core/Error.h"
+#include "detail/CacheImpl.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ml {
+
+namespace {
+
+using detail::CacheState;
+using detail::CacheTriMesh;
+using detail::LightMesh;
+using detail::toVec3;
+using VH = CacheTriMesh::VertexHandle;
+using EH = CacheTriMesh::EdgeHandle;
+using FH = CacheTriMesh::FaceHandle;
+using HH = CacheTriMesh::HalfedgeHandle;
+
+// Display levels below this fraction of white are too dark for steps to show.
+constexpr double kDarkFloor = 0.02;
+// Priority factor for what lies outside the view, when one is given.
+constexpr double kOffViewWeight = 0.1;
+// Deepest chain of longest-edge propagation (Rivara's LEPP): a chain
+// follows strictly longer edges, so it is short on any sane mesh.
+constexpr int kMaxLeppDepth = 48;
+
+double displayLevel(double lum, double white) {
+    const double x = std::max(lum, 0.0) / white;
+    return 2 * x / (1 + x);
+}
+
+// What part of the image an edge or vertex falls in, and how small an edge
+// can be seen there.
+class ViewMetric {
+public:
+    ViewMetric(const std::optional<RefinementView>& view, double sceneMinLength, double minPixels)
+        : sceneMin_(sceneMinLength), minPixels_(minPixels) {
+        if (!view) return;
+        has_ = true;
+        position_ = view->camera.position;
+        view->camera.basis(forward_, right_, up_);
+        tanY_ = std::tan(glm::radians(view->camera.fovYDegrees) * 0.5);
+        tanX_ = tanY_ * double(view->width) / double(view->height);
+        height_ = view->height;
+    }
+    double weight(const Vec3& p) const {
+        if (!has_) return 1;
+        const Vec3 d = p - position_;
+        const double z = glm::dot(d, forward_);
+        // 10% margin: what is just outside will be seen when the camera turns.
+        const bool inside = z > 0 && std::abs(glm::dot(d, right_)) <= 1.1 * z * tanX_ &&
+                            std::abs(glm::dot(d, up_)) <= 1.1 * z * tanY_;
+        return inside ? 1.0 : kOffViewWeight;
+    }
+    double minLength(const Vec3& p) const {
+        if (!has_) return sceneMin_;
+        const double pixel = 2 * glm::length(p - position_) * tanY_ / height_;
+        return std::max(sceneMin_, minPixels_ * pixel);
+    }
+
+private:
+    bool has_ = false;
+    double sceneMin_, minPixels_;
+    Vec3 position_{0.0}, forward_{0.0}, right_{0.0}, up_{0.0};
+    double tanX_ = 1, tanY_ = 1;
+    int height_ = 1;
+};
+
+struct Action {
+    enum Kind : uint8_t { Split, Resample, ResampleGrid };
+    double priority;
+    uint32_t mesh;
+    Kind kind;
+    uint32_t a, b; // edge ends (a < b), or the vertex or grid sample in a
+    bool operator<(const Action& o) const {
+        if (priority != o.priority) return priority > o.priority;
+        return std::tie(mesh, kind, a, b) < std::tie(o.mesh, o.kind, o.a, o.b);
+    }
+};
+
+struct Scoring {
+    double error = 0;
+    std::vector<Action> actions;
+};
+
+// The area a grid sample stands for: its object's area over its samples.
+double gridSampleArea(const CacheState& s, size_t g) {
+    const detail::GridObject& o = detail::gridOf(s, g);
+    return o.area / double(o.grid->sampleCount());
+}
+
+double whiteLevel(const CacheState& s, const std::vector<std::vector<double>>& areas) {
+    double total = 0;
+    for (size_t l = 0; l < s.meshes.size(); ++l) {
+        double sum = 0, area = 0;
+        for (size_t v = 0; v < areas[l].size(); ++v) {
+            sum += areas[l][v] * luminance(s.meshes[l].stats[v].mean());
+            area += areas[l][v];
+        }
+        for (size_t g = 0; g < s.gridSamples; ++g) {
+            const double a = gridSampleArea(s, g);
+            sum += a * luminance(s.meshes[l].gridStats[g].mean());
+            area += a;
+        }
+        if (area > 0) total += sum / area;
+    }
+    return 4 * total;
+}
+
+// The relative standard error of a vertex's (or grid sample's) mean, as the
+// scoring uses it; see the top of this file.
+double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, double white) {
+    double rel = 0;
+    if (st.count >= 2) {
+        const double n = st.count, mean = st.sumLum / n;
+        const double var = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
+        rel = std::sqrt(var / n) / (mean + 0.5 * kDarkFloor * white);
+    } else if (st.count == 1 && st.partial) {
+        // A penumbra seen once: its spread is unknown, so assume the
+        // sampler's per-sample error relative to the unoccluded
+        // irradiance (E / visibility).
+        const double mean = st.sumLum, vis = std::max(st.sumVisibility, 0.01);
+        rel = cs.singleSampleNoise * mean / vis / (mean + 0.5 * kDarkFloor * white);
+    }
+    return std::min(rel, 1.0);
+}
+
+// The value at vertex v of the plane that fits its neighbours' values best
+// (least squares, in v's tangent plane): equal to v's own value for any
+// linear signal, whatever the shape of the ring, also at a border where all
+// neighbours lie on one side. None with fewer than three neighbours off one
+// line.
+std::optional<double> planeFitAt(const CacheTriMesh& mesh, size_t v, const std::vector<uint32_t>& ring,
+                  const std::vector<double>& value) {
+    const Vec3 p = toVec3(mesh.point(VH(int(v))));
+    Vec3 n = toVec3(mesh.normal(VH(int(v)))), tx, ty;
+    if (!(glm::length(n) > 0.5)) n = Vec3(0, 0, 1);
+    orthonormalBasis(glm::normalize(n), tx, ty);
+    // Normal equations of min Σ (c + gx·x + gy·y − w)², relative to the
+    // ring's size so the test for a singular system is scale-free.
+    double scale = 0;
+    for (uint32_t u : ring) scale = std::max(scale, glm::length(toVec3(mesh.point(VH(int(u)))) - p));
+    if (!(scale > 0)) scale = 1;
+    glm::dmat3 a(0.0);
+    glm::dvec3 b(0.0);
+    for (uint32_t u : ring) {
+        const Vec3 d = (toVec3(mesh.point(VH(int(u)))) - p) / scale;
+        const glm::dvec3 row(1.0, glm::dot(d, tx), glm::dot(d, ty));
+        a += glm::outerProduct(row, row);
+        b += row * value[u];
+    }
+    // Well-conditioned only with points spread in two directions: the
+    // determinant is then about n³/64 or more for a ring of n unit offsets.
+    const double det = glm::determinant(a);
+    if (ring.size() < 3 || !(std::abs(det) > 1e-6 * std::pow(double(ring.size()), 3))) return std::nullopt;
+    return (glm::inverse(a) * b).x;
+}
+
+std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
+    std::vector<double> area(mesh.n_vertices(), 0.0);
+    for (auto f : mesh.faces()) {
+        const double a = mesh.calc_face_area(f) / 3;
+        for (auto v : mesh.fv_range(f)) area[size_t(v.idx())] += a;
+    }
+    return area;
+}
+
+Scoring score(const CacheState& s, const std::optional<RefinementView>& view, bool collect) {
+    const CacheSettings& cs = s.settings;
+    std::vector<std::vector<double>> areas;
+    for (const LightMesh& lm : s.meshes) areas.push_back(vertexAreas(lm.mesh));
+    Scoring out;
+    const double white = whiteLevel(s, areas);
+    if (!(white > 0)) return out;  // no light reaches any vertex: nothing to refine
+    const ViewMetric metric(view, cs.minEdgeFraction * s.diagonal, cs.minEdgePixels);
+
+    double edgeErr = 0, edgeWeight = 0, noiseErr = 0, noiseWeight = 0;
+    std::vector<double> t, lum, lap;
+    std::vector<uint32_t> ring;
+    for (size_t l = 0; l < s.meshes.size(); ++l) {
+        const LightMesh& lm = s.meshes[l];
+        const CacheTriMesh& mesh = lm.mesh;
+        const size_t nv = mesh.n_vertices();
+        t.resize(nv);
+        lum.resize(nv);
+        lap.assign(nv, 0.0);
+        for (size_t v = 0; v < nv; ++v) {
+            lum[v] = luminance(lm.stats[v].mean());
+            t[v] = displayLevel(lum[v], white);
+        }
+        for (auto v : mesh.vertices()) {
+            // Neighbours in index order, so the sums are the same however the
+            // mesh's halfedges happen to be numbered (a loaded cache).
+            ring.clear();
+            for (auto u : mesh.vv_range(v)) ring.push_back(uint32_t(u.idx()));
+            if (ring.empty()) continue;
+            std::sort(ring.begin(), ring.end());
+            // The residual is an interpolation error in irradiance, where the
+            // cache interpolates; it is seen through the tone curve's slope
+            // there, dt/dx = 2/(1+x)², relative to the local level.
+            const size_t vi = size_t(v.idx());
+            std::optional<double> fit = planeFitAt(mesh, vi, ring, lum);
+            if (!fit) {
+                // Too few neighbours off one line (an object's corner): fit
+                // the two-ring instead; if even that is a line, no estimate.
+                const std::vector<uint32_t> one = ring;
+                for (uint32_t u : one)
+                    for (auto w : mesh.vv_range(VH(int(u))))
+                        if (size_t(w.idx()) != vi) ring.push_back(uint32_t(w.idx()));
+                std::sort(ring.begin(), ring.end());
+                ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+                fit = planeFitAt(mesh, vi, ring, lum);
+                if (!fit) continue;
+            }
+            const double residual = std::abs(lum[vi] - *fit) / white;
+            const double x = std::max(lum[vi], 0.0) / white;
+            lap[vi] = residual * 2 / ((1 + x) * (1 + x)) / (t[vi] + kDarkFloor);
+        }
+
+        for (auto e : mesh.edges()) {
+            const HH h = mesh.halfedge_handle(e, 0);
+            uint32_t a = uint32_t(mesh.from_vertex_handle(h).idx()), b = uint32_t(mesh.to_vertex_handle(h).idx());
+            if (a > b) std::swap(a, b);
+            const Vec3 pa = toVec3(mesh.point(VH(int(a)))), pb = toVec3(mesh.point(VH(int(b))));
+            const double len = glm::length(pa - pb);
+            const Vec3 mid = 0.5 * (pa + pb);
+            double predicted = 0.25 * std::max(lap[a], lap[b]);
+            const detail::VertexStats &sa = lm.stats[a], &sb = lm.stats[b];
+            const bool step = sa.partial > 0 || sb.partial > 0 ||
+                              std::abs(sa.meanVisibility() - sb.meanVisibility()) > 0.5;
+            if (step) predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
+            const bool splittable = len > metric.minLength(mid);
+            const double seen = metric.weight(mid);
+            edgeWeight += seen * len * len;
+            if (splittable) edgeErr += seen * len * len * predicted * predicted;
+            if (collect && splittable && predicted > cs.splitTolerance)
+                out.actions.push_back({predicted * len / s.diagonal * seen, uint32_t(l), Action::Split, a, b});
+        }
+
+        for (size_t v = 0; v < nv; ++v) {
+            const detail::VertexStats& st = lm.stats[v];
+            const double rel = relativeNoise(st, cs, white);
+            const double seen = metric.weight(toVec3(mesh.point(VH(int(v)))));
+            noiseErr += seen * areas[l][v] * rel * rel;
+            noiseWeight += seen * areas[l][v];
+            if (collect && rel > cs.noiseTolerance && st.count < cs.maxSamplesPerVertex)
+                out.actions.push_back(
+                    {rel * std::sqrt(areas[l][v]) / s.diagonal * seen, uint32_t(l), Action::Resample, uint32_t(v), 0});
+        }
+        for (size_t g = 0; g < s.gridSamples; ++g) {
+            const detail::VertexStats& st = lm.gridStats[g];
+            const double rel = relativeNoise(st, cs, white), area = gridSampleArea(s, g);
+            const detail::GridObject& o = detail::gridOf(s, g);
+            const double seen = metric.weight(o.grid->samplePosition(g - o.firstSample));
+            noiseErr += seen * area * rel * rel;
+            noiseWeight += seen * area;
+            if (collect && rel > cs.noiseTolerance && st.count < cs.maxSamplesPerVertex)
+                out.actions.push_back(
+                    {rel * std::sqrt(area) / s.diagonal * seen, uint32_t(l), Action::ResampleGrid, uint32_t(g), 0});
+        }
+    }
+    // Each light's error is relative to the same white: the lights' errors
+    // add in quadrature over one copy of the surfaces.
+    const double meshes = double(s.meshes.size());
+    const double edgeRms = edgeWeight > 0 ? std::sqrt(edgeErr * meshes / edgeWeight) : 0.0;
+    const double noiseRms = noiseWeight > 0 ? std::sqrt(noiseErr * meshes / noiseWeight) : 0.0;
+    out.error = std::hypot(edgeRms, noiseRms);
+    return out;
+}
+
+// Conforming longest-edge bisection of one face (Rivara's LEPP): its longest
+// edge is split, after the face across that edge has been refined until
+// that edge is its longest too, so no split ever makes a T-vertex or halves
+// a face across anything but its longest edge.
+class Bisector {
+public:
+    Bisector(CacheTriMesh& mesh, std::vector<char>& touched) : mesh_(mesh), touched_(touched) {}
+
+    size_t refineFace(FH f, int depth = 0) {
+        size_t added = 0;
+        for (int guard = 0; guard < 4 * kMaxLeppDepth; ++guard) {
+            const HH hl = longestHalfedge(f);
+            const FH g = mesh_.opposite_face_handle(hl);
+            if (g.is_valid() && depth < kMaxLeppDepth) {
+                const HH hg = longestHalfedge(g);
+                if (mesh_.edge_handle(hg) != mesh_.edge_handle(hl) && length(hg) > length(hl)) {
+                    added += refineFace(g, depth + 1);
+                    continue;  // f is untouched: the chain only climbs to longer edges
+                }
+            }
+            const VH mid = detail::splitAtMidpoint(mesh_, mesh_.edge_handle(hl));
+            touched_.resize(mesh_.n_faces(), 0);
+            for (auto vf : mesh_.vf_range(mid)) touched_[size_t(vf.idx())] = 1;
+            return added + 1;
+        }
+        ML_ASSERT(false, "longest-edge bisection did not terminate at face ", f.idx());
+        return added;
+    }
+
+private:
+    double length(HH h) const {
+        return (mesh_.point(mesh_.to_vertex_handle(h)) - mesh_.point(mesh_.from_vertex_handle(h))).norm();
+    }
+    // The longest edge of f; ties go to the smaller (min, max) vertex pair,
+    // so the choice does not depend on halfedge numbering.
+    HH longestHalfedge(FH f) const {
+        HH best;
+        double bestLen = -1;
+        std::pair<int, int> bestKey{0, 0};
+        for (auto h : mesh_.fh_range(f)) {
+            const int a = mesh_.from_vertex_handle(h).idx(), b = mesh_.to_vertex_handle(h).idx();
+            const std::pair<int, int> key{std::min(a, b), std::max(a, b)};
+            const double len = length(h);
+            if (len > bestLen || (len == bestLen && key < bestKey)) best = h, bestLen = len, bestKey = key;
+        }
+        return best;
+    }
+
+    CacheTriMesh& mesh_;
+    std::vector<char>& touched_;
+};
+
+bool isTouched(const std::vector<char>& touched, FH f) {
+    return f.is_valid() && size_t(f.idx()) < touched.size() && touched[size_t(f.idx())];
+}
+
+}  // namespace
+
+double IrradianceCache::estimatedError(const std::optional<RefinementView>& view) const {
+    if (detail::unsampledCount(impl_->state) > 0) return 1;  // not every vertex sampled yet: unknown
+    return score(impl_->state, view, false).error;
+}
+
+RefineReport IrradianceCache::refine(const DirectSampleFn& fn, size_t budget, uint32_t seed,
+                                     const std::optional<RefinementView>& view) {
+    ML_ASSERT(budget > 0, "refinement budget 0");
+    CacheState& s = impl_->state;
+    RefineReport report;
+    // The score needs every vertex sampled: first, rounds of `budget` of
+    // the vertices that have no sample yet (the base mesh, in (light,
+    // vertex) order), so that a round stays short and snapshots keep coming.
+    const size_t unsampled = detail::unsampledCount(s);
+    if (unsampled > 0) {
+        report.estimatedError = 1;
+        report.estimates = detail::sampleUnsampled(s, fn, seed, budget);
+        report.candidates = unsampled - report.estimates + 1;  // at least the scoring is still to come
+        ++s.rounds;
+        return report;
+    }
+
+    Scoring scoring = score(s, view, true);
+    report.estimatedError = scoring.error;
+    report.candidates = scoring.actions.size();
+    std::sort(scoring.actions.begin(), scoring.actions.end());
+
+    const size_t perVertex = bytesPerVertex();
+    size_t vertices = totalVertices(), cost = 0;
+    std::vector<std::vector<char>> touched(s.meshes.size());
+    std::vector<std::pair<uint32_t, uint32_t>> resample, resampleGrid;  // (mesh, vertex or grid sample)
+    for (const Action& act : scoring.actions) {
+        if (cost >= budget) break;
+        LightMesh& lm = s.meshes[act.mesh];
+        if (act.kind != Action::Split) {
+            (act.kind == Action::Resample ? resample : resampleGrid).emplace_back(act.mesh, act.a);
+            cost += 1;
+            continue;
+        }
+        if (vertices + 2 > s.settings.maxVertices || (vertices + 2) * perVertex > s.settings.maxMemoryBytes)
+            continue;  // out of budget for new vertices; resamples may go on
+        const HH h = lm.mesh.find_halfedge(VH(int(act.a)), VH(int(act.b)));
+        if (!h.is_valid()) continue;  // split already this round
+        std::vector<char>& t = touched[act.mesh];
+        FH faces[2] = {lm.mesh.face_handle(h), lm.mesh.opposite_face_handle(h)};
+        if (isTouched(t, faces[0]) || isTouched(t, faces[1])) continue;  // refined already this round
+        // The faces in the order of their third vertex, not of halfedge numbering.
+        auto third = [&](HH hh) { return lm.mesh.to_vertex_handle(lm.mesh.next_halfedge_handle(hh)).idx(); };
+        if (faces[0].is_valid() && faces[1].is_valid() && third(lm.mesh.opposite_halfedge_handle(h)) < third(h))
+            std::swap(faces[0], faces[1]);
+        Bisector bisector(lm.mesh, t);
+        size_t added = 0;
+        for (FH f : faces) {
+            if (!f.is_valid() || isTouched(t, f)) continue;
+            added += bisector.refineFace(f);
+        }
+        lm.stats.resize(lm.mesh.n_vertices());
+        vertices += added;
+        report.splits += added;
+        cost += added;
+    }
+
+    report.estimates += detail::sampleUnsampled(s, fn, seed, ~size_t(0));
+    std::sort(resample.begin(), resample.end());
+    for (const auto& [l, v] : resample) {
+        detail::addVertexSample(s, l, v, detail::sampleVertex(fn, s.meshes[l], l, v, seed));
+        ++report.estimates;
+        ++report.resamples;
+    }
+    std::sort(resampleGrid.begin(), resampleGrid.end());
+    for (const auto& [l, g] : resampleGrid) {
+        detail::addGridSample(s, l, g, detail::sampleGrid(fn, s, l, g, seed));
+        ++report.estimates;
+        ++report.resamples;
+    }
+    ++s.rounds;
+    return report;
+}
+
+}  // namespace ml

@@ -1,0 +1,78 @@
+// The state behind IrradianceCache, shared by its translation units
+// (construction and views, refinement, the cache file). cache/ only.
+#pragma once
+
+#include "CacheMesh.h"
+#include "cache/GridCache.h"
+#include "cache/IrradianceCache.h"
+
+#include <memory>
+
+#include <cstdint>
+#include <vector>
+
+namespace ml::detail {
+
+// The running sums of one vertex's samples.
+struct VertexStats {
+    Rgb sum{0.0};          // Σ irradiance
+    double sumLum = 0;     // Σ luminance
+    double sumLumSq = 0;   // Σ luminance², for the standard error of the mean
+    double sumVisibility = 0;
+    uint32_t count = 0;
+    uint32_t partial = 0;  // samples that saw the light partly occluded
+
+    Rgb mean() const { return count ? sum / double(count) : Rgb(0.0); }
+    double meanVisibility() const { return count ? sumVisibility / count : 1.0; }
+    void add(const VertexSample& s) {
+        const double y = luminance(s.irradiance);
+        sum += s.irradiance;
+        sumLum += y;
+        sumLumSq += y * y;
+        sumVisibility += s.visibility;
+        count += 1;
+        partial += s.partial ? 1 : 0;
+    }
+};
+
+struct LightMesh {
+    CacheTriMesh mesh;
+    std::vector<VertexStats> stats;      // by vertex index
+    std::vector<VertexStats> gridStats;  // by grid sample, every grid object's in turn
+};
+
+// An object too finely tessellated for a cache mesh: its irradiance is
+// sampled on a grid (GridCache) and interpolated to its own vertices.
+struct GridObject {
+    uint32_t mesh = 0;                    // index into Scene::meshes
+    std::vector<Vec3> positions, normals;
+    std::vector<glm::uvec3> triangles;
+    std::shared_ptr<const GridCache> grid;
+    uint32_t firstSample = 0;             // into LightMesh::gridStats
+    double area = 0;
+};
+
+// Grid samples are seeded as vertices numbered from here, apart from any
+// cache mesh vertex.
+constexpr uint32_t kGridSeedBase = 0x40000000u;
+
+struct CacheState {
+    CacheSettings settings;
+    double diagonal = 1;          // of the scene's bounds
+    uint64_t sceneFingerprint = 0;
+    std::vector<LightMesh> meshes;  // one per light, in the scene's order
+    std::vector<GridObject> grids;  // the same for every light
+    size_t gridSamples = 0;         // over all grid objects
+    uint64_t rounds = 0;
+    uint64_t samples = 0;
+    size_t detachedFaces = 0;     // non-manifold input faces given vertices of their own
+    size_t backFaces = 0;         // reversed copies of faces lit from behind
+};
+
+// A hash of everything in the scene that the cache depends on: geometry,
+// normals, materials and lights. A cache file records it.
+uint64_t sceneFingerprint(const Scene& scene);
+// The same for the settings that shape the meshes and their refinement.
+uint64_t settingsFingerprint(const CacheSettings& settings);
+
+}  // namespace ml::detail

@@ -1,0 +1,436 @@
+// The cache's refinement, file and worker thread, driven by analytic
+// irradiance functions (no GL): what is split, where, how a saved cache
+// resumes, which files are refused, and what readers of snapshots see.
+#include "cache/CacheWorker.h"
+#include "cache/IrradianceCache.h"
+#include "core/Error.h"
+#include "core/Random.h"
+#include "core/scenes/BenchScene.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <thread>
+
+using namespace ml;
+
+namespace {
+
+const Scene& bench() {
+    static const Scene scene = makeBenchScene();
+    return scene;
+}
+
+CacheSettings coarse() {
+    CacheSettings s;
+    s.maxEdgeFraction = 1.0 / 16;  // bench diagonal ≈ 4.3: base edges ≤ 0.27
+    s.minEdgeFraction = 1.0 / 1024;
+    return s;
+}
+
+// A shadow edge at x = 0.3: bright on one side, dark on the other, with a
+// penumbra 0.1 wide that the "sampler" reports as partial visibility.
+VertexSample step(size_t, const Vec3& x, const Vec3&, uint32_t) {
+    const double d = x.x - 0.3;
+    const double vis = std::clamp(0.5 - d / 0.1, 0.0, 1.0);
+    return {Rgb(0.05 + 0.95 * vis), vis, vis > 0 && vis < 1};
+}
+
+// The same with noise drawn from the seed in the penumbra, so resampling
+// changes values and the seeds used must repeat exactly.
+VertexSample noisyStep(size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
+    VertexSample s = step(l, x, n, seed);
+    if (s.partial) s.irradiance *= 1 + 0.05 * (double(hash32(seed) & 0xffff) / 65535.0 - 0.5);
+    return s;
+}
+
+IrradianceMeshView viewOf(const IrradianceCache& c) { return c.view(0); }
+
+void expectSameView(const IrradianceMeshView& a, const IrradianceMeshView& b) {
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    ASSERT_EQ(a.triangles.size(), b.triangles.size());
+    for (size_t i = 0; i < a.positions.size(); ++i) {
+        ASSERT_EQ(a.positions[i], b.positions[i]) << "vertex " << i;
+        ASSERT_EQ(a.irradiance[i], b.irradiance[i]) << "vertex " << i;
+        ASSERT_EQ(a.samples[i], b.samples[i]) << "vertex " << i;
+    }
+    // The same triangles; their order may differ (a split reuses one of
+    // the faces it replaces, which one depends on halfedge numbering, and
+    // nothing drawn or refined depends on face order).
+    auto canonical = [](std::vector<glm::uvec3> tris) {
+        std::vector<std::array<uint32_t, 3>> out;
+        for (glm::uvec3 t : tris) {
+            while (t.x > t.y || t.x > t.z) t = glm::uvec3(t.y, t.z, t.x);  // rotate, keeping orientation
+            out.push_back({t.x, t.y, t.z});
+        }
+        std::sort(out.begin(), out.end());
+        return out;
+    };
+    EXPECT_TRUE(canonical(a.triangles) == canonical(b.triangles));
+}
+
+// Total length of the edges used by exactly one triangle: the mesh's border.
+// A T-vertex inside an object would add border where there was none.
+double borderLength(const IrradianceMeshView& m) {
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = t[k], b = t[(k + 1) % 3];
+            uses[{std::min(a, b), std::max(a, b)}]++;
+        }
+    double len = 0;
+    for (const auto& [e, n] : uses)
+        if (n == 1) len += glm::length(m.positions[e.first] - m.positions[e.second]);
+    return len;
+}
+
+std::string tempPath(const std::string& name) {
+    return (std::filesystem::temp_directory_path() / ("meshlight_test_cache_" + name)).string();
+}
+
+}  // namespace
+
+TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
+    // The plane fitted to a vertex's neighbours reproduces any linear
+    // signal, on any ring and at borders: nothing to split, nothing to
+    // resample, and the predicted error is zero up to rounding.
+    IrradianceCache cache(bench(), coarse());
+    const DirectSampleFn linear = [](size_t, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(1 + 0.3 * x.x + 0.2 * x.z + 0.1 * x.y), 1.0, false};
+    };
+    cache.refine(linear, 1 << 20, 1);  // samples the base mesh
+    const RefineReport r = cache.refine(linear, 1 << 20, 1);
+    EXPECT_EQ(0u, r.splits);
+    EXPECT_EQ(0u, r.resamples);
+    EXPECT_TRUE(r.converged());
+    EXPECT_LT(cache.estimatedError(), 1e-9);
+}
+
+TEST(CacheRefinement, NewVerticesGoWhereTheSignalSteps) {
+    IrradianceCache cache(bench(), coarse());
+    const size_t base = cache.vertexCount(0);
+    for (int round = 0; round < 12; ++round) cache.refine(step, 400, 1);
+    const IrradianceMeshView m = viewOf(cache);
+    ASSERT_GT(m.positions.size(), base + 500);
+    // Within two base edges of the step (0.54 here), for every new vertex
+    // but those that longest-edge propagation adds to keep the mesh
+    // conforming: a chain climbs to edges at most 2× longer each step, and
+    // is short, so 90% is a loose bound.
+    const double band = 2 * coarse().maxEdgeFraction * bench().bounds.diagonal();
+    size_t near = 0;
+    for (size_t v = base; v < m.positions.size(); ++v) near += std::abs(m.positions[v].x - 0.3) < band;
+    EXPECT_GT(double(near) / double(m.positions.size() - base), 0.9);
+    // Finer near the step than anywhere else: its edges were halved at
+    // least twice more than any elsewhere.
+    double shortestNear = kInf, shortestFar = kInf;
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 a = m.positions[t[k]], b = m.positions[t[(k + 1) % 3]];
+            const double len = glm::length(a - b);
+            double& shortest = std::abs(0.5 * (a.x + b.x) - 0.3) < 0.1 ? shortestNear : shortestFar;
+            shortest = std::min(shortest, len);
+        }
+    EXPECT_LE(shortestNear, 0.25 * shortestFar);
+}
+
+TEST(CacheRefinement, SplitsAreConformingAndRespectTheMinimumSize) {
+    CacheSettings s = coarse();
+    IrradianceCache cache(bench(), s);
+    const double border = borderLength(viewOf(cache));
+    for (int round = 0; round < 30; ++round) cache.refine(step, 2000, 1);
+    const IrradianceMeshView m = viewOf(cache);
+    // The border is the objects' outlines: refinement adds none (relative
+    // 1e-12: sums of the same lengths split in halves, in another order).
+    EXPECT_NEAR(border, borderLength(m), 1e-12 * border);
+    // No edge below half the minimum: only edges longer than the minimum are
+    // chosen, and bisection halves an edge at most once per choice (longer
+    // neighbours split first are longer still).
+    const double minLen = s.minEdgeFraction * bench().bounds.diagonal();
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k)
+            ASSERT_GE(glm::length(m.positions[t[k]] - m.positions[t[(k + 1) % 3]]), 0.5 * minLen * (1 - 1e-9));
+}
+
+TEST(CacheRefinement, TheVertexBudgetHolds) {
+    CacheSettings s = coarse();
+    IrradianceCache probe(bench(), s);
+    s.maxVertices = probe.totalVertices() + 300;
+    IrradianceCache cache(bench(), s);
+    for (int round = 0; round < 20; ++round) cache.refine(step, 2000, 1);
+    // An action is taken only while 2 more vertices fit; a longest-edge
+    // chain can add a few more (at most its length, 48).
+    EXPECT_LE(cache.totalVertices(), s.maxVertices + 48);
+    EXPECT_GT(cache.totalVertices(), s.maxVertices - 48);
+}
+
+TEST(CacheRefinement, PenumbraVerticesAreResampledUntilQuiet) {
+    // This sampler's noise (1.4% standard deviation, below) is what the
+    // cache must assume of one sample until it has two.
+    CacheSettings s = coarse();
+    s.singleSampleNoise = 0.014;
+    IrradianceCache cache(bench(), s);
+    for (int round = 0; round < 40; ++round) cache.refine(noisyStep, 4000, 3);
+    const IrradianceMeshView m = viewOf(cache);
+    size_t resampled = 0, partial = 0;
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+        const VertexSample s = step(0, m.positions[v], m.normals[v], 0);
+        if (!s.partial) {
+            // Outside the penumbra one sample is trusted.
+            EXPECT_EQ(1u, m.samples[v]) << "vertex " << v;
+            continue;
+        }
+        ++partial;
+        resampled += m.samples[v] > 1;
+    }
+    ASSERT_GT(partial, 50u);
+    // ±2.5% uniform noise is 1.4% standard deviation; the tolerance (0.5%)
+    // needs several samples wherever the level is above the dark floor.
+    EXPECT_GT(double(resampled) / double(partial), 0.5);
+}
+
+TEST(CacheFile, ALoadedCacheRefinesExactlyLikeOneNeverSaved) {
+    const std::string path = tempPath("resume.mlc");
+    IrradianceCache straight(bench(), coarse());
+    for (int round = 0; round < 8; ++round) straight.refine(noisyStep, 300, 5);
+
+    {
+        IrradianceCache first(bench(), coarse());
+        for (int round = 0; round < 4; ++round) first.refine(noisyStep, 300, 5);
+        first.save(path);
+    }
+    IrradianceCache resumed(bench(), coarse());
+    resumed.load(path);
+    for (int round = 0; round < 4; ++round) resumed.refine(noisyStep, 300, 5);
+    EXPECT_EQ(straight.rounds(), resumed.rounds());
+    EXPECT_EQ(straight.totalSamples(), resumed.totalSamples());
+    expectSameView(viewOf(straight), viewOf(resumed));
+    std::filesystem::remove(path);
+}
+
+TEST(CacheFile, BadFilesAreRefusedAndLeaveTheCacheAsItWas) {
+    const std::string path = tempPath("good.mlc");
+    IrradianceCache saved(bench(), coarse());
+    for (int round = 0; round < 3; ++round) saved.refine(step, 300, 1);
+    saved.save(path);
+    std::string bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    auto writeBad = [&](const std::string& name, const std::string& content) {
+        const std::string p = tempPath(name);
+        std::ofstream(p, std::ios::binary) << content;
+        return p;
+    };
+    std::string flipped = bytes;
+    flipped[bytes.size() / 2] ^= 0x20;
+    std::string badMagic = bytes;
+    badMagic[0] = 'X';
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {writeBad("truncated.mlc", bytes.substr(0, bytes.size() - 9)), "truncated"},
+        {writeBad("half.mlc", bytes.substr(0, bytes.size() / 2)), "truncated"},
+        {writeBad("flipped.mlc", flipped), "corrupt"},
+        {writeBad("magic.mlc", badMagic), "not a Meshlight cache"},
+        {writeBad("empty.mlc", ""), "not a Meshlight cache"},
+        {writeBad("trailing.mlc", bytes + "x"), "trailing"},
+        {tempPath("missing.mlc"), "cannot open"},
+    };
+    IrradianceCache target(bench(), coarse());
+    target.refine(step, 100, 1);
+    const IrradianceMeshView before = viewOf(target);
+    for (const auto& [file, why] : cases) {
+        try {
+            target.load(file);
+            ADD_FAILURE() << file << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+        }
+        expectSameView(before, viewOf(target));
+        std::filesystem::remove(file);
+    }
+    // Another scene, other settings.
+    Scene other = makeBenchScene(2);
+    IrradianceCache otherScene(other, coarse());
+    EXPECT_THROW(
+        try { otherScene.load(path); } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("another scene"), std::string::npos) << e.what();
+            throw;
+        },
+        InputError);
+    CacheSettings finer = coarse();
+    finer.splitTolerance = 0.02;
+    IrradianceCache otherSettings(bench(), finer);
+    EXPECT_THROW(otherSettings.load(path), InputError);
+    std::filesystem::remove(path);
+}
+
+TEST(CacheWorker, ReadersSeeWholeSnapshotsInOrderWhileRefinementRuns) {
+    IrradianceCache cache(bench(), coarse());
+    WorkerSettings ws;
+    ws.publishSeconds = 0;  // publish after every round: as many swaps as possible
+    ws.roundBudget = 64;
+    // Deterministic and checkable: every vertex's value is a function of
+    // its position, so a torn snapshot (positions of one version, values of
+    // another) shows as a mismatch.
+    CacheWorker worker(cache, [] { return DirectSampleFn(step); }, ws);
+    CacheWorker::Reader reader = worker.reader();
+    worker.start();
+    uint64_t last = 0, seen = 0;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+    while (std::chrono::steady_clock::now() < until) {
+        const CacheSnapshot* s = reader.acquire();
+        if (!s) continue;
+        ASSERT_GE(s->version, last);
+        if (s->version == last) continue;
+        last = s->version;
+        ++seen;
+        ASSERT_EQ(1u, s->direct.size());
+        const IrradianceMeshView& m = s->direct[0];
+        ASSERT_EQ(m.positions.size(), s->vertices);
+        for (const glm::uvec3& t : m.triangles) ASSERT_LT(std::max({t.x, t.y, t.z}), m.positions.size());
+        for (size_t v = 0; v < m.positions.size(); ++v)
+            if (m.samples[v]) ASSERT_EQ(step(0, m.positions[v], m.normals[v], 0).irradiance, m.irradiance[v]);
+    }
+    worker.stop();
+    worker.rethrowIfFailed();
+    EXPECT_GT(seen, 5u);
+}
+
+TEST(CacheWorker, PausesResumesAndStops) {
+    IrradianceCache cache(bench(), coarse());
+    WorkerSettings ws;
+    ws.publishSeconds = 0;
+    ws.roundBudget = 32;
+    CacheWorker worker(cache, [] { return DirectSampleFn(noisyStep); }, ws);
+    CacheWorker::Reader reader = worker.reader();
+    worker.start();
+    ASSERT_TRUE(worker.waitForVersion(3, 10));
+    worker.pause();
+    // A round in flight may still publish once.
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const uint64_t paused = reader.acquire()->version;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    EXPECT_EQ(paused, reader.acquire()->version);
+    worker.resume();
+    EXPECT_TRUE(worker.waitForVersion(paused + 2, 10));
+    worker.stop();
+    EXPECT_TRUE(worker.finished());
+    worker.rethrowIfFailed();
+}
+
+TEST(CacheWorker, AFailureReachesTheMainThreadWithWhereItHappened) {
+    IrradianceCache cache(bench(), coarse());
+    const DirectSampleFn failing = [](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
+        if (x.x > 1.0) throw std::runtime_error("sampler broke");
+        return step(l, x, n, s);
+    };
+    CacheWorker worker(cache, [failing] { return failing; }, WorkerSettings{});
+    worker.start();
+    worker.waitForVersion(1u << 30, 20);  // returns when the worker ends
+    ASSERT_TRUE(worker.finished());
+    try {
+        worker.rethrowIfFailed();
+        FAIL() << "no failure reported";
+    } catch (const std::runtime_error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("sampler broke"), std::string::npos) << what;
+        EXPECT_NE(what.find("vertex"), std::string::npos) << what;
+        EXPECT_NE(what.find("light 0"), std::string::npos) << what;
+        EXPECT_NE(what.find("point"), std::string::npos) << what;
+    }
+}
+
+TEST(CacheWorker, ASampleBudgetEndsTheWorkerAndRepeatsExactly) {
+    auto run = [] {
+        auto cache = std::make_unique<IrradianceCache>(bench(), coarse());
+        WorkerSettings ws;
+        ws.maxSamples = 3000;
+        ws.seed = 9;
+        CacheWorker worker(*cache, [] { return DirectSampleFn(noisyStep); }, ws);
+        worker.start();
+        worker.waitForVersion(1u << 30, 60);
+        EXPECT_TRUE(worker.finished());
+        worker.stop();
+        worker.rethrowIfFailed();
+        return cache;
+    };
+    const auto a = run(), b = run();
+    EXPECT_GE(a->totalSamples(), 3000u);
+    expectSameView(viewOf(*a), viewOf(*b));
+}
+
+namespace {
+
+// The bench scene plus a finely tessellated UV sphere (rings × segments × 2
+// triangles), far more vertices than its irradiance needs.
+Scene benchWithDenseSphere(int rings, int segments) {
+    Scene scene = makeBenchScene();
+    Mesh sphere;
+    sphere.name = "dense sphere";
+    const Vec3 centre(-1.0, 0.3, -1.0);
+    const double r = 0.25;
+    for (int i = 0; i <= rings; ++i)
+        for (int j = 0; j <= segments; ++j) {
+            const double th = kPi * i / rings, ph = 2 * kPi * j / segments;
+            const Vec3 n(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+            sphere.positions.push_back(centre + r * n);
+            sphere.normals.push_back(n);
+        }
+    auto at = [&](int i, int j) { return uint32_t(i * (segments + 1) + j); };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            // Outward-facing (counter-clockwise seen from outside); the
+            // poles' zero-area triangles are left out.
+            if (i > 0) sphere.triangles.push_back({at(i, j), at(i, j + 1), at(i + 1, j)});
+            if (i + 1 < rings) sphere.triangles.push_back({at(i, j + 1), at(i + 1, j + 1), at(i + 1, j)});
+        }
+    sphere.materials.assign(sphere.triangles.size(), scene.meshes.back().materials.front());
+    sphere.sourceLines.assign(sphere.triangles.size(), 0);
+    scene.meshes.push_back(sphere);
+    scene.finalize();
+    return scene;
+}
+
+}  // namespace
+
+TEST(CacheGrid, ADenseObjectIsSampledOnAGridAndInterpolatedToItsVertices) {
+    const Scene scene = benchWithDenseSphere(150, 240);  // 72k triangles
+    const size_t sphereVertices = scene.meshes.back().positions.size();
+    IrradianceCache cache(scene, coarse());
+    IrradianceCache plainBench(bench(), coarse());
+    EXPECT_EQ(plainBench.totalVertices(), cache.totalVertices()) << "the sphere must not be in the cache mesh";
+    // A linear field: the grid reproduces it within 1.5 cells × |∇f|₁ (see
+    // GridCache), cells being the base edge length here.
+    const Vec3 gradient(0.3, 0.1, 0.2);
+    const DirectSampleFn linear = [&](size_t, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(2 + glm::dot(gradient, x)), 1.0, false};
+    };
+    cache.refine(linear, 1 << 22, 1);
+    const uint64_t samples = cache.totalSamples();
+    // Far fewer samples than the sphere alone has vertices.
+    EXPECT_LT(samples - plainBench.totalVertices(), sphereVertices / 4);
+    const IrradianceMeshView m = cache.view(0);
+    ASSERT_EQ(cache.totalVertices() + sphereVertices, m.positions.size());
+    const double cell = coarse().maxEdgeFraction * scene.bounds.diagonal();
+    const double bound = 1.5 * cell * (gradient.x + gradient.y + gradient.z);
+    for (size_t v = cache.totalVertices(); v < m.positions.size(); ++v) {
+        ASSERT_NEAR(2 + glm::dot(gradient, m.positions[v]), m.irradiance[v].r, bound) << "vertex " << v;
+        ASSERT_GE(m.samples[v], 1u);
+    }
+    // Saved and loaded, grid samples included.
+    const std::string path = tempPath("grid.mlc");
+    cache.save(path);
+    IrradianceCache loaded(scene, coarse());
+    loaded.load(path);
+    expectSameView(m, loaded.view(0));
+    std::filesystem::remove(path);
+}

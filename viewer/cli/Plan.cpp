@@ -1,0 +1,98 @@
+#include "Plan.h"
+
+#include "Commands.h"
+#include "cache/GridCache.h"
+#include "core/Error.h"
+
+#include <cstdio>
+
+namespace ml {
+
+namespace {
+
+// A light seen from everywhere in the scene under less than a sampling
+// pixel's angle casts shadows no softer than a point light's.
+bool actsAsPoint(const AreaLight& light, const Scene& scene, const DirectChoice& choice) {
+    const double pixelAngle = 2 * std::tan(glm::radians(choice.sampler.maxHalfAngleDegrees)) / choice.sampler.imageSize;
+    // The light's size against the smallest distance that matters: 1% of the
+    // scene (closer receivers are few).
+    return light.bounds.diagonal() < pixelAngle * 0.01 * scene.bounds.diagonal();
+}
+
+}  // namespace
+
+void declareCacheOptions(Options& o) {
+    const CacheSettings d;
+    o.value("cache-edge", "F", "base cache mesh edges at most F x the scene diagonal", concat(d.maxEdgeFraction));
+    o.value("min-edge", "F", "refinement stops at edges of F x the scene diagonal", concat(d.minEdgeFraction));
+    o.value("min-edge-pixels", "P", "...and at edges P pixels long on screen", concat(d.minEdgePixels));
+    o.value("split-tolerance", "T", "split edges while the predicted relative error exceeds T",
+            concat(d.splitTolerance));
+    o.value("noise-tolerance", "T", "resample vertices while their relative standard error exceeds T",
+            concat(d.noiseTolerance));
+    o.value("max-vertices", "N", "vertex budget over all cache meshes", concat(d.maxVertices));
+}
+
+CacheSettings readCacheSettings(const Options& o) {
+    CacheSettings c;
+    c.maxEdgeFraction = o.number("cache-edge", 1e-5, 1.0);
+    c.minEdgeFraction = o.number("min-edge", 1e-7, 1.0);
+    c.minEdgePixels = o.number("min-edge-pixels", 0, 1e4);
+    c.splitTolerance = o.number("split-tolerance", 1e-6, 0.999);
+    c.noiseTolerance = o.number("noise-tolerance", 1e-6, 0.999);
+    c.maxVertices = size_t(o.number("max-vertices", 3, 1e9));
+    c.validate();
+    return c;
+}
+
+void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache, bool directOnly) {
+    std::printf("plan:\n");
+    for (const AreaLight& l : scene.lights) {
+        const bool point = actsAsPoint(l, scene, choice);
+        std::printf("  light '%s': %zu triangles, area %.6g, %s; %s; direct light by %s\n", l.name.c_str(),
+                    l.triangles.size(), l.area, l.planar ? "planar" : "not planar",
+                    point ? "smaller than a sampling pixel from 1% of the scene away: hard shadows, one visibility "
+                            "test per pixel would do (still sampled as an area light)"
+                          : "an area light: soft shadows, sampled with jittered tests",
+                    choice.describe().c_str());
+    }
+    if (scene.lights.empty()) std::printf("  no emissive material (Ke > 0): the image is black\n");
+    const double maxEdge = cache.maxEdgeFraction * scene.bounds.diagonal();
+    size_t grids = 0;
+    for (const Mesh& m : scene.meshes) {
+        const GridCacheDecision d = decideGridCache(m, maxEdge);
+        if (!d.useGrid) continue;
+        ++grids;
+        std::printf("  grid cache: %s\n", d.reason.c_str());
+    }
+    std::printf("  cache: one mesh per light over %zu objects, edges at most %.4g (1/%.0f of the scene), refined "
+                "where irradiance is not linear or visibility is partial; %s\n",
+                scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
+                grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
+    std::printf("  indirect light: not simulated (%s)\n",
+                directOnly ? "--direct-only" : "the indirect gather is not implemented yet; direct light only");
+    if (scene.hasGlossy())
+        std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"
+                    " they render as Lambertian\n");
+    else
+        std::printf("  specular: no pass (no material has Ks > 0)\n");
+}
+
+int runPlan(const std::vector<std::string>& args) {
+    Options o("plan");
+    o.positional("scene", "cornell, bench or an OBJ file");
+    declareDirectOptions(o);
+    declareCacheOptions(o);
+    o.flag("direct-only", "direct light only");
+    if (!o.parseOrPrintHelp(args)) return 0;
+    const DirectChoice choice = readDirectOptions(o);
+    const CacheSettings cache = readCacheSettings(o);
+    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights\n", scene.name.c_str(), scene.meshes.size(),
+                scene.triangleCount(), scene.lights.size());
+    printPlan(scene, choice, cache, o.isSet("direct-only"));
+    return 0;
+}
+
+}  // namespace ml
