@@ -3,7 +3,10 @@
 #include "Options.h"
 
 #include "core/Error.h"
+#include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
+#include "viewer/bench/BenchReport.h"
+#include "viewer/bench/BenchScaling.h"
 
 #include <cstdio>
 
@@ -12,7 +15,7 @@ namespace ml {
 namespace {
 
 // More benches arrive with later issues; each adds itself here.
-const char* const kBenches = "direct";
+const char* const kBenches = "direct, scaling, convergence, report";
 
 int runDirect(const std::vector<std::string>& args) {
     const BenchDirectOptions defaults;
@@ -42,6 +45,65 @@ int runDirect(const std::vector<std::string>& args) {
     return runBenchDirect(options);
 }
 
+int runScaling(const std::vector<std::string>& args) {
+    const BenchScalingOptions defaults;
+    Options o("bench scaling");
+    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
+    o.flag("quick", "CI size: 1k to 64k triangles, 1 to 8 lights, fewer points");
+    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
+    o.value("seed", "N", "jitter and receiver seed; the same seed repeats a run", std::to_string(defaults.seed));
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    BenchScalingOptions options;
+    options.outDir = o.str("out");
+    options.quick = o.isSet("quick");
+    options.backend = parseGlBackend(o.str("gl"));
+    if (options.backend == GlBackend::Glfw)
+        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
+    options.seed = o.seed("seed");
+    return runBenchScaling(options);
+}
+
+int runConvergence(const std::vector<std::string>& args) {
+    const BenchConvergenceOptions defaults;
+    Options o("bench convergence");
+    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
+    o.flag("quick", "CI size: still 64x64 for 3 s, walkthrough of 3 views at 32x32");
+    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
+    o.value("seed", "N", "jitter seed of the cache's sampler and the path tracer", std::to_string(defaults.seed));
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    BenchConvergenceOptions options;
+    options.outDir = o.str("out");
+    options.quick = o.isSet("quick");
+    options.backend = parseGlBackend(o.str("gl"));
+    if (options.backend == GlBackend::Glfw)
+        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
+    options.seed = o.seed("seed");
+    return runBenchConvergence(options);
+}
+
+int runReport(const std::vector<std::string>& args) {
+    const BenchReportOptions defaults;
+    Options o("bench report");
+    o.value("out", "DIR", "folder for index.html and one subfolder per bench (made if missing)", defaults.outDir);
+    o.flag("quick", "every bench in its CI size");
+    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
+    o.value("seed", "N", "seed passed to every bench", std::to_string(defaults.seed));
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    BenchReportOptions options;
+    options.outDir = o.str("out");
+    options.quick = o.isSet("quick");
+    options.backend = parseGlBackend(o.str("gl"));
+    if (options.backend == GlBackend::Glfw)
+        throw InputError("option --gl: the benches need a headless back end (osmesa, egl or auto), not glfw");
+    options.seed = o.seed("seed");
+    options.commandLine = "meshlight bench report";
+    for (const std::string& a : args) options.commandLine += " " + a;
+    return runBenchReport(options);
+}
+
 }  // namespace
 
 int runBench(const std::vector<std::string>& args) {
@@ -49,6 +111,9 @@ int runBench(const std::vector<std::string>& args) {
     const std::string& name = args.front();
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     if (name == "direct") return runDirect(rest);
+    if (name == "scaling") return runScaling(rest);
+    if (name == "convergence") return runConvergence(rest);
+    if (name == "report") return runReport(rest);
     if (name == "--help" || name == "-h") {
         std::printf("usage: meshlight bench <name> [options]\nbenches: %s\n"
                     "Run 'meshlight bench <name> --help' for its options.\n",

@@ -1,0 +1,296 @@
+// The bench report's building blocks, on values known exactly: the power-law
+// fit, HTML escaping, CSV and Markdown to HTML, the scaling scenes, and the
+// page of a report whose sections are test fixtures.
+#include "core/Error.h"
+#include "core/scenes/BenchScene.h"
+#include "core/scenes/CornellBox.h"
+#include "core/scenes/ScalingScene.h"
+#include "viewer/bench/BenchReport.h"
+#include "viewer/bench/PowerLawFit.h"
+#include "viewer/bench/ReportHtml.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+using namespace ml;
+namespace fs = std::filesystem;
+
+// --- Power-law fit ------------------------------------------------------------------
+
+TEST(PowerLawFit, ExactOnAPowerLaw) {
+    const std::vector<double> x = {1, 2, 10, 1000, 1e6};
+    std::vector<double> y;
+    for (double v : x) y.push_back(3.0 * std::pow(v, 1.5));
+    const PowerLawFit fit = fitPowerLaw(x, y);
+    EXPECT_NEAR(fit.exponent, 1.5, 1e-12);
+    EXPECT_NEAR(fit.coefficient, 3.0, 3e-12);
+    EXPECT_NEAR(fit.r2, 1.0, 1e-12);
+    EXPECT_EQ(fit.points, 5u);
+    EXPECT_NEAR(fit.at(4.0), 24.0, 1e-10);
+}
+
+TEST(PowerLawFit, ExactOnDecreasingAndConstantLaws) {
+    const std::vector<double> x = {0.5, 3, 7, 64};
+    std::vector<double> falling, flat;
+    for (double v : x) {
+        falling.push_back(0.25 / v);
+        flat.push_back(42.0);
+    }
+    const PowerLawFit f = fitPowerLaw(x, falling);
+    EXPECT_NEAR(f.exponent, -1.0, 1e-12);
+    EXPECT_NEAR(f.coefficient, 0.25, 1e-12);
+    const PowerLawFit c = fitPowerLaw(x, flat);
+    EXPECT_NEAR(c.exponent, 0.0, 1e-12);
+    EXPECT_NEAR(c.coefficient, 42.0, 1e-10);
+    EXPECT_EQ(c.r2, 1.0);  // nothing to explain: every point is on the line
+}
+
+// Off the line, the least-squares answer in closed form: ln x = 0, 1, 2 and
+// ln y = 0, 2, 3 give slope 3/2, intercept 1/6 and r² = 1 − (1/6)/(14/3) = 27/28.
+TEST(PowerLawFit, LeastSquaresOffTheLine) {
+    const double e = std::exp(1.0);
+    const PowerLawFit fit = fitPowerLaw({1, e, e * e}, {1, e * e, e * e * e});
+    EXPECT_NEAR(fit.exponent, 1.5, 1e-12);
+    EXPECT_NEAR(fit.coefficient, std::exp(1.0 / 6.0), 1e-12);
+    EXPECT_NEAR(fit.r2, 27.0 / 28.0, 1e-12);
+}
+
+TEST(PowerLawFit, RefusesWhatHasNoSlope) {
+    EXPECT_THROW(fitPowerLaw({1, 2}, {1}), std::invalid_argument);
+    EXPECT_THROW(fitPowerLaw({1}, {1}), std::invalid_argument);
+    EXPECT_THROW(fitPowerLaw({3, 3, 3}, {1, 2, 3}), std::invalid_argument);
+    EXPECT_THROW(fitPowerLaw({1, 2}, {0, 1}), std::invalid_argument);
+    EXPECT_THROW(fitPowerLaw({-1, 2}, {1, 1}), std::invalid_argument);
+    EXPECT_THROW(fitPowerLaw({1, NAN}, {1, 1}), std::invalid_argument);
+}
+
+// --- HTML ------------------------------------------------------------------------------
+
+TEST(ReportHtml, EscapesTheFiveSpecialCharacters) {
+    EXPECT_EQ(htmlEscape("<a href=\"x\">Tom & Jerry's</a>"),
+              "&lt;a href=&quot;x&quot;&gt;Tom &amp; Jerry&#39;s&lt;/a&gt;");
+    EXPECT_EQ(htmlEscape("&amp;"), "&amp;amp;");  // text, not markup: escaped again
+    EXPECT_EQ(htmlEscape("64×64, ≤ 0.2 %"), "64×64, ≤ 0.2 %");  // UTF-8 passes through
+    EXPECT_EQ(htmlEscape(""), "");
+}
+
+TEST(ReportHtml, ParsesCsvWithQuotesAndCrLf) {
+    const CsvTable t = parseCsv("name,value\r\n\"a, \"\"b\"\"\",1.5\r\nplain,-2e-3\r\n", "t.csv");
+    ASSERT_EQ(t.header, (std::vector<std::string>{"name", "value"}));
+    ASSERT_EQ(t.rows.size(), 2u);
+    EXPECT_EQ(t.rows[0][0], "a, \"b\"");
+    EXPECT_EQ(t.rows[1][1], "-2e-3");
+    EXPECT_EQ(t.column("value"), 1u);
+    EXPECT_THROW(t.column("missing"), InputError);
+}
+
+TEST(ReportHtml, CsvErrorsNameFileAndLine) {
+    try {
+        parseCsv("a,b\n1,2\n3\n", "bad.csv");
+        FAIL() << "a short row was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("bad.csv:3"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(parseCsv("a,b\n\"1,2\n", "open.csv"), InputError);
+    EXPECT_THROW(parseCsv("", "empty.csv"), InputError);
+}
+
+TEST(ReportHtml, TableEscapesCellsAndPicksColumns) {
+    const CsvTable t = parseCsv("config,ms,note\nq<32>,0.25,a&b\n", "t.csv");
+    const std::string all = htmlTable(t);
+    EXPECT_NE(all.find("<td>q&lt;32&gt;</td>"), std::string::npos) << all;
+    EXPECT_NE(all.find("<td class=\"num\">0.25</td>"), std::string::npos) << all;
+    EXPECT_NE(all.find("<td>a&amp;b</td>"), std::string::npos) << all;
+    const std::string picked = htmlTable(t, {"ms", "config"});
+    EXPECT_LT(picked.find("<th>ms</th>"), picked.find("<th>config</th>"));
+    EXPECT_EQ(picked.find("note"), std::string::npos);
+    EXPECT_THROW(htmlTable(t, {"absent"}), InputError);
+}
+
+TEST(ReportHtml, MarkdownSubset) {
+    const std::string html = markdownToHtml(
+        "# Title <x>\n\n- one `a<b`\n- **two**\n\n| k | v |\n|---|---|\n| x | 1.5 |\n\ntext & more\nnext line\n"
+        "<script>alert(1)</script>\n",
+        2);
+    EXPECT_NE(html.find("<h3>Title &lt;x&gt;</h3>"), std::string::npos) << html;
+    EXPECT_NE(html.find("<li>one <code>a&lt;b</code></li>"), std::string::npos) << html;
+    EXPECT_NE(html.find("<li><strong>two</strong></li>"), std::string::npos) << html;
+    EXPECT_NE(html.find("<th>k</th><th>v</th>"), std::string::npos) << html;
+    EXPECT_NE(html.find("<td>x</td><td class=\"num\">1.5</td>"), std::string::npos) << html;
+    EXPECT_EQ(html.find("---"), std::string::npos) << "the separator row is not a row";
+    EXPECT_NE(html.find("<p>text &amp; more\nnext line\n&lt;script&gt;"), std::string::npos) << html;
+    EXPECT_EQ(html.find("<script"), std::string::npos);
+}
+
+// --- Scaling scenes ------------------------------------------------------------------
+
+namespace {
+
+double totalArea(const Scene& s, bool emissive) {
+    double a = 0;
+    for (const Mesh& m : s.meshes)
+        for (size_t t = 0; t < m.triangles.size(); ++t)
+            if (s.materials[m.materials[t]].emissive() == emissive) a += m.area(t);
+    return a;
+}
+
+}  // namespace
+
+TEST(ScalingScene, SubdivisionQuadruplesSurfacesAndKeepsLights) {
+    const Scene base = makeBenchScene();
+    for (int k : {0, 1, 3}) {
+        const Scene s = subdivideScene(base, k);
+        // 4 non-emissive triangles (occluder, floor) split, 2 light triangles kept.
+        EXPECT_EQ(s.triangleCount(), size_t(4) * (size_t(1) << (2 * k)) + 2) << "levels " << k;
+        EXPECT_NEAR(totalArea(s, false), totalArea(base, false), 1e-12);
+        ASSERT_EQ(s.lights.size(), 1u);
+        EXPECT_EQ(s.lights[0].triangles.size(), 2u);
+        EXPECT_DOUBLE_EQ(s.lights[0].area, base.lights[0].area);
+        EXPECT_EQ(s.bounds.lo, base.bounds.lo);
+        EXPECT_EQ(s.bounds.hi, base.bounds.hi);
+        // Midpoints are shared: a quad of 2^k × 2^k cells has (2^k + 1)² vertices.
+        const Mesh& floor = s.meshes[2];
+        const size_t side = (size_t(1) << k) + 1;
+        EXPECT_EQ(floor.positions.size(), side * side) << "levels " << k;
+        for (size_t t = 0; t < floor.triangles.size(); ++t) EXPECT_GT(floor.areaNormal(t).y, 0) << t;
+    }
+    EXPECT_THROW(subdivideScene(base, -1), InputError);
+    EXPECT_THROW(subdivideScene(base, 13), InputError);
+}
+
+TEST(ScalingScene, LightGridKeepsTotalPower) {
+    const Scene cornell = makeCornellBox();
+    const Rgb power0 = cornell.lights[0].power();
+    for (int n : {1, 2, 7, 64}) {
+        const Scene s = makeCornellLightGrid(n);
+        ASSERT_EQ(s.lights.size(), size_t(n));
+        Rgb power(0.0);
+        for (const AreaLight& l : s.lights) {
+            power += l.power();
+            EXPECT_NEAR(l.area, 1600.0, 1e-9);
+            EXPECT_LT(l.normal.y, -0.999);
+            EXPECT_TRUE(l.planar);
+            // Inside the box, below the ceiling.
+            EXPECT_GT(l.bounds.lo.x, 0.0);
+            EXPECT_LT(l.bounds.hi.x, 556.0);
+            EXPECT_GT(l.bounds.lo.z, 0.0);
+            EXPECT_LT(l.bounds.hi.z, 559.2);
+            EXPECT_LT(l.bounds.hi.y, 548.8);
+        }
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(power[c], power0[c], 1e-9 * power0[c]) << n << " lights";
+        EXPECT_EQ(s.triangleCount(), cornell.triangleCount() - 2 + size_t(2 * n));
+    }
+    EXPECT_THROW(makeCornellLightGrid(0), InputError);
+}
+
+TEST(ScalingScene, SurfaceReceiversLieOnSurfacesAndRepeat) {
+    const Scene bench = makeBenchScene();
+    const std::vector<ReceiverPoint> a = surfaceReceivers(bench, 200, 7), b = surfaceReceivers(bench, 200, 7);
+    ASSERT_EQ(a.size(), 200u);
+    size_t onFloor = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(a[i].position, b[i].position);
+        const bool floor = a[i].position.y == 0.0, occluder = std::abs(a[i].position.y - 0.5) < 1e-12;
+        EXPECT_TRUE(floor || occluder) << a[i].position.y;
+        EXPECT_NEAR(glm::length(a[i].normal), 1.0, 1e-12);
+        EXPECT_NEAR(std::abs(a[i].normal.y), 1.0, 1e-12);
+        onFloor += floor;
+    }
+    // By area: the floor is 36 times the occluder.
+    EXPECT_GT(onFloor, 180u);
+    EXPECT_NE(surfaceReceivers(bench, 1, 8)[0].position, a[0].position);
+}
+
+// --- The page ---------------------------------------------------------------------------
+
+namespace {
+
+std::string readAll(const fs::path& p) {
+    std::ifstream in(p);
+    std::ostringstream os;
+    os << in.rdbuf();
+    return os.str();
+}
+
+void writeAll(const fs::path& p, const std::string& text) {
+    std::ofstream out(p);
+    out << text;
+}
+
+// A section that writes a CSV and a summary, names a plot it does not
+// write, and a section that fails.
+std::vector<ReportSection> fixtureSections() {
+    ReportSection good;
+    good.id = "fixture";
+    good.title = "A <fixture> & more";
+    good.about = "Writes known files.";
+    good.run = [](const BenchReportOptions&, const std::string& dir) {
+        fs::create_directories(dir);
+        writeAll(fs::path(dir) / "data.csv", "label,ms\n\"x<y\",1.5\nplain,2\n");
+        writeAll(fs::path(dir) / "summary.md", "# Fixture\n\n- exponent **0.5**\n");
+        writeAll(fs::path(dir) / "plot.png", "not really a PNG; the page only links it");
+        return 0;
+    };
+    good.summary = "summary.md";
+    good.figures = {{"plot.png", "A plot of data.csv", {"data.csv"}}, {"never.png", "Never written", {"data.csv"}}};
+    good.tables = {{"data.csv", "The data", {"ms", "label"}}};
+
+    ReportSection bad;
+    bad.id = "broken";
+    bad.title = "Broken";
+    bad.about = "Throws.";
+    bad.run = [](const BenchReportOptions&, const std::string&) -> int {
+        throw std::runtime_error("no GPU <today>");
+    };
+    return {good, bad};
+}
+
+}  // namespace
+
+TEST(BenchReport, PageShowsSectionsEscapedAndFailuresNamed) {
+    const fs::path dir = fs::temp_directory_path() / concat("meshlight-test-report-", ::getpid());
+    fs::remove_all(dir);
+    BenchReportOptions options;
+    options.outDir = dir.string();
+    options.commandLine = "meshlight bench report --out <dir>";
+    EXPECT_EQ(runBenchReport(options, fixtureSections()), 1);  // one section failed
+
+    const std::string html = readAll(dir / "index.html");
+    ASSERT_FALSE(html.empty());
+    EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+    EXPECT_EQ(html.find("<script"), std::string::npos);
+    EXPECT_NE(html.find("--out &lt;dir&gt;"), std::string::npos);
+    EXPECT_NE(html.find("A &lt;fixture&gt; &amp; more"), std::string::npos);
+    EXPECT_NE(html.find("<img src=\"fixture/plot.png\""), std::string::npos);
+    EXPECT_NE(html.find("<a href=\"fixture/data.csv\">data.csv</a>"), std::string::npos);
+    EXPECT_EQ(html.find("fixture/never.png\""), std::string::npos) << "a missing plot must not be an <img>";
+    EXPECT_NE(html.find("Plot not produced: never.png"), std::string::npos);
+    EXPECT_NE(html.find("<td class=\"num\">1.5</td><td>x&lt;y</td>"), std::string::npos) << html;
+    EXPECT_NE(html.find("exponent <strong>0.5</strong>"), std::string::npos);
+    EXPECT_NE(html.find("no GPU &lt;today&gt;"), std::string::npos);
+    EXPECT_NE(html.find("<a href=\"#broken\">broken</a> (<strong>failed</strong>"), std::string::npos);
+    // No temporaries left behind by the atomic writes.
+    for (const auto& e : fs::directory_iterator(dir)) EXPECT_NE(e.path().filename().string().front(), '.');
+    fs::remove_all(dir);
+}
+
+TEST(BenchReport, RegistryListsTheBenchesThatExist) {
+    std::vector<std::string> ids;
+    for (const ReportSection& s : reportSections()) {
+        ids.push_back(s.id);
+        EXPECT_TRUE(bool(s.run)) << s.id;
+        EXPECT_FALSE(s.figures.empty()) << s.id;
+    }
+    // Later benches add sections; these two exist now, each once.
+    for (const char* id : {"direct", "scaling"}) EXPECT_EQ(std::count(ids.begin(), ids.end(), id), 1) << id;
+    std::sort(ids.begin(), ids.end());
+    EXPECT_EQ(std::adjacent_find(ids.begin(), ids.end()), ids.end()) << "section ids must be unique";
+}

@@ -1,0 +1,447 @@
+#include "BenchReport.h"
+
+#include "BenchConvergence.h"
+#include "BenchDirect.h"
+#include "BenchScaling.h"
+#include "Gnuplot.h"
+#include "ReportHtml.h"
+
+#include "core/Error.h"
+#include "core/io/AtomicFile.h"
+
+#include <sys/utsname.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#ifndef MESHLIGHT_SOURCE_DIR
+#define MESHLIGHT_SOURCE_DIR "."
+#endif
+
+namespace ml {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// --- The sections ----------------------------------------------------------------
+
+ReportSection directSection() {
+    ReportSection s;
+    s.id = "direct";
+    s.title = "Direct light: error against time per method";
+    s.about = "Fournier & Péroche §6.1 (Figs. 7–9): every sampling scheme × image size × tests per pixel × "
+              "estimator on the bench scene's receiver grid, one pass per point, against the exact visible "
+              "cosine solid angle (CGAL), with the median time of each phase of a sample.";
+    s.run = [](const BenchReportOptions& o, const std::string& dir) {
+        BenchDirectOptions d;
+        d.outDir = dir;
+        d.quick = o.quick;
+        d.backend = o.backend;
+        d.seed = o.seed;
+        return runBenchDirect(d);
+    };
+    s.summary = "direct_summary.md";
+    s.figures = {
+        {"direct_error_vs_time.png",
+         "Error against time: mean and max |error| (% of the unoccluded value) against the median time per "
+         "sample, one point per configuration.",
+         {"direct_accuracy.csv"}},
+        {"direct_phases.png",
+         "Time split by phase: median setup, draw, readback and weighting per sample for each configuration "
+         "(glFinish between phases).",
+         {"direct_accuracy.csv"}},
+        {"direct_convergence.png", "Error of the mean of K passes at penumbra receivers.", {"direct_convergence.csv"}},
+    };
+    s.tables = {
+        {"direct_accuracy.csv",
+         "Error and time per phase per method (ms per sample; total_ms without glFinish between phases: the real "
+         "cost).",
+         {"config", "points", "mean_rel_pct", "max_rel_pct", "setup_ms", "draw_ms", "readback_ms", "weighting_ms",
+          "timed_total_ms", "total_ms"}},
+        {"direct_timing_scenes.csv", "Timings on larger scenes.", {}},
+    };
+    return s;
+}
+
+ReportSection convergenceSection() {
+    ReportSection s;
+    s.id = "convergence";
+    s.title = "Convergence: progressive image against the path tracer at equal time";
+    s.about = "Issue 4: the Cornell box, direct light only. A still image: the progressive cache (worker thread, "
+              "production settings) composited at fixed elapsed times, and the path tracer (depth 1, every core) at "
+              "doubling samples per pixel, both against the exact direct image. A walkthrough with one cache "
+              "refined all along, against the path tracer's time to the same error per view. Memory per cached "
+              "vertex.";
+    s.run = [](const BenchReportOptions& o, const std::string& dir) {
+        BenchConvergenceOptions b;
+        b.outDir = dir;
+        b.quick = o.quick;
+        b.backend = o.backend;
+        b.seed = o.seed;
+        return runBenchConvergence(b);
+    };
+    s.summary = "convergence_summary.md";
+    s.figures = {
+        {"convergence_still.png",
+         "Still image: relative RMSE against the exact image over wall-clock time, Meshlight and the path tracer "
+         "(labels: samples per pixel); dashed: the targets.",
+         {"convergence_still.csv"}},
+        {"convergence_walkthrough.png", "Walkthrough: cumulative time over the frames.",
+         {"convergence_walkthrough.csv"}},
+        {"convergence_walkthrough_error.png", "Walkthrough: relative RMSE per view.", {"convergence_walkthrough.csv"}},
+    };
+    s.tables = {
+        {"convergence_targets.csv", "Targets of issue 4.", {}},
+        {"convergence_memory.csv", "Memory per cached vertex, extrapolated to a million vertices.", {}},
+    };
+    return s;
+}
+
+ReportSection scalingSection() {
+    ReportSection s;
+    s.id = "scaling";
+    s.title = "Scaling: cost against scene size and number of lights";
+    s.about = "The bench scene and the Cornell box with every triangle split into 4 recursively, sampled at the "
+              "same receivers at every size (the sampler culls occluders with a BVH), with the one-off costs of "
+              "the sampler, the cache and the compositor; and the Cornell box with N ceiling lights of constant "
+              "total power. Growth exponents are least-squares slopes in log-log.";
+    s.run = [](const BenchReportOptions& o, const std::string& dir) {
+        BenchScalingOptions b;
+        b.outDir = dir;
+        b.quick = o.quick;
+        b.backend = o.backend;
+        b.seed = o.seed;
+        return runBenchScaling(b);
+    };
+    s.summary = "scaling_summary.md";
+    s.figures = {
+        {"scaling_triangles_sample.png",
+         "Cost per sample at fixed receivers and per estimate of the cache's first pass against the number of "
+         "triangles; dashed: least-squares power-law fits.",
+         {"scaling_triangles.csv", "scaling_fits.csv"}},
+        {"scaling_triangles_setup.png",
+         "One-off costs against the number of triangles: occluder BVH, sampler setup, cache build, compositing.",
+         {"scaling_triangles.csv", "scaling_fits.csv"}},
+        {"scaling_lights.png", "Costs against the number of lights, total power constant.",
+         {"scaling_lights.csv", "scaling_fits.csv"}},
+    };
+    s.tables = {
+        {"scaling_triangles.csv", "Cost against scene size (ms).",
+         {"scene", "triangles", "drawn_triangles", "bvh_build_ms", "setup_ms", "per_sample_ms", "grid_objects",
+          "cache_build_ms", "first_pass_estimates", "per_estimate_ms", "composite_ms", "first_image_ms"}},
+        {"scaling_lights.csv", "Cost against the number of lights (ms; first_image extrapolated).", {}},
+    };
+    return s;
+}
+
+// --- The machine -------------------------------------------------------------------
+
+// The first "KEY : value" line of a /proc file with that key, or "".
+std::string procField(const char* file, const std::string& key) {
+    std::ifstream in(file);
+    std::string line;
+    while (std::getline(in, line)) {
+        const size_t colon = line.find(':');
+        if (colon == std::string::npos) continue;
+        std::string k = line.substr(0, colon);
+        k.erase(k.find_last_not_of(" \t") + 1);
+        if (k != key) continue;
+        const size_t v = line.find_first_not_of(" \t", colon + 1);
+        return v == std::string::npos ? std::string() : line.substr(v);
+    }
+    return {};
+}
+
+// stdout of a shell command, trailing newline dropped; "" when it fails.
+std::string commandOutput(const std::string& command) {
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) return {};
+    std::string out;
+    char buf[256];
+    while (size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
+    if (::pclose(pipe) != 0) return {};
+    while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+    return out;
+}
+
+struct HeaderRow {
+    std::string name, value;  // plain text
+};
+
+std::vector<HeaderRow> machineRows(const BenchReportOptions& options) {
+    std::vector<HeaderRow> rows;
+    char date[64];
+    const std::time_t now = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", &utc);
+    rows.push_back({"date", date});
+
+    std::string cpu = procField("/proc/cpuinfo", "model name");
+    if (cpu.empty()) cpu = "unknown CPU";
+    std::string machine = concat(cpu, ", ", std::thread::hardware_concurrency(), " hardware threads");
+    const std::string mem = procField("/proc/meminfo", "MemTotal");  // "131900000 kB"
+    if (!mem.empty()) machine += concat(", ", std::llround(std::atof(mem.c_str()) / 1048576.0), " GiB memory");
+    utsname u{};
+    if (::uname(&u) == 0) machine += concat(", ", u.sysname, " ", u.release, " ", u.machine);
+    rows.push_back({"machine", machine});
+
+    std::string gl;
+    try {
+        gl = createHeadlessContext(options.backend)->describe();
+    } catch (const std::exception& e) {
+        gl = concat("no headless context (", glBackendName(options.backend), "): ", e.what());
+    }
+    rows.push_back({"OpenGL", gl});
+
+    const std::string git = concat("git -C ", shellQuoted(MESHLIGHT_SOURCE_DIR), " ");
+    std::string source = commandOutput(git + "log -1 --format='%H (%cs) %s' 2>/dev/null");
+    if (source.empty()) {
+        source = "unknown (not a git checkout, or git missing)";
+    } else if (!commandOutput(git + "status --porcelain --untracked-files=no 2>/dev/null").empty()) {
+        source += " — with uncommitted changes";
+    }
+    rows.push_back({"source", concat(MESHLIGHT_SOURCE_DIR, " at ", source)});
+    rows.push_back(
+        {"command", options.commandLine.empty() ? std::string("meshlight bench report") : options.commandLine});
+    rows.push_back({"options", concat(options.quick ? "quick (CI size)" : "full", ", seed ", options.seed, ", GL ",
+                                      glBackendName(options.backend))});
+    return rows;
+}
+
+// --- The page --------------------------------------------------------------------------
+
+struct Outcome {
+    const ReportSection* section = nullptr;
+    bool ok = false;
+    std::string error;  // when not ok
+    double seconds = 0;
+};
+
+// A relative URL path: every byte outside [A-Za-z0-9._~/-] percent-encoded.
+std::string urlPath(const std::string& path) {
+    static const char* hex = "0123456789ABCDEF";
+    std::string out;
+    for (unsigned char c : path) {
+        if (std::isalnum(c) || c == '.' || c == '_' || c == '~' || c == '/' || c == '-') {
+            out += char(c);
+        } else {
+            out += '%';
+            out += hex[c >> 4];
+            out += hex[c & 15];
+        }
+    }
+    return out;
+}
+
+std::string link(const std::string& href, const std::string& text) {
+    return concat("<a href=\"", htmlEscape(urlPath(href)), "\">", htmlEscape(text), "</a>");
+}
+
+std::string readFile(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream os;
+    os << in.rdbuf();
+    if (!in && !in.eof()) throwInputError(SourceLocation{path.string()}, "cannot read");
+    return os.str();
+}
+
+bool isFile(const fs::path& p) {
+    std::error_code ec;
+    return fs::is_regular_file(p, ec);
+}
+
+const char* kStyle = R"(
+body { font-family: "DejaVu Sans", Arial, sans-serif; font-size: 15px; line-height: 1.45; color: #1b1b1b;
+       max-width: 1160px; margin: 0 auto; padding: 16px 20px 48px; background: #fff; }
+h1 { font-size: 26px; margin: 8px 0 12px; }
+h2 { font-size: 21px; margin: 36px 0 8px; padding-top: 10px; border-top: 2px solid #3a5f8f; }
+h3 { font-size: 17px; margin: 20px 0 6px; }
+h4, h5, h6 { font-size: 15px; margin: 14px 0 4px; }
+table { border-collapse: collapse; font-size: 13px; margin: 6px 0 12px; }
+th, td { border: 1px solid #c8c8c8; padding: 3px 7px; vertical-align: top; text-align: left; }
+th { background: #eef1f5; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+table.meta th { width: 90px; }
+.scroll { overflow-x: auto; max-width: 100%; }
+figure { margin: 14px 0 22px; }
+figure img { display: block; max-width: 100%; height: auto; border: 1px solid #ddd; }
+figcaption, .caption { font-size: 13px; color: #444; margin: 4px 0; }
+.summary { background: #f8f9fb; border-left: 4px solid #3a5f8f; padding: 2px 14px; margin: 10px 0; }
+.failed { background: #fdecea; border-left: 4px solid #b3261e; padding: 6px 12px; }
+.missing { color: #8a5a00; font-size: 13px; }
+.files { font-size: 13px; color: #444; }
+code { font-size: 13px; background: #f0f0f0; padding: 0 3px; }
+)";
+
+// The section's part of the page; files are looked up in outDir/<id>/.
+std::string sectionHtml(const Outcome& o, int number, const fs::path& outDir) {
+    const ReportSection& s = *o.section;
+    const fs::path dir = outDir / s.id;
+    std::ostringstream h;
+    h << "<section id=\"" << htmlEscape(s.id) << "\">\n<h2>" << number << ". " << htmlEscape(s.title) << "</h2>\n"
+      << "<p>" << htmlEscape(s.about) << "</p>\n";
+    if (!o.ok)
+        h << "<p class=\"failed\">This bench failed after " << concat(std::lround(o.seconds * 10) / 10.0)
+          << " s: " << htmlEscape(o.error) << ". What it wrote before failing is shown below.</p>\n";
+    if (!s.summary.empty() && isFile(dir / s.summary))
+        h << "<div class=\"summary\">\n" << markdownToHtml(readFile(dir / s.summary), 2) << "</div>\n";
+
+    for (const ReportFigure& f : s.figures) {
+        const std::string src = s.id + "/" + f.png;
+        if (!isFile(dir / f.png)) {
+            h << "<p class=\"missing\">Plot not produced: " << htmlEscape(f.png)
+              << " (is gnuplot installed?). " << htmlEscape(f.caption) << "</p>\n";
+            continue;
+        }
+        h << "<figure>\n<img src=\"" << htmlEscape(urlPath(src)) << "\" alt=\"" << htmlEscape(f.caption)
+          << "\">\n<figcaption>" << htmlEscape(f.caption);
+        bool first = true;
+        for (const std::string& csv : f.data) {
+            if (!isFile(dir / csv)) continue;
+            h << (first ? " Data: " : ", ") << link(s.id + "/" + csv, csv);
+            first = false;
+        }
+        h << "</figcaption>\n</figure>\n";
+    }
+
+    for (const ReportTable& t : s.tables) {
+        if (!isFile(dir / t.csv)) {
+            h << "<p class=\"missing\">Table not produced: " << htmlEscape(t.csv) << "</p>\n";
+            continue;
+        }
+        const CsvTable csv = parseCsv(readFile(dir / t.csv), (dir / t.csv).string());
+        h << "<h3>" << htmlEscape(t.caption) << "</h3>\n<p class=\"caption\">From "
+          << link(s.id + "/" + t.csv, t.csv)
+          << (t.columns.empty() || t.columns.size() == csv.header.size() ? "" : " (some columns; all in the CSV)")
+          << ".</p>\n<div class=\"scroll\">\n" << htmlTable(csv, t.columns) << "</div>\n";
+    }
+
+    // Every file the bench left, so that nothing it wrote is out of reach.
+    std::vector<std::string> files;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (name.empty() || name.front() == '.' || !entry.is_regular_file(ec)) continue;  // temporaries
+        files.push_back(name);
+    }
+    std::sort(files.begin(), files.end());
+    if (!files.empty()) {
+        h << "<p class=\"files\">All files of this bench: ";
+        for (size_t i = 0; i < files.size(); ++i) h << (i ? ", " : "") << link(s.id + "/" + files[i], files[i]);
+        h << ".</p>\n";
+    }
+    h << "</section>\n";
+    return h.str();
+}
+
+// What the page shows of a section whose files could not be read.
+std::string brokenSectionHtml(const Outcome& o, int number) {
+    return concat("<section id=\"", htmlEscape(o.section->id), "\">\n<h2>", number, ". ",
+                  htmlEscape(o.section->title), "</h2>\n<p class=\"failed\">", htmlEscape(o.error),
+                  "</p>\n</section>\n");
+}
+
+// `bodies`: the sections' HTML, parallel to `outcomes`.
+std::string pageHtml(const std::vector<HeaderRow>& header, const std::vector<Outcome>& outcomes,
+                     const std::vector<std::string>& bodies) {
+    std::ostringstream h;
+    h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+         "<title>Meshlight bench report</title>\n<style>"
+      << kStyle << "</style>\n</head>\n<body>\n<h1>Meshlight bench report</h1>\n<table class=\"meta\">\n";
+    for (const HeaderRow& r : header)
+        h << "<tr><th>" << htmlEscape(r.name) << "</th><td>" << htmlEscape(r.value) << "</td></tr>\n";
+    h << "</table>\n<p>Benches in this report, in order: ";
+    for (size_t i = 0; i < outcomes.size(); ++i) {
+        const Outcome& o = outcomes[i];
+        h << (i ? "; " : "") << "<a href=\"#" << htmlEscape(o.section->id) << "\">" << htmlEscape(o.section->id)
+          << "</a> (" << (o.ok ? "ran in " : "<strong>failed</strong> after ")
+          << concat(std::lround(o.seconds * 10) / 10.0) << " s)";
+    }
+    if (outcomes.empty()) h << "none";
+    h << ". Times come from this machine while it ran the benches; other processes disturb them, which is why "
+         "the benches report medians.</p>\n<ol>\n";
+    for (const Outcome& o : outcomes)
+        h << "<li><a href=\"#" << htmlEscape(o.section->id) << "\">" << htmlEscape(o.section->title) << "</a></li>\n";
+    h << "</ol>\n";
+    for (const std::string& body : bodies) h << body;
+    h << "</body>\n</html>\n";
+    return h.str();
+}
+
+void checkSection(const ReportSection& s) {
+    ML_ASSERT(!s.id.empty() && s.id.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-") == std::string::npos,
+              "report section id '", s.id, "' must be lower-case letters, digits and '-'");
+    ML_ASSERT(bool(s.run), "report section '", s.id, "' has nothing to run");
+}
+
+}  // namespace
+
+std::vector<ReportSection> reportSections() {
+    // Page order. Each later bench adds its section here, e.g. the
+    // indirect-light bench.
+    return {directSection(), convergenceSection(), scalingSection()};
+}
+
+int runBenchReport(const BenchReportOptions& options, const std::vector<ReportSection>& sections) {
+    for (const ReportSection& s : sections) checkSection(s);
+    const fs::path outDir(options.outDir);
+    std::error_code ec;
+    fs::create_directories(outDir, ec);
+    if (ec || !fs::is_directory(outDir, ec))
+        throwInputError(SourceLocation{options.outDir}, "cannot make the output directory",
+                        ec ? concat(": ", ec.message()) : std::string());
+    const std::vector<HeaderRow> header = machineRows(options);
+
+    std::vector<Outcome> outcomes;
+    for (const ReportSection& s : sections) {
+        std::printf("\n=== bench %s ===\n", s.id.c_str());
+        Outcome o;
+        o.section = &s;
+        const Clock::time_point start = Clock::now();
+        try {
+            const int code = s.run(options, (outDir / s.id).string());
+            o.ok = code == 0;
+            if (!o.ok) o.error = concat("exit code ", code);
+        } catch (const std::exception& e) {
+            o.error = e.what();
+        }
+        o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        if (!o.ok) std::fprintf(stderr, "meshlight: bench %s failed: %s\n", s.id.c_str(), o.error.c_str());
+        outcomes.push_back(std::move(o));
+    }
+
+    // A file the section names but cannot be read fails that section, not the page.
+    std::vector<std::string> bodies;
+    for (size_t i = 0; i < outcomes.size(); ++i) {
+        try {
+            bodies.push_back(sectionHtml(outcomes[i], int(i) + 1, outDir));
+        } catch (const std::exception& e) {
+            outcomes[i].ok = false;
+            outcomes[i].error = concat("its results could not be shown: ", e.what());
+            std::fprintf(stderr, "meshlight: bench %s: %s\n", outcomes[i].section->id.c_str(),
+                         outcomes[i].error.c_str());
+            bodies.push_back(brokenSectionHtml(outcomes[i], int(i) + 1));
+        }
+    }
+    const fs::path index = outDir / "index.html";
+    writeTextFileAtomically(index.string(), pageHtml(header, outcomes, bodies));
+    const bool allOk = std::all_of(outcomes.begin(), outcomes.end(), [](const Outcome& o) { return o.ok; });
+    std::printf("\nreport: %s (%zu benches, %s)\n", index.string().c_str(), outcomes.size(),
+                allOk ? "all ran" : "some failed");
+    return allOk ? 0 : 1;
+}
+
+}  // namespace ml
