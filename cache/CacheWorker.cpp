@@ -47,13 +47,16 @@ void CacheWorker::stop() {
     if (thread_.joinable()) thread_.join();
 }
 
-void CacheWorker::setView(const std::optional<RefinementView>& view) {
+uint64_t CacheWorker::setView(const std::optional<RefinementView>& view) {
+    uint64_t serial;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         view_ = view;
         viewChanged_ = true;
+        serial = ++viewSerial_;
     }
     wake_.notify_all();
+    return serial;
 }
 
 void CacheWorker::rethrowIfFailed() const {
@@ -67,7 +70,8 @@ bool CacheWorker::waitForVersion(uint64_t version, double timeoutSeconds) {
                           [&] { return published_ >= version || finished_; });
 }
 
-void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementView>& view) {
+void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementView>& view,
+                          uint64_t viewSerial) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
     for (size_t l = 0; l < cache_.lightCount(); ++l) {
@@ -79,6 +83,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->rounds = cache_.rounds();
     snap->estimatedError = cache_.estimatedError(view);
     snap->converged = converged;
+    snap->viewSerial = viewSerial;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         snap->version = ++published_;
@@ -96,6 +101,7 @@ void CacheWorker::run() {
         double lastPublish = -1e30;
         bool converged = false;
         std::optional<RefinementView> lastView;
+        uint64_t serial = 0;
         for (;;) {
             std::optional<RefinementView> view;
             {
@@ -107,6 +113,7 @@ void CacheWorker::run() {
                 viewChanged_ = false;
                 view = view_;
                 lastView = view;
+                serial = viewSerial_;
             }
             if (settings_.maxSamples && cache_.totalSamples() >= settings_.maxSamples) break;
             size_t budget = settings_.roundBudget;
@@ -119,11 +126,11 @@ void CacheWorker::run() {
             const RefineReport report = cache_.refine(sample, budget, settings_.seed, view);
             converged = report.converged();
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
-                publish(seconds(), converged, view);
+                publish(seconds(), converged, view, serial);
                 lastPublish = seconds();
             }
         }
-        publish(seconds(), converged, lastView);
+        publish(seconds(), converged, lastView, serial);
     } catch (...) {
         std::lock_guard<std::mutex> lock(mutex_);
         failure_ = std::current_exception();

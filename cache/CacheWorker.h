@@ -33,6 +33,7 @@ struct CacheSnapshot {
     uint64_t rounds = 0;
     double estimatedError = 0;        // IrradianceCache::estimatedError at publication
     bool converged = false;           // the last round found nothing to do
+    uint64_t viewSerial = 0;          // the setView() call the last round served (0: none)
 };
 
 struct WorkerSettings {
@@ -72,7 +73,9 @@ public:
     // The worker has ended: stopped, out of samples, or failed.
     bool finished() const { return finished_.load(); }
     // The camera to serve: refined first, and no finer than its pixels.
-    void setView(const std::optional<RefinementView>& view);
+    // Returns the call's serial: snapshots with this viewSerial or later
+    // were made for this view.
+    uint64_t setView(const std::optional<RefinementView>& view);
 
     using Reader = SnapshotExchange<CacheSnapshot>::Reader;
     // One per reading thread; see SnapshotExchange.
@@ -87,7 +90,7 @@ public:
 
 private:
     void run();
-    void publish(double seconds, bool converged, const std::optional<RefinementView>& view);
+    void publish(double seconds, bool converged, const std::optional<RefinementView>& view, uint64_t viewSerial);
 
     IrradianceCache& cache_;
     SamplerFactory factory_;
@@ -100,6 +103,7 @@ private:
     std::atomic<bool> paused_{false}, stopping_{false}, finished_{false};
     std::optional<RefinementView> view_;
     bool viewChanged_ = false;
+    uint64_t viewSerial_ = 0;
     std::exception_ptr failure_;
     uint64_t published_ = 0;
 };

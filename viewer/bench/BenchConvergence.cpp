@@ -26,7 +26,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -548,24 +547,14 @@ WalkthroughResult runWalkthrough(const Scene& scene, const Plan& plan, const Dir
     for (size_t v = 0; v < cameras.size(); ++v) {
         ViewResult& out = r.views[v];
         const Clock::time_point viewStart = v == 0 ? start : Clock::now();
-        worker.setView(RefinementView{cameras[v], size, size});
+        const uint64_t serial = worker.setView(RefinementView{cameras[v], size, size});
         if (v == 0) worker.start();
-        // A round in flight when the view changed may still publish a
-        // snapshot made for the old view; every later one is made for this
-        // view, and an idle (converged) worker's next one is too. A fresh
-        // snapshot that converged is taken as well: the worker idles after
-        // it, so waiting could bring nothing (CacheSnapshot does not say
-        // which view it was made for; should it be the old view's last
-        // round, the measured error shows it).
-        const CacheSnapshot* at = reader.acquire();
-        const uint64_t seen = at ? at->version : 0;
-        const uint64_t forView = at ? seen + (at->converged ? 1 : 2) : 1;
+        // Only snapshots made for this view (CacheSnapshot::viewSerial) count.
         bool done = false;
         for (;;) {
             worker.rethrowIfFailed();
             const CacheSnapshot* s = reader.acquire();
-            done = s && s->version > seen &&
-                   (s->converged || (s->version >= forView && s->estimatedError <= kViewEstimatedError));
+            done = s && s->viewSerial >= serial && (s->converged || s->estimatedError <= kViewEstimatedError);
             const double left = kViewSecondsLimit - secondsSince(viewStart);
             if (done || left <= 0 || worker.finished()) break;
             worker.waitForVersion((s ? s->version : 0) + 1, left);

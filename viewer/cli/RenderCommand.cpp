@@ -221,7 +221,7 @@ int runRender(const std::vector<std::string>& args) {
 
     auto phases = std::make_shared<DirectPhaseTimes>();
     CacheWorker worker(cache, directSamplerFactory(scene, choice, phases), workerSettings);
-    worker.setView(RefinementView{cameras.front(), comp.width, comp.height});
+    const uint64_t firstSerial = worker.setView(RefinementView{cameras.front(), comp.width, comp.height});
     CacheWorker::Reader reader = worker.reader();
     const auto start = Clock::now();
     worker.start();
@@ -246,15 +246,14 @@ int runRender(const std::vector<std::string>& args) {
     };
 
     for (size_t frame = 0; frame < cameras.size(); ++frame) {
-        if (frame > 0) worker.setView(RefinementView{cameras[frame], comp.width, comp.height});
+        // Only snapshots made for this frame's view count for it.
+        const uint64_t serial =
+            frame == 0 ? firstSerial : worker.setView(RefinementView{cameras[frame], comp.width, comp.height});
         const auto frameStart = Clock::now();
-        // Only snapshots published after this frame's view count for it.
-        const CacheSnapshot* first = reader.acquire();
-        const uint64_t versionAtStart = first ? first->version : 0;
         for (;;) {
             worker.rethrowIfFailed();
             const CacheSnapshot* s = reader.acquire();
-            const bool fresh = s && s->version > versionAtStart;
+            const bool fresh = s && s->viewSerial >= serial;
             if (worker.finished()) break;
             if (fresh && s->converged) break;
             if (fresh && stop.error && s->estimatedError <= *stop.error) break;
