@@ -60,4 +60,12 @@ void writeTextFileAtomically(const std::string& path, const std::string& text) {
     out.commit();
 }
 
+void makeOutputDirectory(const std::string& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec || !std::filesystem::is_directory(dir, ec))
+        throwInputError(SourceLocation{dir}, "cannot make the output directory",
+                        ec ? concat(": ", ec.message()) : std::string());
+}
+
 }  // namespace ml

@@ -35,6 +35,10 @@ private:
     bool committed_ = false;
 };
 
+// Makes the folder `dir` (and its parents) if missing; throws InputError
+// naming it if it cannot be made or is not a folder.
+void makeOutputDirectory(const std::string& dir);
+
 // Writes `text` to `path` through an AtomicOutput.
 void writeTextFileAtomically(const std::string& path, const std::string& text);
 

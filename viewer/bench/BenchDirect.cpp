@@ -793,14 +793,6 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>&
     return md.str();
 }
 
-void makeOutputDirectory(const std::string& dir) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir, ec))
-        throwInputError(SourceLocation{dir}, "cannot make the output directory",
-                        ec ? concat(": ", ec.message()) : std::string());
-}
-
 }  // namespace
 
 int runBenchDirect(const BenchDirectOptions& options) {

@@ -168,12 +168,7 @@ int runRender(const std::vector<std::string>& args) {
     if (!stop.seconds && !stop.error && !stop.samples) stop.error = 0.02;
     const double every = o.number("every", 0.01, 1e6);
     const std::string snapshotsDir = o.has("snapshots") ? o.str("snapshots") : "";
-    if (!snapshotsDir.empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(snapshotsDir, ec);
-        if (ec || !std::filesystem::is_directory(snapshotsDir))
-            throw InputError(concat("--snapshots '", snapshotsDir, "': cannot make the folder"));
-    }
+    if (!snapshotsDir.empty()) makeOutputDirectory(snapshotsDir);
     const std::string logPath = o.has("log") ? o.str("log") : "";
     if (!logPath.empty()) checkOutputDirectory(logPath);
     if (o.has("reference") && logPath.empty()) throw InputError("--reference needs --log, where the errors go");
