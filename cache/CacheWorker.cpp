@@ -119,7 +119,7 @@ void CacheWorker::run() {
             size_t budget = settings_.roundBudget;
             if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
             if (settings_.maxSamples) {
-                // The first round samples every base vertex whatever the budget.
+                // No round takes more than what is left of the sample budget.
                 const uint64_t left = settings_.maxSamples - cache_.totalSamples();
                 budget = size_t(std::min<uint64_t>(budget, std::max<uint64_t>(left, 1)));
             }
