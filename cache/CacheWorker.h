@@ -27,6 +27,10 @@ struct CacheSnapshot {
     uint64_t version = 0;             // 1, 2, ... in publication order
     double seconds = 0;               // worker time since start()
     std::vector<IrradianceMeshView> direct;  // one per light, in the scene's order
+    // Indirect irradiance, one mesh per bounce (bounce 1 first); empty with
+    // direct light only or before the indirect pass has started. The
+    // irradiance a surface receives is Σ direct + Σ indirect.
+    std::vector<IrradianceMeshView> indirect;
     size_t vertices = 0;              // over all meshes
     std::vector<size_t> verticesPerMesh;
     uint64_t samples = 0;             // estimates taken, all meshes
