@@ -13,9 +13,19 @@ void WorkerSettings::validate() const {
     if (roundBudget > (size_t(1) << 24)) throw InputError(concat("round budget ", roundBudget, " is above 2^24"));
 }
 
-CacheWorker::CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings)
-    : cache_(cache), factory_(std::move(factory)), settings_(settings) {
+CacheWorker::CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
+                         IndirectSolver* indirect, IndirectFactory indirectFactory)
+    : cache_(cache),
+      factory_(std::move(factory)),
+      indirect_(indirect),
+      indirectFactory_(std::move(indirectFactory)),
+      settings_(settings) {
     settings_.validate();
+    ML_ASSERT(!indirect_ || indirectFactory_, "indirect light needs an estimator factory");
+}
+
+uint64_t CacheWorker::totalSamples() const {
+    return cache_.totalSamples() + (indirect_ ? indirect_->totalSamples() : 0);
 }
 
 CacheWorker::~CacheWorker() { stop(); }
@@ -71,7 +81,7 @@ bool CacheWorker::waitForVersion(uint64_t version, double timeoutSeconds) {
 }
 
 void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementView>& view,
-                          uint64_t viewSerial) {
+                          uint64_t viewSerial, const IndirectEstimator* estimator) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
     for (size_t l = 0; l < cache_.lightCount(); ++l) {
@@ -81,7 +91,19 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->vertices = cache_.totalVertices();
     snap->samples = cache_.totalSamples();
     snap->rounds = cache_.rounds();
-    snap->estimatedError = cache_.estimatedError(view);
+    snap->directError = cache_.estimatedError(view);
+    if (indirect_) {
+        snap->indirect = indirect_->views();
+        snap->bounces = indirect_->bounces();
+        snap->bouncesFinished = indirect_->finished();
+        snap->indirectVertices = indirect_->totalVertices();
+        snap->indirectSamples = indirect_->totalSamples();
+        snap->vertices += snap->indirectVertices;
+        snap->samples += snap->indirectSamples;
+        snap->indirectError = indirect_->estimatedError(view);
+        if (estimator) snap->indirectStats = estimator->stats();
+    }
+    snap->estimatedError = std::max(snap->directError, snap->indirectError);
     snap->converged = converged;
     snap->viewSerial = viewSerial;
     {
@@ -98,8 +120,16 @@ void CacheWorker::run() {
     auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     try {
         const DirectSampleFn sample = factory_();
+        const std::unique_ptr<IndirectEstimator> estimator = indirect_ ? indirectFactory_() : nullptr;
+        const auto directViews = [&] {
+            std::vector<IrradianceMeshView> v;
+            for (size_t l = 0; l < cache_.lightCount(); ++l) v.push_back(cache_.view(l));
+            return v;
+        };
         double lastPublish = -1e30;
-        bool converged = false;
+        bool converged = false, directConverged = false, indirectStarted = false;
+        double lastDirectError = 1, lastIndirectError = 1;
+        uint64_t rounds = 0;
         std::optional<RefinementView> lastView;
         uint64_t serial = 0;
         for (;;) {
@@ -109,28 +139,58 @@ void CacheWorker::run() {
                 // Idle while paused, or converged for this view, until told otherwise.
                 wake_.wait(lock, [&] { return stopping_ || (!paused_ && (!converged || viewChanged_)); });
                 if (stopping_) break;
-                if (viewChanged_) converged = false;
+                if (viewChanged_) converged = directConverged = false;
                 viewChanged_ = false;
                 view = view_;
                 lastView = view;
                 serial = viewSerial_;
             }
-            if (settings_.maxSamples && cache_.totalSamples() >= settings_.maxSamples) break;
-            size_t budget = settings_.roundBudget;
-            if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
-            if (settings_.maxSamples) {
-                // No round takes more than what is left of the sample budget.
-                const uint64_t left = settings_.maxSamples - cache_.totalSamples();
-                budget = size_t(std::min<uint64_t>(budget, std::max<uint64_t>(left, 1)));
+            // No round takes more than what is left of the sample budget.
+            const auto capped = [&](size_t budget) {
+                if (!settings_.maxSamples) return budget;
+                const uint64_t left = settings_.maxSamples - totalSamples();
+                return size_t(std::min<uint64_t>(budget, std::max<uint64_t>(left, 1)));
+            };
+            if (settings_.maxSamples && totalSamples() >= settings_.maxSamples) break;
+            // Once indirect light is under way, the two share the worker by
+            // their errors: a direct round runs while direct light's error
+            // is at least half of indirect light's (and every eighth round
+            // regardless, so it never stalls).
+            const bool directTurn = !indirectStarted || lastDirectError >= 0.5 * lastIndirectError || ++rounds % 8 == 0;
+            double directError = lastDirectError;
+            if (!directConverged && directTurn) {
+                size_t budget = settings_.roundBudget;
+                if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
+                const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
+                directConverged = report.converged();
+                directError = lastDirectError = report.estimatedError;
             }
-            const RefineReport report = cache_.refine(sample, budget, settings_.seed, view);
-            converged = report.converged();
+            bool indirectConverged = true;
+            if (indirect_) {
+                // Indirect light starts once direct light is nearly right,
+                // then alternates with it round by round.
+                indirectStarted = indirectStarted || directConverged ||
+                                  directError <= indirect_->settings().startError;
+                indirectConverged = false;
+                if (indirectStarted && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
+                    size_t budget = settings_.indirectBudget;
+                    if (budget == 0) {
+                        const size_t vertices = indirect_->started() ? indirect_->cache(indirect_->started()).totalVertices()
+                                                                     : cache_.totalVertices() / std::max<size_t>(cache_.lightCount(), 1);
+                        budget = std::clamp<size_t>(vertices / 8, 16, 512);
+                    }
+                    const RefineReport r = indirect_->step(*estimator, directViews, capped(budget), settings_.seed, view);
+                    indirectConverged = r.converged();
+                    if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
+                }
+            }
+            converged = directConverged && indirectConverged;
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
-                publish(seconds(), converged, view, serial);
+                publish(seconds(), converged, view, serial, estimator.get());
                 lastPublish = seconds();
             }
         }
-        publish(seconds(), converged, lastView, serial);
+        publish(seconds(), converged, lastView, serial, estimator.get());
     } catch (...) {
         std::lock_guard<std::mutex> lock(mutex_);
         failure_ = std::current_exception();

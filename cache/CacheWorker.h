@@ -9,6 +9,8 @@
 // context lives and dies on the thread that uses it.
 #pragma once
 
+#include "IndirectEstimator.h"
+#include "IndirectSolver.h"
 #include "IrradianceCache.h"
 #include "SnapshotExchange.h"
 
@@ -31,11 +33,18 @@ struct CacheSnapshot {
     // direct light only or before the indirect pass has started. The
     // irradiance a surface receives is Σ direct + Σ indirect.
     std::vector<IrradianceMeshView> indirect;
+    int bounces = 0;                  // indirect bounces planned
+    int bouncesFinished = 0;          // of those, converged once
+    size_t indirectVertices = 0;      // over the indirect meshes (also in `vertices`)
+    uint64_t indirectSamples = 0;     // gathers taken (also in `samples`)
+    double directError = 0;           // direct meshes' estimated error
+    double indirectError = 0;         // IndirectSolver::estimatedError (1 until every bounce is done)
+    IndirectStats indirectStats;      // the estimator's memory and times
     size_t vertices = 0;              // over all meshes
     std::vector<size_t> verticesPerMesh;
     uint64_t samples = 0;             // estimates taken, all meshes
     uint64_t rounds = 0;
-    double estimatedError = 0;        // IrradianceCache::estimatedError at publication
+    double estimatedError = 0;        // the larger of directError and indirectError
     bool converged = false;           // the last round found nothing to do
     uint64_t viewSerial = 0;          // the setView() call the last round served (0: none)
 };
@@ -49,9 +58,14 @@ struct WorkerSettings {
     // Snapshots are published after a round at most this often (seconds);
     // always after the first and the last round.
     double publishSeconds = 0.25;
-    // Stop on your own after this many estimates in all (0: no limit); a
-    // budget in samples makes a run repeat whatever the machine's speed.
+    // Stop on your own after this many estimates in all, direct and
+    // indirect (0: no limit); a budget in samples makes a run repeat
+    // whatever the machine's speed.
     uint64_t maxSamples = 0;
+    // Gathers per indirect round; 0 picks one from the bounce's mesh (an
+    // eighth of its vertices, 16 to 512). A gather costs some 30 direct
+    // estimates, so rounds of both kinds take comparable time.
+    size_t indirectBudget = 0;
 
     void validate() const;
 };
@@ -62,8 +76,14 @@ public:
     // released on that thread too.
     using SamplerFactory = std::function<DirectSampleFn()>;
 
-    // `cache` must outlive the worker and not be touched while it runs.
-    CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings);
+    // Returns the indirect estimator, made on the worker thread after the
+    // direct sampler (so it may share the sampler's GL context).
+    using IndirectFactory = std::function<std::unique_ptr<IndirectEstimator>()>;
+
+    // `cache` (and `indirect`, if given) must outlive the worker and not be
+    // touched while it runs. Without `indirect` only direct light is refined.
+    CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
+                IndirectSolver* indirect = nullptr, IndirectFactory indirectFactory = {});
     ~CacheWorker();  // stops and joins
     CacheWorker(const CacheWorker&) = delete;
     CacheWorker& operator=(const CacheWorker&) = delete;
@@ -94,10 +114,14 @@ public:
 
 private:
     void run();
-    void publish(double seconds, bool converged, const std::optional<RefinementView>& view, uint64_t viewSerial);
+    void publish(double seconds, bool converged, const std::optional<RefinementView>& view, uint64_t viewSerial,
+                 const IndirectEstimator* estimator);
+    uint64_t totalSamples() const;
 
     IrradianceCache& cache_;
     SamplerFactory factory_;
+    IndirectSolver* indirect_;
+    IndirectFactory indirectFactory_;
     WorkerSettings settings_;
     SnapshotExchange<CacheSnapshot> snapshots_;
     std::thread thread_;

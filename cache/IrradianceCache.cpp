@@ -1,6 +1,7 @@
 #include "IrradianceCache.h"
 
 #include "core/Error.h"
+#include "core/MeshUtil.h"
 #include "core/Random.h"
 #include "detail/CacheImpl.h"
 
@@ -27,6 +28,8 @@ void CacheSettings::validate() const {
         throw InputError(concat("cache split tolerance ", splitTolerance, " is not in (0, 1)"));
     if (!(noiseTolerance > 0 && noiseTolerance < 1))
         throw InputError(concat("cache noise tolerance ", noiseTolerance, " is not in (0, 1)"));
+    if (!(sampleNoise >= 0 && sampleNoise < 1))
+        throw InputError(concat("cache sample noise ", sampleNoise, " is not in [0, 1)"));
     if (maxSamplesPerVertex < 1) throw InputError("cache: at least one sample per vertex");
     if (!(singleSampleNoise >= 0 && singleSampleNoise < 1))
         throw InputError(concat("cache single-sample noise ", singleSampleNoise, " is not in [0, 1)"));
@@ -76,6 +79,7 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.maxEdgeFraction), f.f64(s.minEdgeFraction), f.f64(s.minEdgePixels);
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
+    f.f64(s.sampleNoise);
     return f.h;
 }
 
@@ -103,33 +107,13 @@ using detail::CacheState;
 // Copies every object into one mesh. A face OpenMesh refuses (a complex
 // edge or vertex: non-manifold input) gets vertices of its own, so nothing
 // is lost; the count is reported by the caller.
-// Whether an object is closed: with its vertices welded by position (they
-// are split at creases), every edge is shared by an even number of its
-// triangles. The inside of a closed object is never seen nor lit.
-bool isClosed(const Mesh& m) {
-    std::map<std::array<double, 3>, uint32_t> weld;
-    std::vector<uint32_t> id(m.positions.size());
-    for (size_t v = 0; v < m.positions.size(); ++v)
-        id[v] = weld.emplace(std::array<double, 3>{m.positions[v].x, m.positions[v].y, m.positions[v].z},
-                             uint32_t(weld.size()))
-                    .first->second;
-    std::map<std::pair<uint32_t, uint32_t>, int> uses;
-    for (const glm::uvec3& t : m.triangles)
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t a = id[t[k]], b = id[t[(k + 1) % 3]];
-            uses[{std::min(a, b), std::max(a, b)}]++;
-        }
-    for (const auto& [edge, n] : uses)
-        if (n % 2) return false;
-    return true;
-}
-
 // Whether some light lies behind triangle t's plane and emits towards it:
 // then its back is lit, and needs a cache of its own.
 bool litFromBehind(const Scene& scene, const Mesh& m, size_t t) {
     const Triangle3 p = m.triangle(t);
     const Vec3 n = glm::normalize(m.areaNormal(t));
     const double eps = 1e-6 * scene.bounds.diagonal();
+    
     for (const AreaLight& light : scene.lights)
         for (const Triangle3& lt : light.geometry) {
             const Vec3 ln = glm::cross(lt[1] - lt[0], lt[2] - lt[0]);
@@ -140,7 +124,26 @@ bool litFromBehind(const Scene& scene, const Mesh& m, size_t t) {
     return false;
 }
 
-size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheTriMesh& mesh, size_t& backFaces) {
+// Whether any part of the scene's bounds lies behind triangle t's plane,
+// beyond a thousandth of the scene's size: a wall inside a building has
+// rooms behind it, the walls of a box seen from inside have nothing.
+bool sceneBehind(const Scene& scene, const Mesh& m, size_t t) {
+    const Vec3 n = glm::normalize(m.areaNormal(t));
+    const Vec3 p = m.positions[m.triangles[t].x];
+    const double eps = 1e-3 * scene.bounds.diagonal();
+    for (int c = 0; c < 8; ++c) {
+        const Vec3 corner((c & 1) ? scene.bounds.hi.x : scene.bounds.lo.x, (c & 2) ? scene.bounds.hi.y : scene.bounds.lo.y,
+                          (c & 4) ? scene.bounds.hi.z : scene.bounds.lo.z);
+        if (glm::dot(corner - p, n) < -eps) return true;
+    }
+    return false;
+}
+
+size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheLayout::BackFaces rule,
+                     CacheTriMesh& mesh, size_t& backFaces) {
+    const auto needsBack = [&](const Mesh& m, size_t t) {
+        return rule == CacheLayout::BackFaces::LitFromBehind ? litFromBehind(scene, m, t) : sceneBehind(scene, m, t);
+    };
     size_t detached = 0;
     backFaces = 0;
     for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
@@ -148,10 +151,10 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheTri
         const Mesh& m = scene.meshes[mi];
         // Surfaces lit from both sides (open objects with a light behind)
         // get a reversed copy, facing the other way, with vertices of its own.
-        if (!isClosed(m)) {
+        if (!isClosedMesh(m)) {
             std::map<uint32_t, CacheTriMesh::VertexHandle> back;
             for (size_t t = 0; t < m.triangles.size(); ++t) {
-                if (!litFromBehind(scene, m, t) || !(m.area(t) > 0)) continue;
+                if (!needsBack(m, t) || !(m.area(t) > 0)) continue;
                 CacheTriMesh::VertexHandle h[3];
                 for (int k = 0; k < 3; ++k) {
                     const uint32_t v = m.triangles[t][k];
@@ -221,13 +224,15 @@ void bisectLongEdges(CacheTriMesh& mesh, double maxLength) {
 
 }  // namespace
 
-IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings)
+IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings, const CacheLayout& layout)
     : impl_(std::make_unique<Impl>()) {
     settings.validate();
     CacheState& s = impl_->state;
     s.settings = settings;
     s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     s.sceneFingerprint = detail::sceneFingerprint(scene);
+    s.insetBorders = layout.insetBorders;
+    for (const AreaLight& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
     const double maxEdge = settings.maxEdgeFraction * s.diagonal;
@@ -250,9 +255,9 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
         s.grids.push_back(std::move(g));
     }
     CacheTriMesh base;
-    s.detachedFaces = buildBaseMesh(scene, gridded, base, s.backFaces);
+    s.detachedFaces = buildBaseMesh(scene, gridded, layout.backFaces, base, s.backFaces);
     bisectLongEdges(base, maxEdge);
-    s.meshes.resize(scene.lights.size());
+    s.meshes.resize(layout.meshes ? layout.meshes : scene.lights.size());
     for (detail::LightMesh& lm : s.meshes) {
         lm.mesh = base;
         lm.stats.assign(base.n_vertices(), {});
@@ -264,6 +269,7 @@ IrradianceCache::~IrradianceCache() = default;
 
 const CacheSettings& IrradianceCache::settings() const { return impl_->state.settings; }
 size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size(); }
+size_t IrradianceCache::unsampledCount() const { return detail::unsampledCount(impl_->state); }
 size_t IrradianceCache::vertexCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_vertices(); }
 size_t IrradianceCache::triangleCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_faces(); }
 uint64_t IrradianceCache::totalSamples() const { return impl_->state.samples; }
@@ -279,7 +285,7 @@ size_t IrradianceCache::totalVertices() const {
 }
 
 Vec3 IrradianceCache::position(size_t l, size_t v) const {
-    return toVec3(impl_->state.meshes.at(l).mesh.point(CacheTriMesh::VertexHandle(int(v))));
+    return detail::samplePoint(impl_->state, impl_->state.meshes.at(l).mesh, CacheTriMesh::VertexHandle(int(v)));
 }
 Vec3 IrradianceCache::normal(size_t l, size_t v) const {
     return toVec3(impl_->state.meshes.at(l).mesh.normal(CacheTriMesh::VertexHandle(int(v))));
@@ -359,9 +365,49 @@ size_t IrradianceCache::memoryBytes() const {
 
 namespace detail {
 
-VertexSample sampleVertex(const DirectSampleFn& fn, const LightMesh& lm, size_t light, size_t v, uint32_t seed) {
+Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh) {
+    const Vec3 x = toVec3(mesh.point(vh));
+    if (!mesh.is_boundary(vh)) return x;
+    // A vertex on an object's border where an emitter meets it (a floor
+    // against a glowing wall) lies in the emitter's plane, where samplers
+    // see it edge-on and count none of its light; the limit from inside the
+    // object, which is what the mesh interpolates, counts it. So such a
+    // point is moved a thousandth of its shortest edge into its own faces;
+    // with CacheLayout::insetBorders every border vertex is (a floor's edge
+    // under a wall, which would otherwise see both rooms).
+    const double eps = 1e-9 * s.diagonal;
+    const Vec3 own = toVec3(mesh.normal(vh));
+    bool onEmitter = false;
+    for (const Triangle3& t : s.emitters) {
+        const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
+        if (!(glm::length(n) > 0) || std::abs(glm::dot(x - t[0], glm::normalize(n))) > eps) continue;
+        if (std::abs(glm::dot(own, glm::normalize(n))) > 0.999) continue;  // the emitter's own surface
+        Bounds3 b;
+        for (const Vec3& p : t) b.extend(p);
+        if (glm::all(glm::greaterThanEqual(x, b.lo - eps)) && glm::all(glm::lessThanEqual(x, b.hi + eps))) {
+            onEmitter = true;
+            break;
+        }
+    }
+    if (!onEmitter && !s.insetBorders) return x;
+    Vec3 inward(0.0);
+    double shortest = kInf;
+    for (auto f : mesh.vf_range(vh)) {
+        Vec3 c(0.0);
+        for (auto u : mesh.fv_range(f)) c += toVec3(mesh.point(u));
+        inward += c / 3.0 - x;
+    }
+    for (auto u : mesh.vv_range(vh)) shortest = std::min(shortest, glm::length(toVec3(mesh.point(u)) - x));
+    const Vec3 n = toVec3(mesh.normal(vh));
+    inward -= glm::dot(inward, n) * n;
+    if (!(glm::length(inward) > 0) || !(shortest < kInf)) return x;
+    return x + 1e-3 * shortest * glm::normalize(inward);
+}
+
+VertexSample sampleVertex(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t v, uint32_t seed) {
+    const LightMesh& lm = s.meshes[light];
     const auto vh = CacheTriMesh::VertexHandle(int(v));
-    const Vec3 x = toVec3(lm.mesh.point(vh)), n = toVec3(lm.mesh.normal(vh));
+    const Vec3 x = samplePoint(s, lm.mesh, vh), n = toVec3(lm.mesh.normal(vh));
     const uint32_t count = lm.stats[v].count;
     try {
         return fn(light, x, n, seedFor(seed, uint32_t(v), uint32_t(light), count));
@@ -404,7 +450,7 @@ size_t sampleUnsampled(CacheState& s, const DirectSampleFn& fn, uint32_t seed, s
         LightMesh& lm = s.meshes[l];
         for (size_t v = 0; v < lm.stats.size() && done < budget; ++v) {
             if (lm.stats[v].count) continue;
-            addVertexSample(s, l, v, sampleVertex(fn, lm, l, v, seed));
+            addVertexSample(s, l, v, sampleVertex(fn, s, l, v, seed));
             ++done;
             if (each) each();
         }

@@ -50,6 +50,10 @@ struct CacheSettings {
     // it: 0.2% is the largest error of one jittered 64×64, 8-bit estimate
     // over the bench scene's 10,000 receivers (bench direct: 0.15%).
     double singleSampleNoise = 0.002;
+    // The relative error of any one sample, for samplers that cannot tell a
+    // noisy sample from an exact one (indirect gathers): > 0 makes every
+    // vertex with a single sample count as that noisy. 0 for direct light.
+    double sampleNoise = 0;
     // Budgets over all meshes: refinement stops splitting at either.
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
@@ -100,9 +104,28 @@ struct RefineReport {
     bool converged() const { return candidates == 0; }
 };
 
+// Which meshes a cache holds, and which faces of open objects get a reversed
+// copy so that each side keeps its own irradiance.
+struct CacheLayout {
+    enum class BackFaces {
+        // Faces a light shines on from behind: direct light.
+        LitFromBehind,
+        // Faces with any part of the scene behind them (their plane cuts the
+        // scene's bounds): light reflected by any surface may arrive there.
+        SceneBehind,
+    };
+    size_t meshes = 0;  // 0: one per light
+    BackFaces backFaces = BackFaces::LitFromBehind;
+    // Sample every vertex on an object's border a hair inside its faces,
+    // not only those an emitter's plane passes through (see position()):
+    // for gathers, to which a floor's edge under a wall would otherwise see
+    // both rooms.
+    bool insetBorders = false;
+};
+
 class IrradianceCache {
 public:
-    IrradianceCache(const Scene& scene, const CacheSettings& settings = {});
+    IrradianceCache(const Scene& scene, const CacheSettings& settings = {}, const CacheLayout& layout = {});
     ~IrradianceCache();
     IrradianceCache(const IrradianceCache&) = delete;
     IrradianceCache& operator=(const IrradianceCache&) = delete;
@@ -119,7 +142,11 @@ public:
     size_t gridObjectCount() const;
     uint64_t totalSamples() const;
     uint64_t rounds() const;  // refinement rounds so far
-    // The shading point of a vertex: where and facing where it is sampled.
+    size_t unsampledCount() const;  // vertices (and grid samples) without a sample yet
+    // The shading point of a vertex: where and facing where it is sampled
+    // (on an object's border that an emitter meets, a thousandth of its
+    // shortest edge inside its faces: right on the border, samplers would see
+    // the emitter edge-on and miss its light).
     Vec3 position(size_t light, size_t vertex) const;
     Vec3 normal(size_t light, size_t vertex) const;
 

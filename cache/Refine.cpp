@@ -21,7 +21,10 @@
 // view when one is given. A vertex is resampled while the standard error of
 // its mean (from its samples' spread) exceeds the noise tolerance; one
 // sample is trusted unless it saw a penumbra (outside penumbrae the control-
-// variate sampler is exact).
+// variate sampler is exact). With a sampler whose every sample is noisy
+// (CacheSettings::sampleNoise > 0: indirect gathers), twice a vertex's
+// relative standard error is taken off its residual before it asks for a
+// split, so noise is resampled away rather than refined into the mesh.
 #include "IrradianceCache.h"
 
 #include "core/Error.h"
@@ -148,6 +151,9 @@ double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, dou
         // irradiance (E / visibility).
         const double mean = st.sumLum, vis = std::max(st.sumVisibility, 0.01);
         rel = cs.singleSampleNoise * mean / vis / (mean + 0.5 * kDarkFloor * white);
+    } else if (st.count == 1 && cs.sampleNoise > 0) {
+        // A sampler whose every sample is noisy (a jittered gather).
+        rel = cs.sampleNoise * st.sumLum / (st.sumLum + 0.5 * kDarkFloor * white);
     }
     return std::min(rel, 1.0);
 }
@@ -242,6 +248,10 @@ Scoring score(const CacheState& s, const std::optional<RefinementView>& view, bo
             const double residual = std::abs(lum[vi] - *fit) / white;
             const double x = std::max(lum[vi], 0.0) / white;
             lap[vi] = residual * 2 / ((1 + x) * (1 + x)) / (t[vi] + kDarkFloor);
+            // With a sampler whose every sample is noisy, a residual within
+            // twice the mean's standard error may be noise, not curvature:
+            // resampling, not splitting, is what helps there.
+            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], cs, white));
         }
 
         for (auto e : mesh.edges()) {
@@ -418,7 +428,7 @@ RefineReport IrradianceCache::refine(const DirectSampleFn& fn, size_t budget, ui
     report.estimates += detail::sampleUnsampled(s, fn, seed, ~size_t(0));
     std::sort(resample.begin(), resample.end());
     for (const auto& [l, v] : resample) {
-        detail::addVertexSample(s, l, v, detail::sampleVertex(fn, s.meshes[l], l, v, seed));
+        detail::addVertexSample(s, l, v, detail::sampleVertex(fn, s, l, v, seed));
         ++report.estimates;
         ++report.resamples;
     }

@@ -2,7 +2,9 @@
 
 #include "Error.h"
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <cstring>
 #include <stdexcept>
 #include <unordered_map>
@@ -163,6 +165,24 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
     mesh.positions = std::move(positions);
     mesh.normals = std::move(normals);
     mesh.triangles = std::move(triangles);
+}
+
+bool isClosedMesh(const Mesh& m) {
+    std::map<std::array<double, 3>, uint32_t> weld;
+    std::vector<uint32_t> id(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v)
+        id[v] = weld.emplace(std::array<double, 3>{m.positions[v].x, m.positions[v].y, m.positions[v].z},
+                             uint32_t(weld.size()))
+                    .first->second;
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = id[t[k]], b = id[t[(k + 1) % 3]];
+            uses[{std::min(a, b), std::max(a, b)}]++;
+        }
+    for (const auto& [edge, n] : uses)
+        if (n % 2) return false;
+    return true;
 }
 
 }  // namespace ml

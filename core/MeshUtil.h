@@ -41,4 +41,9 @@ size_t removeDegenerateTriangles(Mesh& mesh, double relTol,
 // removeDegenerateTriangles first).
 void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees);
 
+// Whether an object is closed: with its vertices welded by position (they
+// are split at creases), every edge is shared by an even number of its
+// triangles. The inside of a closed object is never seen nor lit.
+bool isClosedMesh(const Mesh& mesh);
+
 }  // namespace ml

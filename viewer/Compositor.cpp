@@ -1,11 +1,15 @@
 #include "Compositor.h"
 
+#include "Illuminance.h"
 #include "core/Error.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/gl/GlObjects.h"
 #include "meshlight_viewer_lib_shaders.h"
 
 #include <glm/gtc/matrix_transform.hpp>
+
+#include <array>
+#include <map>
 
 namespace ml {
 
@@ -17,29 +21,43 @@ void CompositorSettings::validate() const {
     if (long(width) * supersample > 16384 || long(height) * supersample > 16384)
         throw InputError(concat("image ", width, "x", height, " with supersampling ", supersample,
                                 " exceeds 16384 sub-pixels per side: lower --supersample"));
+    if (!(efficacy > 0 && efficacy < 1e6))
+        throw InputError(concat("luminous efficacy ", efficacy, " lm/W is not within (0, 1e6)"));
+}
+
+LightWeights LightWeights::unit(size_t lights) {
+    LightWeights w;
+    w.light.assign(lights, Rgb(1.0));
+    return w;
 }
 
 namespace {
 
 struct SceneVertex {
-    glm::vec3 position, kd, ke;
+    glm::vec3 position, kd;
+    int32_t light;  // index into Scene::lights, −1 for faces that emit nothing
 };
-struct CacheVertex {
-    glm::vec3 position, irradiance;
-};
+static_assert(sizeof(SceneVertex) == 7 * sizeof(float), "SceneVertex is tightly packed");
 
-// Vertex layout of interleaved float attributes, `counts` floats each.
-void describeFloats(const GlApi& gl, GLuint vao, GLuint buffer, std::initializer_list<int> counts) {
-    GLuint offset = 0, index = 0;
-    for (int c : counts) {
-        gl.EnableVertexArrayAttrib(vao, index);
-        gl.VertexArrayAttribFormat(vao, index, c, GL_FLOAT, GL_FALSE, offset);
-        gl.VertexArrayAttribBinding(vao, index, 0);
-        offset += GLuint(c * sizeof(float));
-        ++index;
+int quantityCode(CompositeQuantity q) {
+    switch (q) {
+        case CompositeQuantity::Radiance: return 0;
+        case CompositeQuantity::Reflectance: return 1;
+        case CompositeQuantity::Illuminance: return 2;
     }
-    gl.VertexArrayVertexBuffer(vao, 0, buffer, 0, GLsizei(offset));
+    return 0;
 }
+
+int operatorCode(ToneOperator op) {
+    switch (op) {
+        case ToneOperator::Aces: return 0;
+        case ToneOperator::Reinhard: return 1;
+        case ToneOperator::Clamp: return 2;
+    }
+    return 0;
+}
+
+glm::vec3 toVec3(const Rgb& c) { return glm::vec3(c); }
 
 }  // namespace
 
@@ -47,31 +65,139 @@ struct Compositor::Impl {
     const GlApi& gl;
     const Scene& scene;
     Vec3 origin;
-    GlProgram gbuffer, irradiance, composite;
-    GlBuffer sceneBuffer;
+    GlProgram surfaceProgram, irradianceProgram, accumulateProgram, resolveProgram, wireframeProgram;
+    // Variants compiled on first use (see common_composite.glsl), by key.
+    std::map<int, GlProgram> compositePrograms, displayPrograms, forwardPrograms;
+    GlBuffer sceneBuffer, lightEmissionBuffer, paletteBuffer;
     GlVertexArray sceneVao, emptyVao;
     GLsizei sceneVertices = 0;
 
+    // Targets of one size, kept between frames; remade when the size changes.
+    struct Targets {
+        int width = 0, height = 0, supersample = 0;  // pixels, sub-pixels per side
+        // Sub-pixel targets.
+        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth;
+        GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb;
+        // Pixel targets: the box-filtered composite; the forward pass's image and depth.
+        GlTexture pixels, forwardColour, forwardDepth;
+        GlFramebuffer pixelsFb, forwardFb;
+    } t;
+
+    // The last compose() drew the irradiance (pass 2); the other passes run
+    // when something needs them, at most once per compose.
+    glm::mat4 mvp{1.0f};
+    std::array<glm::vec4, 5> frustum;  // planes of mvp's view, inside: dot(plane, (p, 1)) ≥ 0
+    CompositeQuantity quantity = CompositeQuantity::Radiance;
+    double efficacy = kDefaultEfficacy;
+    bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
+    size_t drawnTriangles = 0;  // by the last compose's irradiance pass
+
+    GlProgram program(const char* vertName, std::string vert, const char* fragName, std::string frag) const {
+        return GlProgram(gl, {{GL_VERTEX_SHADER, vertName, std::move(vert)}, {GL_FRAGMENT_SHADER, fragName, std::move(frag)}});
+    }
+
+    // Display variants: operator and contours matter only where they are used.
+    static std::string displayDefines(CompositeQuantity q, int supersample, ToneOperator op, bool contours, int& key) {
+        const int operatorKey = q == CompositeQuantity::Radiance ? operatorCode(op) : 0;
+        const int contourKey = q == CompositeQuantity::Illuminance && contours ? 1 : 0;
+        key = ((quantityCode(q) * 32 + supersample) * 4 + operatorKey) * 2 + contourKey;
+        return concat("#define QUANTITY ", quantityCode(q), "\n#define SUPERSAMPLE ", supersample,
+                      "\n#define OPERATOR ", operatorKey, "\n#define CONTOURS ", contourKey, "\n");
+    }
+
+    const GlProgram& compositeProgram(CompositeQuantity q) {
+        const int key = quantityCode(q);
+        auto it = compositePrograms.find(key);
+        if (it == compositePrograms.end()) {
+            const std::string defines = concat("#define QUANTITY ", key, "\n");
+            it = compositePrograms
+                     .emplace(key, program("composite.vert", glslSource({shaders::composite_vert}), "composite.frag",
+                                           glslSource({defines.c_str(), shaders::common_constants_glsl,
+                                                       shaders::common_composite_glsl, shaders::composite_frag})))
+                     .first;
+        }
+        return it->second;
+    }
+
+    const GlProgram& displayProgram(CompositeQuantity q, int supersample, ToneOperator op, bool contours) {
+        int key = 0;
+        const std::string defines = displayDefines(q, supersample, op, contours, key);
+        auto it = displayPrograms.find(key);
+        if (it == displayPrograms.end())
+            it = displayPrograms
+                     .emplace(key, program("composite.vert", glslSource({shaders::composite_vert}), "display.frag",
+                                           glslSource({defines.c_str(), shaders::common_constants_glsl,
+                                                       shaders::common_composite_glsl, shaders::common_display_glsl,
+                                                       shaders::display_frag})))
+                     .first;
+        return it->second;
+    }
+
+    const GlProgram& forwardProgram(CompositeQuantity q, ToneOperator op, bool contours) {
+        int key = 0;
+        const std::string defines = displayDefines(q, 1, op, contours, key);
+        auto it = forwardPrograms.find(key);
+        if (it == forwardPrograms.end())
+            it = forwardPrograms
+                     .emplace(key, program("scene_forward.vert", glslSource({shaders::scene_forward_vert}),
+                                           "scene_forward.frag",
+                                           glslSource({defines.c_str(), shaders::common_constants_glsl,
+                                                       shaders::common_display_glsl, shaders::scene_forward_frag})))
+                     .first;
+        return it->second;
+    }
+
     Impl(GlContext& ctx, const Scene& s) : gl(ctx.gl()), scene(s), origin(s.bounds.center()) {
-        gbuffer = GlProgram(gl, {{GL_VERTEX_SHADER, "scene_gbuffer.vert", glslSource({shaders::scene_gbuffer_vert})},
-                                 {GL_FRAGMENT_SHADER, "scene_gbuffer.frag", glslSource({shaders::scene_gbuffer_frag})}});
-        irradiance = GlProgram(gl, {{GL_VERTEX_SHADER, "irradiance.vert", glslSource({shaders::irradiance_vert})},
-                                    {GL_FRAGMENT_SHADER, "irradiance.frag", glslSource({shaders::irradiance_frag})}});
-        composite = GlProgram(gl, {{GL_VERTEX_SHADER, "composite.vert", glslSource({shaders::composite_vert})},
-                                   {GL_FRAGMENT_SHADER, "composite.frag", glslSource({shaders::composite_frag})}});
-        // The scene as a triangle soup: materials are per face.
+        surfaceProgram = program("scene_gbuffer.vert", glslSource({shaders::scene_gbuffer_vert}), "scene_gbuffer.frag",
+                                 glslSource({shaders::scene_gbuffer_frag}));
+        irradianceProgram = program("irradiance.vert", glslSource({shaders::irradiance_vert}), "irradiance.frag",
+                                    glslSource({shaders::irradiance_frag}));
+        accumulateProgram = program("composite.vert", glslSource({shaders::composite_vert}), "accumulate.frag",
+                                    glslSource({shaders::accumulate_frag}));
+        resolveProgram = program("composite.vert", glslSource({shaders::composite_vert}), "resolve.frag",
+                                 glslSource({shaders::resolve_frag}));
+        wireframeProgram = GlProgram(gl, {{GL_VERTEX_SHADER, "wireframe.vert", glslSource({shaders::wireframe_vert})},
+                                          {GL_GEOMETRY_SHADER, "wireframe.geom", glslSource({shaders::wireframe_geom})},
+                                          {GL_FRAGMENT_SHADER, "wireframe.frag", glslSource({shaders::wireframe_frag})}});
+
+        // The scene as a triangle soup: materials are per face, and so is
+        // the light a face emits as.
+        std::map<std::pair<uint32_t, uint32_t>, int32_t> lightOf;  // (mesh, triangle) → light
+        for (size_t l = 0; l < scene.lights.size(); ++l)
+            for (uint32_t tri : scene.lights[l].triangles) lightOf[{scene.lights[l].mesh, tri}] = int32_t(l);
         std::vector<SceneVertex> soup;
         soup.reserve(scene.triangleCount() * 3);
-        for (const Mesh& m : scene.meshes)
-            for (size_t t = 0; t < m.triangles.size(); ++t) {
-                const Material& mat = scene.materials[m.materials[t]];
-                for (const Vec3& p : m.triangle(t))
-                    soup.push_back({glm::vec3(p - origin), glm::vec3(mat.kd), glm::vec3(mat.ke)});
+        for (uint32_t mi = 0; mi < scene.meshes.size(); ++mi) {
+            const Mesh& m = scene.meshes[mi];
+            for (size_t tri = 0; tri < m.triangles.size(); ++tri) {
+                const Material& mat = scene.materials[m.materials[tri]];
+                int32_t light = -1;
+                if (mat.emissive()) {
+                    // Scene::finalize makes every emissive face part of a light.
+                    const auto it = lightOf.find({mi, uint32_t(tri)});
+                    ML_ASSERT(it != lightOf.end(), "emissive triangle ", tri, " of mesh '", m.name, "' in no light");
+                    light = it->second;
+                }
+                for (const Vec3& p : m.triangle(tri)) soup.push_back({glm::vec3(p - origin), glm::vec3(mat.kd), light});
             }
+        }
         sceneVertices = GLsizei(soup.size());
         sceneBuffer = makeBuffer(gl, std::max<size_t>(soup.size(), 1) * sizeof(SceneVertex), soup.data());
         sceneVao = makeVertexArray(gl);
-        describeFloats(gl, sceneVao.id(), sceneBuffer.id(), {3, 3, 3});
+        for (GLuint a = 0; a < 2; ++a) {
+            gl.EnableVertexArrayAttrib(sceneVao.id(), a);
+            gl.VertexArrayAttribFormat(sceneVao.id(), a, 3, GL_FLOAT, GL_FALSE, GLuint(3 * a * sizeof(float)));
+            gl.VertexArrayAttribBinding(sceneVao.id(), a, 0);
+        }
+        gl.EnableVertexArrayAttrib(sceneVao.id(), 2);
+        gl.VertexArrayAttribIFormat(sceneVao.id(), 2, 1, GL_INT, GLuint(6 * sizeof(float)));
+        gl.VertexArrayAttribBinding(sceneVao.id(), 2, 0);
+        gl.VertexArrayVertexBuffer(sceneVao.id(), 0, sceneBuffer.id(), 0, GLsizei(sizeof(SceneVertex)));
+        lightEmissionBuffer = makeBuffer(gl, std::max<size_t>(scene.lights.size(), 1) * sizeof(glm::vec4), nullptr,
+                                         GL_DYNAMIC_DRAW);
+        std::vector<glm::vec4> palette;
+        for (const Rgb& c : falseColourPalette()) palette.emplace_back(glm::vec3(c), 1.0f);
+        paletteBuffer = makeBuffer(gl, palette.size() * sizeof(glm::vec4), palette.data());
         emptyVao = makeVertexArray(gl);
         checkGl(gl, "creating the compositor");
     }
@@ -93,6 +219,30 @@ struct Compositor::Impl {
         return fb;
     }
 
+    void ensureTargets(int width, int height, int supersample) {
+        if (t.width == width && t.height == height && t.supersample == supersample) return;
+        t = Targets{};
+        const int w = width * supersample, h = height * supersample;
+        t.surface = makeTexture2D(gl, GL_RGBA32F, w, h);
+        t.irradianceSum = makeTexture2D(gl, GL_RGBA32F, w, h);
+        t.composite = makeTexture2D(gl, GL_RGBA32F, w, h);
+        t.sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
+        t.irradianceMesh = makeTexture2D(gl, GL_RGBA32F, w, h);
+        t.cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
+        t.surfaceFb = framebuffer({t.surface.id()}, t.sceneDepth.id());
+        t.irradianceFb = framebuffer({t.irradianceSum.id()}, t.cacheDepth.id());
+        t.irradianceMeshFb = framebuffer({t.irradianceMesh.id()}, t.cacheDepth.id());
+        t.compositeFb = framebuffer({t.composite.id()}, 0);
+        t.pixels = makeTexture2D(gl, GL_RGBA32F, width, height);
+        t.pixelsFb = framebuffer({t.pixels.id()}, 0);
+        t.forwardColour = makeTexture2D(gl, GL_RGBA8, width, height);
+        t.forwardDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, width, height);
+        t.forwardFb = framebuffer({t.forwardColour.id()}, t.forwardDepth.id());
+        t.width = width;
+        t.height = height;
+        t.supersample = supersample;
+    }
+
     // Right-handed view, reversed infinite projection (z_ndc = near / depth).
     glm::mat4 clipFromLocal(const Camera& camera, double aspect) const {
         const double f = 1.0 / std::tan(glm::radians(camera.fovYDegrees) * 0.5);
@@ -106,119 +256,353 @@ struct Compositor::Impl {
         return glm::mat4(p * view);
     }
 
-    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
-                    const CompositorSettings& s) {
-        s.validate();
-        camera.validate();
-        ML_ASSERT(direct.size() == scene.lights.size(), direct.size(), " meshes for ", scene.lights.size(), " lights");
-        const int w = s.width * s.supersample, h = s.height * s.supersample;
-        const glm::mat4 mvp = clipFromLocal(camera, double(s.width) / s.height);
-
-        GlTexture reflectance = makeTexture2D(gl, GL_RGBA32F, w, h);
-        GlTexture emission = makeTexture2D(gl, GL_RGBA32F, w, h);
-        GlTexture irradianceSum = makeTexture2D(gl, GL_RGBA32F, w, h);
-        GlTexture radiance = makeTexture2D(gl, GL_RGBA32F, w, h);
-        GlTexture sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        GlTexture cacheDepth = makeTexture2D(gl, GL_DEPTH32F_STENCIL8, w, h);
-        GlFramebuffer gbufferFb = framebuffer({reflectance.id(), emission.id()}, sceneDepth.id());
-        GlFramebuffer irradianceFb = framebuffer({irradianceSum.id()}, cacheDepth.id(), true);
-        GlFramebuffer radianceFb = framebuffer({radiance.id()}, 0);
-
+    // The state every pass relies on, whatever ran before (ImGui among others).
+    void baseState(int width, int height) {
         gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
         gl.Disable(GL_DEPTH_CLAMP);
         gl.Disable(GL_CULL_FACE);
         gl.Disable(GL_COLOR_LOGIC_OP);
-        gl.Viewport(0, 0, w, h);
+        gl.Disable(GL_SCISSOR_TEST);
+        gl.Disable(GL_BLEND);
+        gl.Disable(GL_STENCIL_TEST);
+        gl.Disable(GL_DEPTH_TEST);
+        gl.Viewport(0, 0, width, height);
         gl.DepthMask(GL_TRUE);
+        gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    }
+
+    // Adds one mesh's weighted irradiance where it is the nearest cache
+    // surface. Each mesh is drawn once, with its own depth test: the first
+    // straight into the sum, the others into a target of their own that is
+    // then added to the sum (blending them in directly would add the
+    // surfaces each hides). Back faces occlude and add nothing (a cache
+    // triangle holds the irradiance of its front, CCW, side; a surface lit
+    // from both sides has a reversed copy for its back), and sit a hair
+    // behind their depth so that such a copy wins over them whatever the
+    // order; of coincident front faces (two copies of a floor) the first
+    // drawn wins, so a sub-pixel adds one of them only. On llvmpipe the cost
+    // of a large cache is per triangle: one draw, not a depth pass and then
+    // a shading pass.
+    void drawIrradianceMesh(const GpuCacheMeshes::Mesh& mesh, const Rgb& weight, bool& first) {
+        if (mesh.triangleCount == 0 || weight == Rgb(0.0)) return;  // nothing to add
         const float zero[4] = {0, 0, 0, 0};
         const float farDepth = 0.0f;  // reversed depth
-
-        // 1. Reflectance and emission from the scene's geometry.
-        gl.BindFramebuffer(GL_FRAMEBUFFER, gbufferFb.id());
-        gl.ClearBufferfv(GL_COLOR, 0, zero);
-        gl.ClearBufferfv(GL_COLOR, 1, zero);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, first ? t.irradianceFb.id() : t.irradianceMeshFb.id());
+        if (!first) gl.ClearBufferfv(GL_COLOR, 0, zero);
         gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
         gl.Enable(GL_DEPTH_TEST);
         gl.DepthFunc(GL_GREATER);
-        gbuffer.use();
-        gl.UniformMatrix4fv(gbuffer.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
-        gl.BindVertexArray(sceneVao.id());
-        gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
-
-        // 2. Σ over lights of the Gouraud-interpolated cached irradiance. Each
-        // mesh first lays its own depth, then adds its nearest surface only.
-        gl.BindFramebuffer(GL_FRAMEBUFFER, irradianceFb.id());
-        gl.ClearBufferfv(GL_COLOR, 0, zero);
-        irradiance.use();
-        gl.UniformMatrix4fv(irradiance.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
-        gl.BlendFunc(GL_ONE, GL_ONE);
-        gl.BlendEquation(GL_FUNC_ADD);
-        for (const IrradianceMeshView& mesh : direct) {
-            std::vector<CacheVertex> vertices;
-            vertices.reserve(mesh.triangles.size() * 3);
-            for (const glm::uvec3& t : mesh.triangles)
-                for (int k = 0; k < 3; ++k)
-                    vertices.push_back({glm::vec3(mesh.positions[t[k]] - origin), glm::vec3(mesh.irradiance[t[k]])});
-            if (vertices.empty()) continue;
-            GlBuffer buffer = makeBuffer(gl, vertices.size() * sizeof(CacheVertex), vertices.data());
-            GlVertexArray vao = makeVertexArray(gl);
-            describeFloats(gl, vao.id(), buffer.id(), {3, 3});
-            gl.BindVertexArray(vao.id());
-            gl.DepthMask(GL_TRUE);
-            gl.StencilMask(0xff);
-            gl.ClearBufferfi(GL_DEPTH_STENCIL, 0, farDepth, 0);
-            gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-            gl.DepthFunc(GL_GREATER);
-            gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(vertices.size()));
-            gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-            gl.DepthMask(GL_FALSE);
-            gl.DepthFunc(GL_EQUAL);
+        gl.DepthMask(GL_TRUE);
+        irradianceProgram.use();
+        gl.UniformMatrix4fv(irradianceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+        gl.Uniform3f(irradianceProgram.uniform("uWeight"), float(weight.r), float(weight.g), float(weight.b));
+        gl.BindVertexArray(mesh.vao.id());
+        drawnTriangles += drawTriangles(mesh);
+        gl.Disable(GL_DEPTH_TEST);
+        if (!first) {
+            gl.BindFramebuffer(GL_FRAMEBUFFER, t.irradianceFb.id());
             gl.Enable(GL_BLEND);
-            // A cache triangle holds the irradiance of its front (CCW) side; a
-            // surface lit from both sides has a second, reversed copy for its
-            // back (IrradianceCache). The depth pass above took both sides, so
-            // a back seen without a copy stays unlit instead of showing what
-            // lies behind it.
-            gl.Enable(GL_CULL_FACE);
-            gl.CullFace(GL_BACK);
-            gl.FrontFace(GL_CCW);
-            // Coincident surfaces (two copies of a floor) tie in depth: only
-            // the first fragment of a sub-pixel adds its irradiance.
-            gl.Enable(GL_STENCIL_TEST);
-            gl.StencilFunc(GL_EQUAL, 0, 0xff);
-            gl.StencilOp(GL_KEEP, GL_KEEP, GL_INCR);
-            gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(vertices.size()));
-            gl.Disable(GL_STENCIL_TEST);
-            gl.Disable(GL_CULL_FACE);
+            gl.BlendFunc(GL_ONE, GL_ONE);
+            gl.BlendEquation(GL_FUNC_ADD);
+            accumulateProgram.use();
+            gl.BindTextureUnit(3, t.irradianceMesh.id());
+            gl.BindVertexArray(emptyVao.id());
+            gl.DrawArrays(GL_TRIANGLES, 0, 3);
             gl.Disable(GL_BLEND);
         }
-        gl.DepthMask(GL_TRUE);
-        gl.Disable(GL_DEPTH_TEST);
+        first = false;
+    }
 
-        // 3. Radiance per sub-pixel.
-        gl.BindFramebuffer(GL_FRAMEBUFFER, radianceFb.id());
+    // Left, right, bottom, top and near planes of the view (the projection
+    // has no far plane; clip z ≥ 0 holds in front of the camera).
+    void setFrustum() {
+        auto row = [&](int i) { return glm::vec4(mvp[0][i], mvp[1][i], mvp[2][i], mvp[3][i]); };
+        frustum = {row(3) + row(0), row(3) - row(0), row(3) + row(1), row(3) - row(1), row(3) - row(2)};
+    }
+
+    bool inView(const GpuCacheMeshes::Cell& c) const {
+        for (const glm::vec4& plane : frustum) {
+            // The box's corner furthest along the plane's normal.
+            const glm::vec3 corner(plane.x >= 0 ? c.hi.x : c.lo.x, plane.y >= 0 ? c.hi.y : c.lo.y,
+                                   plane.z >= 0 ? c.hi.z : c.lo.z);
+            if (glm::dot(glm::vec3(plane), corner) + plane.w < 0) return false;
+        }
+        return true;
+    }
+
+    // A mesh's triangles, those of its cells out of view left out (its
+    // vertex array bound). Cells are in buffer order: neighbours in view
+    // make one draw. Returns the triangles drawn.
+    size_t drawTriangles(const GpuCacheMeshes::Mesh& mesh) {
+        if (mesh.cells.empty()) {
+            gl.DrawElements(GL_TRIANGLES, GLsizei(mesh.triangleCount * 3), GL_UNSIGNED_INT, nullptr);
+            return mesh.triangleCount;
+        }
+        size_t first = 0, count = 0, drawn = 0;
+        auto flush = [&] {
+            if (count)
+                gl.DrawElements(GL_TRIANGLES, GLsizei(count * 3), GL_UNSIGNED_INT,
+                                reinterpret_cast<const void*>(first * sizeof(glm::uvec3)));
+            drawn += count;
+            count = 0;
+        };
+        for (const GpuCacheMeshes::Cell& c : mesh.cells) {
+            if (!inView(c)) continue;
+            if (count && first + count == c.first) {
+                count += c.count;
+            } else {
+                flush();
+                first = c.first;
+                count = c.count;
+            }
+        }
+        flush();
+        return drawn;
+    }
+
+    // Pass 2, the irradiance, for the passes that follow.
+    void compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                 const CompositorSettings& s) {
+        s.validate();
+        camera.validate();
+        ML_ASSERT(meshes.directCount() == scene.lights.size(), meshes.directCount(), " meshes for ",
+                  scene.lights.size(), " lights");
+        ML_ASSERT(weights.light.size() == scene.lights.size(), weights.light.size(), " weights for ",
+                  scene.lights.size(), " lights");
+        ensureTargets(s.width, s.height, s.supersample);
+        mvp = clipFromLocal(camera, double(s.width) / s.height);
+        setFrustum();
+        quantity = s.quantity;
+        efficacy = s.efficacy;
+        if (!scene.lights.empty()) {
+            std::vector<glm::vec4> emission;
+            for (size_t l = 0; l < scene.lights.size(); ++l)
+                emission.emplace_back(toVec3(scene.lights[l].radiance * weights.light[l]), 1.0f);
+            gl.NamedBufferSubData(lightEmissionBuffer.id(), 0, GLsizeiptr(emission.size() * sizeof(glm::vec4)),
+                                  emission.data());
+        }
+        baseState(s.width * s.supersample, s.height * s.supersample);
+        const float zero[4] = {0, 0, 0, 0};
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.irradianceFb.id());
+        gl.ClearBufferfv(GL_COLOR, 0, zero);
+        drawnTriangles = 0;
+        bool first = true;
+        for (size_t l = 0; l < meshes.directCount(); ++l) drawIrradianceMesh(meshes.direct(l), weights.light[l], first);
+        for (size_t b = 0; b < meshes.indirectCount(); ++b)
+            drawIrradianceMesh(meshes.indirect(b), weights.indirect, first);
+        checkGl(gl, "compositing the irradiance");
+        composed = true;
+        surfaced = composited = resolved = forwarded = false;
+    }
+
+    // Pass 1: reflectance, and which light's front is seen, per sub-pixel.
+    void ensureSurface() {
+        ML_ASSERT(composed, "nothing composited yet");
+        if (surfaced) return;
+        baseState(t.width * t.supersample, t.height * t.supersample);
+        const float zero[4] = {0, 0, 0, 0};
+        const float farDepth = 0.0f;  // reversed depth
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.surfaceFb.id());
+        gl.ClearBufferfv(GL_COLOR, 0, zero);
+        gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+        gl.Enable(GL_DEPTH_TEST);
+        gl.DepthFunc(GL_GREATER);
+        surfaceProgram.use();
+        gl.UniformMatrix4fv(surfaceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+        gl.BindVertexArray(sceneVao.id());
+        gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+        gl.Disable(GL_DEPTH_TEST);
+        checkGl(gl, "drawing the surfaces");
+        surfaced = true;
+    }
+
+    // The composite's inputs and uniforms, for composite.frag and display.frag.
+    void bindCompositeInputs(const GlProgram& p) {
+        gl.Uniform1f(p.uniform("uEfficacy"), float(efficacy));
+        gl.BindTextureUnit(0, t.surface.id());
+        gl.BindTextureUnit(1, t.irradianceSum.id());
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
+    }
+
+    void bindDisplayUniforms(const GlProgram& p, const DisplaySettings& d) {
+        gl.Uniform1f(p.uniform("uExposure"), float(d.exposure));
+        gl.Uniform1f(p.uniform("uLog10LuxMin"), float(std::log10(std::max(d.luxMin, 1e-30))));
+        gl.Uniform1f(p.uniform("uLog10LuxMax"), float(std::log10(std::max(d.luxMax, 1e-30))));
+        gl.Uniform1i(p.uniform("uPaletteSize"), GLint(falseColourPalette().size()));
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, paletteBuffer.id());
+    }
+
+    // Pass 3: the quantity per sub-pixel, for images read back.
+    void ensureComposite() {
+        ensureSurface();
+        if (composited) return;
+        baseState(t.width * t.supersample, t.height * t.supersample);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.compositeFb.id());
+        const GlProgram& composite = compositeProgram(quantity);
         composite.use();
-        gl.BindTextureUnit(0, reflectance.id());
-        gl.BindTextureUnit(1, emission.id());
-        gl.BindTextureUnit(2, irradianceSum.id());
+        bindCompositeInputs(composite);
         gl.BindVertexArray(emptyVao.id());
         gl.DrawArrays(GL_TRIANGLES, 0, 3);
-
-        std::vector<float> rgba(size_t(w) * h * 4);
-        gl.NamedFramebufferReadBuffer(radianceFb.id(), GL_COLOR_ATTACHMENT0);
-        gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
-        gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
         checkGl(gl, "compositing");
+        composited = true;
+    }
 
-        ImageRgb full(w, h);
+    // The box filter to pixels, on the GPU.
+    void resolvePixels() {
+        ensureComposite();
+        if (resolved) return;
+        baseState(t.width, t.height);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.pixelsFb.id());
+        resolveProgram.use();
+        gl.Uniform1i(resolveProgram.uniform("uSupersample"), t.supersample);
+        gl.BindTextureUnit(2, t.composite.id());
+        gl.BindVertexArray(emptyVao.id());
+        gl.DrawArrays(GL_TRIANGLES, 0, 3);
+        checkGl(gl, "resolving pixels");
+        resolved = true;
+    }
+
+    void displayTo(GLuint framebuffer, const DisplaySettings& d) {
+        ML_ASSERT(composed, "nothing composited yet");
+        if (t.supersample == 1) {
+            // One sample per pixel: the scene's faces shaded straight from
+            // the irradiance, into a target with a float depth buffer (the
+            // window's is fixed-point, too coarse for reversed depth), then
+            // copied to the framebuffer.
+            baseState(t.width, t.height);
+            const float background[4] = {quantity == CompositeQuantity::Illuminance ? 0.08f : 0.0f,
+                                         quantity == CompositeQuantity::Illuminance ? 0.08f : 0.0f,
+                                         quantity == CompositeQuantity::Illuminance ? 0.08f : 0.0f, 1.0f};
+            const float farDepth = 0.0f;
+            gl.BindFramebuffer(GL_FRAMEBUFFER, t.forwardFb.id());
+            gl.ClearBufferfv(GL_COLOR, 0, background);
+            gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+            gl.Enable(GL_DEPTH_TEST);
+            gl.DepthFunc(GL_GREATER);
+            const GlProgram& forward = forwardProgram(quantity, d.op, d.contours);
+            forward.use();
+            gl.UniformMatrix4fv(forward.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+            gl.Uniform1f(forward.uniform("uEfficacy"), float(efficacy));
+            gl.BindTextureUnit(1, t.irradianceSum.id());
+            gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
+            bindDisplayUniforms(forward, d);
+            gl.BindVertexArray(sceneVao.id());
+            gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+            gl.Disable(GL_DEPTH_TEST);
+            gl.BlitNamedFramebuffer(t.forwardFb.id(), framebuffer, 0, 0, t.width, t.height, 0, 0, t.width, t.height,
+                                    GL_COLOR_BUFFER_BIT, GL_NEAREST);
+            // What is drawn next (the controls) goes where the image went.
+            gl.BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+            forwarded = true;
+        } else {
+            ensureSurface();
+            baseState(t.width, t.height);
+            gl.BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+            const GlProgram& display = displayProgram(quantity, t.supersample, d.op, d.contours);
+            display.use();
+            bindCompositeInputs(display);
+            bindDisplayUniforms(display, d);
+            gl.BindVertexArray(emptyVao.id());
+            gl.DrawArrays(GL_TRIANGLES, 0, 3);
+        }
+        checkGl(gl, "displaying the composite");
+    }
+
+    void drawWireframe(GLuint framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours) {
+        ML_ASSERT(composed && !colours.empty(), "wireframe before compose, or without colours");
+        // The depth of the surfaces seen: the forward pass's, or the sub-pixels'.
+        if (!forwarded) ensureSurface();
+        baseState(t.width, t.height);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+        gl.Enable(GL_CULL_FACE);  // the side a cache triangle holds is its front
+        gl.CullFace(GL_BACK);
+        gl.FrontFace(GL_CCW);
+        gl.Enable(GL_BLEND);
+        gl.BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+        gl.BlendEquation(GL_FUNC_ADD);
+        wireframeProgram.use();
+        gl.UniformMatrix4fv(wireframeProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+        gl.Uniform1i(wireframeProgram.uniform("uSupersample"), forwarded ? 1 : t.supersample);
+        gl.BindTextureUnit(0, forwarded ? t.forwardDepth.id() : t.sceneDepth.id());
+        const size_t count = meshes.directCount() + meshes.indirectCount();
+        for (size_t i = 0; i < count; ++i) {
+            const GpuCacheMeshes::Mesh& m = i < meshes.directCount() ? meshes.direct(i)
+                                                                     : meshes.indirect(i - meshes.directCount());
+            if (m.triangleCount == 0) continue;
+            const Rgb& c = colours[i % colours.size()];
+            gl.Uniform3f(wireframeProgram.uniform("uColor"), float(c.r), float(c.g), float(c.b));
+            gl.BindVertexArray(m.vao.id());
+            drawTriangles(m);
+        }
+        gl.Disable(GL_BLEND);
+        gl.Disable(GL_CULL_FACE);
+        checkGl(gl, "drawing the cache wireframe");
+    }
+
+    // Float rows of a framebuffer attachment, bottom row first.
+    std::vector<float> readFloats(GLuint fb, GLenum attachment, GLenum format, int components, int x, int y, int w,
+                                  int h) {
+        std::vector<float> values(size_t(w) * h * components);
+        if (attachment != GL_DEPTH_ATTACHMENT) gl.NamedFramebufferReadBuffer(fb, attachment);
+        gl.BindFramebuffer(GL_READ_FRAMEBUFFER, fb);
+        gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+        gl.ReadPixels(x, y, w, h, format, GL_FLOAT, values.data());
+        gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+        checkGl(gl, "reading the composite back");
+        return values;
+    }
+    std::vector<float> readRgba(GLuint fb, int x, int y, int w, int h) {
+        return readFloats(fb, GL_COLOR_ATTACHMENT0, GL_RGBA, 4, x, y, w, h);
+    }
+
+    static ImageRgb toImage(const std::vector<float>& rgba, int w, int h) {
+        ImageRgb image(w, h);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 const float* p = &rgba[(size_t(h - 1 - y) * w + x) * 4];  // GL rows start at the bottom
                 const Rgb c(p[0], p[1], p[2]);
-                ML_ASSERT(isFinite(c), "non-finite radiance at sub-pixel ", x, ",", y);
-                full.set(x, y, c);
+                ML_ASSERT(isFinite(c), "non-finite value at pixel ", x, ",", y);
+                image.set(x, y, c);
             }
-        return boxDownsample(full, s.supersample);
+        return image;
+    }
+
+    ImageRgb readImage() {
+        ensureComposite();
+        const int w = t.width * t.supersample, h = t.height * t.supersample;
+        return boxDownsample(toImage(readRgba(t.compositeFb.id(), 0, 0, w, h), w, h), t.supersample);
+    }
+
+    ImageRgb readPixels() {
+        resolvePixels();
+        return toImage(readRgba(t.pixelsFb.id(), 0, 0, t.width, t.height), t.width, t.height);
+    }
+
+    // From the sub-pixels' irradiance and coverage, without a full-screen pass
+    // (the forward pass's depth says what is covered when it ran).
+    std::optional<double> readIlluminance(int x, int y) {
+        ML_ASSERT(composed, "nothing composited yet");
+        if (x < 0 || y < 0 || x >= t.width || y >= t.height) return std::nullopt;
+        const int s = t.supersample, gx = x * s, gy = (t.height - 1 - y) * s;
+        std::vector<bool> covered(size_t(s) * s);
+        if (forwarded) {
+            covered[0] = readFloats(t.forwardFb.id(), GL_DEPTH_ATTACHMENT, GL_DEPTH_COMPONENT, 1, x, t.height - 1 - y,
+                                    1, 1)[0] > 0;
+        } else {
+            ensureSurface();
+            const std::vector<float> surface = readRgba(t.surfaceFb.id(), gx, gy, s, s);
+            for (size_t i = 0; i < covered.size(); ++i) covered[i] = surface[4 * i + 3] > 0;
+        }
+        const std::vector<float> e = readRgba(t.irradianceFb.id(), gx, gy, s, s);
+        double sum = 0;
+        int count = 0;
+        for (size_t i = 0; i < covered.size(); ++i)
+            if (covered[i]) {
+                sum += illuminanceLux(Rgb(e[4 * i], e[4 * i + 1], e[4 * i + 2]), efficacy);
+                ++count;
+            }
+        if (count == 0) return std::nullopt;
+        return sum / count;
     }
 };
 
@@ -228,7 +612,36 @@ Compositor::~Compositor() = default;
 
 ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
                             const CompositorSettings& settings) {
-    return impl_->render(camera, direct, settings);
+    return render(camera, direct, {}, settings);
 }
+
+ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
+                            const std::vector<IrradianceMeshView>& indirect, const CompositorSettings& settings) {
+    ML_ASSERT(direct.size() == impl_->scene.lights.size(), direct.size(), " meshes for ",
+              impl_->scene.lights.size(), " lights");
+    GpuCacheMeshes meshes(impl_->gl, impl_->origin);
+    meshes.upload(direct, indirect);
+    impl_->compose(camera, meshes, LightWeights::unit(direct.size()), settings);
+    return impl_->readImage();
+}
+
+void Compositor::compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                         const CompositorSettings& settings) {
+    impl_->compose(camera, meshes, weights, settings);
+}
+
+void Compositor::display(GLuint framebuffer, const DisplaySettings& display) { impl_->displayTo(framebuffer, display); }
+
+void Compositor::drawWireframe(GLuint framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours) {
+    impl_->drawWireframe(framebuffer, meshes, colours);
+}
+
+ImageRgb Compositor::readPixels() { return impl_->readPixels(); }
+
+std::optional<double> Compositor::readIlluminance(int x, int y) { return impl_->readIlluminance(x, y); }
+
+ImageRgb Compositor::readImage() { return impl_->readImage(); }
+
+size_t Compositor::drawnTriangles() const { return impl_->drawnTriangles; }
 
 }  // namespace ml

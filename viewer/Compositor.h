@@ -1,28 +1,77 @@
 // The compositor of §3.2: a reflectance image rendered from the scene's
-// geometry, a direct-irradiance image per light rendered from that light's
-// cache mesh (Gouraud-interpolated), combined per sub-pixel as
-// Kd/π × Σ E_l + Le, then box-filtered to pixels.
+// geometry, an irradiance image per cache mesh rendered from that mesh
+// (Gouraud-interpolated), combined per sub-pixel as
+// Kd/π × (Σ_l w_l E_l + w_ind Σ_b E_b) + Σ_l w_l Le_l, then box-filtered to
+// pixels. E_l is light l's direct mesh, E_b bounce b's indirect mesh.
+//
+// The weights w make light changes free: irradiance is linear in emission,
+// so a light switched off, dimmed or tinted scales its own mesh and its own
+// emitted radiance exactly, with no new sample. `render` composites with
+// every weight 1 and reads the image back; the viewer composites every
+// frame into the compositor's own targets (compose), then draws them to the
+// window (display, drawWireframe) without a trip through the CPU.
 #pragma once
 
+#include "GpuCacheMeshes.h"
+#include "ToneMap.h"
 #include "cache/IrradianceCache.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
 #include "core/image/Image.h"
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace ml {
 
 class GlContext;
 
+// What a composited sub-pixel holds (black where no surface is seen).
+enum class CompositeQuantity {
+    // Kd/π × (Σ_l w_l E_l + w_ind Σ_b E_b) + Σ_l w_l Le_l, W·sr⁻¹·m⁻².
+    Radiance,
+    // Kd, the diffuse reflectance.
+    Reflectance,
+    // Illuminance in lux (lm·m⁻²), the same value in all three channels:
+    // efficacy × the Rec. 709 luminance of Σ_l w_l E_l + w_ind Σ_b E_b.
+    Illuminance,
+};
+
 struct CompositorSettings {
     int width = 512;      // output pixels
     int height = 512;
     // Sub-pixels per pixel side, typical 4 (16 samples, box filter): an EXR
-    // pixel is the average radiance over its area.
+    // pixel is the average radiance over its area. The viewer uses 1 or 2.
     int supersample = 4;
+    CompositeQuantity quantity = CompositeQuantity::Radiance;
+    // Lumens per watt of irradiance, CompositeQuantity::Illuminance only;
+    // typical 179 (RADIANCE's equal-energy white, see viewer/Illuminance.h).
+    double efficacy = 179.0;
     void validate() const;
+};
+
+// Per-mesh RGB factors. A light's factor scales its direct mesh and the
+// radiance its emitting faces show; indirect meshes (one per bounce, not
+// per light) share one factor.
+struct LightWeights {
+    std::vector<Rgb> light;  // one per scene light, in the scene's order; 1 = as the scene says
+    Rgb indirect{1.0};
+    static LightWeights unit(size_t lights);
+};
+
+// How display() maps the composite to the screen.
+struct DisplaySettings {
+    // Radiance: multiplied by `exposure`, then `op` and the sRGB curve,
+    // exactly as toneMap() does on the CPU (its auto exposure is the
+    // caller's: see Compositor::readPixels). Reflectance: the sRGB curve only.
+    double exposure = 1.0;
+    ToneOperator op = ToneOperator::Aces;
+    // Illuminance: falseColour() over [luxMin, luxMax] on a log scale, and
+    // optional iso-lux lines at the 1-2-5 values (luxLevelIndex).
+    double luxMin = 1.0;
+    double luxMax = 1000.0;
+    bool contours = false;
 };
 
 class Compositor {
@@ -32,9 +81,40 @@ public:
     ~Compositor();
 
     // Linear radiance, W·sr⁻¹·m⁻², row 0 at the top. `direct` holds one
-    // cache mesh per light (IrradianceCache::view), in the scene's light order.
+    // cache mesh per light (IrradianceCache::view), in the scene's light
+    // order; `indirect` one per bounce (none: direct light only).
     ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
                     const CompositorSettings& settings);
+    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
+                    const std::vector<IrradianceMeshView>& indirect, const CompositorSettings& settings);
+
+    // --- Interactive frames -------------------------------------------------
+    // Composites `settings.quantity` into the compositor's own targets
+    // (width·s × height·s sub-pixels, kept between calls of one size).
+    void compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                 const CompositorSettings& settings);
+    // Draws the last composite, box-filtered to pixels on the GPU, into
+    // `framebuffer` (0: the window's back buffer) over the viewport
+    // (0, 0, width, height), mapped as `display` says; leaves `framebuffer`
+    // bound.
+    void display(GLuint framebuffer, const DisplaySettings& display);
+    // Draws the edges of every cache mesh over `framebuffer`, where that
+    // mesh's surface is the one the last composite saw, mesh i in colour
+    // colours[i % size] (alpha-blended, about a pixel wide).
+    void drawWireframe(GLuint framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours);
+    // The last composite box-filtered to pixels on the GPU, as display()
+    // shows it (auto exposure, the illuminance range). Row 0 at the top.
+    ImageRgb readPixels();
+    // The illuminance (lux) at pixel (x, y), row 0 at the top: the mean over
+    // its sub-pixels that see a surface, whatever share of the pixel they
+    // cover; none off every surface.
+    std::optional<double> readIlluminance(int x, int y);
+    // The last composite box-filtered on the CPU exactly as render() does:
+    // for images that must equal render's output bit for bit.
+    ImageRgb readImage();
+    // Cache triangles the last compose drew: large meshes' cells out of
+    // view are skipped (GpuCacheMeshes::Cell).
+    size_t drawnTriangles() const;
 
 private:
     struct Impl;

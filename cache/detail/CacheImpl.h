@@ -17,9 +17,13 @@ double edgeLength(const CacheTriMesh& mesh, CacheTriMesh::VertexHandle a, CacheT
 // Splits `e` (and both faces beside it) at its midpoint; the new vertex's
 // normal is the normalised mean of the ends'. Returns the new vertex.
 CacheTriMesh::VertexHandle splitAtMidpoint(CacheTriMesh& mesh, CacheTriMesh::EdgeHandle e);
+// Where vertex vh is sampled: the vertex itself, or, on an object's border
+// that an emitter's plane passes through, a hair inside its own faces (see
+// IrradianceCache.cpp).
+Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh);
 // One estimate at vertex v of light `light`'s mesh, seeded from (seed, v,
 // light, samples so far); errors carry the light, vertex and point.
-VertexSample sampleVertex(const DirectSampleFn& fn, const LightMesh& lm, size_t light, size_t v, uint32_t seed);
+VertexSample sampleVertex(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t v, uint32_t seed);
 // The same at grid sample g (over all grid objects).
 VertexSample sampleGrid(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t g, uint32_t seed);
 const GridObject& gridOf(const CacheState& s, size_t g);  // the object grid sample g belongs to

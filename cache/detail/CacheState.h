@@ -59,6 +59,8 @@ constexpr uint32_t kGridSeedBase = 0x40000000u;
 struct CacheState {
     CacheSettings settings;
     double diagonal = 1;          // of the scene's bounds
+    std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
+    bool insetBorders = false;        // CacheLayout::insetBorders
     uint64_t sceneFingerprint = 0;
     std::vector<LightMesh> meshes;  // one per light, in the scene's order
     std::vector<GridObject> grids;  // the same for every light

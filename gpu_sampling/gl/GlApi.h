@@ -111,7 +111,13 @@ namespace ml {
     X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                          \
     X(PFNGLBINDIMAGETEXTUREPROC, BindImageTexture)                      \
     X(PFNGLGETNAMEDBUFFERSUBDATAPROC, GetNamedBufferSubData)            \
-    X(PFNGLGETTEXTUREIMAGEPROC, GetTextureImage)
+    X(PFNGLGETTEXTUREIMAGEPROC, GetTextureImage)                        \
+    X(PFNGLTEXTURESTORAGE3DPROC, TextureStorage3D)                      \
+    X(PFNGLTEXTURESUBIMAGE3DPROC, TextureSubImage3D)                    \
+    X(PFNGLCOPYIMAGESUBDATAPROC, CopyImageSubData)                      \
+    X(PFNGLDRAWARRAYSINSTANCEDBASEINSTANCEPROC, DrawArraysInstancedBaseInstance) \
+    X(PFNGLUNIFORM3IPROC, Uniform3i)                                    \
+    X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)
 
 struct GlApi {
 #define ML_GL_DECLARE(type, name) type name = nullptr;

@@ -26,6 +26,23 @@ GlTexture makeTexture2D(const GlApi& gl, GLenum internalFormat, int width, int h
     return GlTexture(gl, n);
 }
 
+GlFramebuffer makeFramebuffer(const GlApi& gl, std::initializer_list<GLuint> colors, GLuint depth, const char* what) {
+    GLuint f = 0;
+    gl.CreateFramebuffers(1, &f);
+    GlFramebuffer fb(gl, f);
+    std::vector<GLenum> buffers;
+    for (GLuint c : colors) {
+        const GLenum att = GLenum(GL_COLOR_ATTACHMENT0 + buffers.size());
+        gl.NamedFramebufferTexture(f, att, c, 0);
+        buffers.push_back(att);
+    }
+    if (depth) gl.NamedFramebufferTexture(f, GL_DEPTH_ATTACHMENT, depth, 0);
+    gl.NamedFramebufferDrawBuffers(f, GLsizei(buffers.size()), buffers.data());
+    if (gl.CheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw std::runtime_error(std::string(what) + ": framebuffer incomplete");
+    return fb;
+}
+
 GlQuery makeQuery(const GlApi& gl, GLenum target) {
     GLuint n = 0;
     gl.CreateQueries(target, 1, &n);

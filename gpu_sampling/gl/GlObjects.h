@@ -57,6 +57,9 @@ GlBuffer makeBuffer(const GlApi& gl, size_t bytes, const void* data, GLenum usag
 GlVertexArray makeVertexArray(const GlApi& gl);
 GlTexture makeTexture2D(const GlApi& gl, GLenum internalFormat, int width, int height);
 GlQuery makeQuery(const GlApi& gl, GLenum target);
+// A framebuffer with these colour attachments (in order) and depth texture
+// (0: none); throws std::runtime_error naming `what` if incomplete.
+GlFramebuffer makeFramebuffer(const GlApi& gl, std::initializer_list<GLuint> colors, GLuint depth, const char* what);
 
 // A linked program. Compile and link errors throw std::runtime_error with the
 // shader's name and the driver's log.

@@ -2,7 +2,9 @@
 
 #include "BenchConvergence.h"
 #include "BenchDirect.h"
+#include "BenchIndirect.h"
 #include "BenchScaling.h"
+#include "BenchView.h"
 #include "Gnuplot.h"
 #include "ReportHtml.h"
 
@@ -141,6 +143,74 @@ ReportSection scalingSection() {
          {"scene", "triangles", "drawn_triangles", "bvh_build_ms", "setup_ms", "per_sample_ms", "grid_objects",
           "cache_build_ms", "first_pass_estimates", "per_estimate_ms", "composite_ms", "first_image_ms"}},
         {"scaling_lights.csv", "Cost against the number of lights (ms; first_image extrapolated).", {}},
+    };
+    return s;
+}
+
+ReportSection viewSection() {
+    ReportSection s;
+    s.id = "view";
+    s.title = "Viewer: frame rate, first frame and light changes";
+    s.about = "Issue 6: meshlight view in a real GLFW window (under Xvfb when there is no display), driven by its "
+              "own scripts at 1280x720 on the Cornell box: a walk with refinement paused and refining, the same walk "
+              "over a cache of about a million triangles, and light changes at a still camera, timed to the end of "
+              "the frame that shows them.";
+    s.run = [](const BenchReportOptions& o, const std::string& dir) {
+        BenchViewOptions b;
+        b.outDir = dir;
+        b.quick = o.quick;
+        b.seed = o.seed;
+        return runBenchView(b);
+    };
+    s.summary = "view_summary.md";
+    s.figures = {
+        {"view_frames.png", "Frame time while walking: refinement paused, refining, and over a million-triangle cache.",
+         {"view_frames.csv"}},
+        {"view_latency.png", "Time from each light change to the end of the frame that shows it.",
+         {"view_latency.csv"}},
+    };
+    s.tables = {
+        {"view_targets.csv", "Targets of issue 6.", {}},
+        {"view_scenarios.csv", "Frames per scenario (rates after the first second).", {}},
+    };
+    return s;
+}
+
+ReportSection indirectSection() {
+    ReportSection s;
+    s.id = "indirect";
+    s.title = "Indirect light: gather methods, error against time";
+    s.about = "Fournier & Péroche §6.2 on the Cornell box: one source (the direct cache sampled exactly, as exitant "
+              "radiance on the radiance proxy) gathered six ways (voxel slices walked per pixel or drawn as quads, "
+              "the voxels ray-marched as a 3D texture, the proxy's triangles in a fish-eye image, one 160-degree "
+              "perspective image or a hemicube) at several image sizes and resolutions: time per gather by phase, "
+              "and error against the path tracer's one-bounce indirect irradiance and against an exact-geometry "
+              "gather of the same source.";
+    s.run = [](const BenchReportOptions& o, const std::string& dir) {
+        BenchIndirectOptions b;
+        b.outDir = dir;
+        b.quick = o.quick;
+        b.backend = o.backend;
+        b.seed = o.seed;
+        return runBenchIndirect(b);
+    };
+    s.summary = "indirect_summary.md";
+    s.figures = {
+        {"indirect_error_vs_time.png",
+         "Error against time: relative RMS error against the path tracer over the points, one gather (solid) and "
+         "the mean of K (dashed), against the median time per gather; one curve per method over image sizes, "
+         "squares for other resolutions; dotted: the floor (the exact gather of the same source).",
+         {"indirect_methods.csv", "indirect_points.csv"}},
+        {"indirect_gather_error_vs_time.png",
+         "The gathers alone: the same against the exact-geometry gather of the source.", {"indirect_methods.csv"}},
+        {"indirect_phases.png", "Time split by phase per gather (glFinish between phases).", {"indirect_methods.csv"}},
+    };
+    s.tables = {
+        {"indirect_equal_error.csv", "Slices against the perspective triangle gather at equal error (target: 2x).",
+         {}},
+        {"indirect_methods.csv", "Every configuration: ms per gather and relative RMS error (%).",
+         {"config", "proxy_triangles", "drawn_triangles", "setup_ms", "draw_ms", "readback_ms", "total_ms",
+          "rel_rms_pct", "gather_rel_rms_pct", "rel_rms_walls_pct", "rel_rms_blocks_pct", "rel_rms_corners_pct"}},
     };
     return s;
 }
@@ -392,7 +462,7 @@ void checkSection(const ReportSection& s) {
 std::vector<ReportSection> reportSections() {
     // Page order. Each later bench adds its section here, e.g. the
     // indirect-light bench.
-    return {directSection(), convergenceSection(), scalingSection()};
+    return {directSection(), convergenceSection(), scalingSection(), viewSection(), indirectSection()};
 }
 
 int runBenchReport(const BenchReportOptions& options, const std::vector<ReportSection>& sections) {

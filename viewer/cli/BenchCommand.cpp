@@ -5,8 +5,10 @@
 #include "core/Error.h"
 #include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
+#include "viewer/bench/BenchIndirect.h"
 #include "viewer/bench/BenchReport.h"
 #include "viewer/bench/BenchScaling.h"
+#include "viewer/bench/BenchView.h"
 
 #include <cstdio>
 
@@ -15,7 +17,7 @@ namespace ml {
 namespace {
 
 // More benches arrive with later issues; each adds itself here.
-const char* const kBenches = "direct, scaling, convergence, report";
+const char* const kBenches = "direct, scaling, convergence, view, indirect, report";
 
 int runDirect(const std::vector<std::string>& args) {
     const BenchDirectOptions defaults;
@@ -83,6 +85,41 @@ int runConvergence(const std::vector<std::string>& args) {
     return runBenchConvergence(options);
 }
 
+int runViewBench(const std::vector<std::string>& args) {
+    const BenchViewOptions defaults;
+    Options o("bench view");
+    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
+    o.flag("quick", "CI size: 4 s per scenario, 8 light changes");
+    o.value("seed", "N", "the worker's jitter seed", std::to_string(defaults.seed));
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    BenchViewOptions options;
+    options.outDir = o.str("out");
+    options.quick = o.isSet("quick");
+    options.seed = o.seed("seed");
+    return runBenchView(options);
+}
+
+int runIndirect(const std::vector<std::string>& args) {
+    const BenchIndirectOptions defaults;
+    Options o("bench indirect");
+    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
+    o.flag("quick", "CI size: fewer points, passes and configurations, coarse voxels and proxies");
+    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
+    o.value("seed", "N", "points, jitter and path tracer seed; the same seed repeats a run",
+            std::to_string(defaults.seed));
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    BenchIndirectOptions options;
+    options.outDir = o.str("out");
+    options.quick = o.isSet("quick");
+    options.backend = parseGlBackend(o.str("gl"));
+    if (options.backend == GlBackend::Glfw)
+        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
+    options.seed = o.seed("seed");
+    return runBenchIndirect(options);
+}
+
 int runReport(const std::vector<std::string>& args) {
     const BenchReportOptions defaults;
     Options o("bench report");
@@ -113,6 +150,8 @@ int runBench(const std::vector<std::string>& args) {
     if (name == "direct") return runDirect(rest);
     if (name == "scaling") return runScaling(rest);
     if (name == "convergence") return runConvergence(rest);
+    if (name == "indirect") return runIndirect(rest);
+    if (name == "view") return runViewBench(rest);
     if (name == "report") return runReport(rest);
     if (name == "--help" || name == "-h") {
         std::printf("usage: meshlight bench <name> [options]\nbenches: %s\n"

@@ -5,6 +5,10 @@ namespace ml {
 void declareViewOptions(Options& o) {
     o.value("width", "W", "image width, pixels", std::string("512"));
     o.value("height", "H", "image height, pixels", std::string("512"));
+    declareCameraOptions(o);
+}
+
+void declareCameraOptions(Options& o) {
     o.value("camera-pos", "X,Y,Z", "camera position (default: the scene's camera or a framing one)");
     o.value("camera-target", "X,Y,Z", "point the camera looks at");
     o.value("camera-up", "X,Y,Z", "camera up vector");

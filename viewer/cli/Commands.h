@@ -15,6 +15,7 @@ int runProbe(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
 int runPlan(const std::vector<std::string>& args);
 int runReference(const std::vector<std::string>& args);
+int runView(const std::vector<std::string>& args);
 
 // Where `reference` writes the standard error of its image OUT: the same
 // folder and extension, ".noise" before it ("ref.exr" -> "ref.noise.exr").

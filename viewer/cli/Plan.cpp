@@ -2,6 +2,7 @@
 
 #include "Commands.h"
 #include "cache/GridCache.h"
+#include "gpu_sampling/indirect/VoxelGrid.h"
 #include "core/Error.h"
 
 #include <cstdio>
@@ -45,7 +46,8 @@ CacheSettings readCacheSettings(const Options& o) {
     return c;
 }
 
-void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache, bool directOnly) {
+void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
+               const IndirectChoice& indirect) {
     std::printf("plan:\n");
     for (const AreaLight& l : scene.lights) {
         const bool point = actsAsPoint(l, scene, choice);
@@ -69,8 +71,30 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "where irradiance is not linear or visibility is partial; %s\n",
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
-    std::printf("  indirect light: not simulated (%s)\n",
-                directOnly ? "--direct-only" : "the indirect gather is not implemented yet; direct light only");
+    const BouncePlan& b = indirect.plan;
+    std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
+                "largest channel\n",
+                b.albedo.r, b.albedo.g, b.albedo.b, b.meanAlbedo);
+    if (!indirect.enabled) {
+        std::printf("  indirect light: not simulated (--direct-only); about %.3g%% of the radiance is left out\n",
+                    100 * b.meanAlbedo);
+    } else if (indirect.solver.bounces == 0) {
+        std::printf("  indirect light: none: %s\n", b.reason.c_str());
+    } else {
+        std::printf("  indirect light: %s\n", b.reason.c_str());
+        std::printf("  indirect gather: %s\n", indirect.describe().c_str());
+        const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
+        std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
+                    "(empty faces are freed)\n",
+                    grid.describe().c_str(), grid.voxel, 2 * (grid.dims[0] + grid.dims[1] + grid.dims[2]),
+                    16.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
+        const CacheSettings& ic = indirect.solver.cache;
+        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene, split tolerance "
+                    "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
+                    "starts once direct light's estimated error is below %.3g\n",
+                    1 / ic.maxEdgeFraction, ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
+                    indirect.solver.startError);
+    }
     if (scene.hasGlossy())
         std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"
                     " they render as Lambertian\n");
@@ -83,15 +107,18 @@ int runPlan(const std::vector<std::string>& args) {
     o.positional("scene", "cornell, bench or an OBJ file");
     declareDirectOptions(o);
     declareCacheOptions(o);
+    declareIndirectOptions(o);
     o.flag("direct-only", "direct light only");
     if (!o.parseOrPrintHelp(args)) return 0;
     const DirectChoice choice = readDirectOptions(o);
     const CacheSettings cache = readCacheSettings(o);
+    IndirectChoice indirect = readIndirectOptions(o);
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights\n", scene.name.c_str(), scene.meshes.size(),
                 scene.triangleCount(), scene.lights.size());
-    printPlan(scene, choice, cache, o.isSet("direct-only"));
+    indirect.decide(scene);
+    printPlan(scene, choice, cache, indirect);
     return 0;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "DirectSetup.h"
+#include "IndirectSetup.h"
 #include "cache/IrradianceCache.h"
 #include "core/Scene.h"
 
@@ -12,6 +13,8 @@ namespace ml {
 void declareCacheOptions(Options& options);
 CacheSettings readCacheSettings(const Options& options);
 
-void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache, bool directOnly);
+// `indirect` must have decided its bounces (IndirectChoice::decide).
+void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
+               const IndirectChoice& indirect);
 
 }  // namespace ml

@@ -1,7 +1,10 @@
-// meshlight probe: direct irradiance at sensor points (RADIANCE's
-// `rtrace -I`), what lighting designers check.
+// meshlight probe: irradiance at sensor points (RADIANCE's `rtrace -I`),
+// what lighting designers check: direct light per light, and indirect light.
 #include "Commands.h"
 #include "DirectSetup.h"
+#include "IndirectSetup.h"
+#include "Plan.h"
+#include "cache/CacheWorker.h"
 #include "Progress.h"
 #include "core/Error.h"
 #include "core/Random.h"
@@ -209,6 +212,69 @@ int probeRaytrace(const Options& o, const std::vector<std::string>& args, const 
     return 0;
 }
 
+// Indirect irradiance at the points, as render computes it: the direct
+// caches are refined (with bounce after bounce of indirect caches) on the
+// worker until converged or `seconds`; then, bounce by bounce, each point
+// gathers from the source the bounce's cache gathered from (the direct
+// meshes for bounce 1, bounce n−1's mesh for bounce n), `passes` jittered
+// gathers averaged. Returns one sum over the bounces per point.
+std::vector<Rgb> probeIndirect(const Scene& scene, const DirectChoice& choice, const CacheSettings& cacheSettings,
+                               const IndirectChoice& indirect, const std::vector<SensorPoint>& points,
+                               std::optional<double> seconds) {
+    std::vector<Rgb> sum(points.size(), Rgb(0.0));
+    if (indirect.solver.bounces == 0) return sum;
+    IrradianceCache cache(scene, cacheSettings);
+    IndirectSolver solver(scene, indirect.solver);
+    auto phases = std::make_shared<DirectPhaseTimes>();
+    const WorkerFactories factories = workerFactories(scene, choice, indirect, phases);
+    WorkerSettings ws;
+    ws.seed = choice.seed;
+    {
+        CacheWorker worker(cache, factories.direct, ws, &solver, factories.indirect);
+        CacheWorker::Reader reader = worker.reader();
+        const auto start = std::chrono::steady_clock::now();
+        worker.start();
+        for (;;) {
+            worker.rethrowIfFailed();
+            const CacheSnapshot* s = reader.acquire();
+            if (worker.finished() || (s && s->converged)) break;
+            if (seconds && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= *seconds)
+                break;
+            if (s)
+                std::fprintf(stderr, "\rprobe: refining the caches: %zu vertices, bounces %d/%d   ", s->vertices,
+                             s->bouncesFinished, s->bounces);
+            worker.waitForVersion((s ? s->version : 0) + 1, 0.25);
+        }
+        worker.stop();
+        worker.rethrowIfFailed();
+        std::fprintf(stderr, "\n");
+    }
+    std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
+    std::unique_ptr<IndirectEstimator> estimator = makeIndirectEstimator(*context, scene, indirect);
+    Progress progress("probe: gathering", points.size() * size_t(solver.started()));
+    for (int b = 1; b <= solver.started(); ++b) {
+        std::vector<IrradianceMeshView> source;
+        if (b == 1)
+            for (size_t l = 0; l < cache.lightCount(); ++l) source.push_back(cache.view(l));
+        else
+            source.push_back(solver.view(b - 1));
+        estimator->setSource(0, source);
+        for (size_t i = 0; i < points.size(); ++i) {
+            Rgb e(0.0);
+            for (int k = 0; k < choice.passes; ++k)
+                e += estimator->estimate(0, points[i].position, points[i].normal,
+                                         seedFor(choice.seed, uint32_t(i), 0x1d1ec7u + uint32_t(b), uint32_t(k)));
+            sum[i] += e / double(choice.passes);
+            progress.update(size_t(b - 1) * points.size() + i + 1);
+        }
+    }
+    progress.finish();
+    if (solver.started() < solver.bounces())
+        std::fprintf(stderr, "warning: only %d of %d bounces were reached in the time given\n", solver.started(),
+                     solver.bounces());
+    return sum;
+}
+
 }  // namespace
 
 int runProbe(const std::vector<std::string>& args) {
@@ -223,11 +289,20 @@ int runProbe(const std::vector<std::string>& args) {
                         "light (default 1024)");
     o.value("max-depth", "D", "--method path: 1 = direct light only, D = direct + D-1 indirect bounces (default 8)");
     o.value("threads", "T", "--method path: worker threads, 0 = every core (default 0)");
+    // GPU and exact direct light: indirect light as render computes it.
+    o.flag("direct-only", "GPU and exact methods: direct light only (no E_indirect columns)");
+    o.value("time", "S", "GPU and exact methods: refine the caches for at most S seconds before gathering");
+    declareCacheOptions(o);
+    declareIndirectOptions(o);
     if (!o.parseOrPrintHelp(args)) return 0;
     const std::string out = o.str("out");
     checkOutputDirectory(out);
     const std::string methodName = o.str("method");
     if (methodName == "path" || methodName == "raytrace") {
+        refuseOptions(args, methodName,
+                      {"direct-only", "time", "bounces", "indirect-tolerance", "max-bounces", "indirect-method", "voxels",
+                       "gather-size", "near-voxels", "slice-supersample", "cache-edge", "min-edge", "min-edge-pixels",
+                       "split-tolerance", "noise-tolerance", "max-vertices"});
         const std::vector<SensorPoint> points = readPoints(o.str("points"));
         const Scene scene = loadSceneArgument(o.positionalValue("scene"));
         for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -235,9 +310,17 @@ int runProbe(const std::vector<std::string>& args) {
     }
     refuseOptions(args, methodName, {"spp", "max-depth", "threads"});
     const DirectChoice choice = readDirectOptions(o);
+    const CacheSettings cacheSettings = readCacheSettings(o);
+    IndirectChoice indirect = readIndirectOptions(o);
+    std::optional<double> timeLimit;
+    if (o.has("time")) timeLimit = o.number("time", 0, 1e7);
     const std::vector<SensorPoint> points = readPoints(o.str("points"));
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    indirect.decide(scene);
+    if (indirect.enabled) std::printf("indirect light: %s\n", indirect.plan.reason.c_str());
+    const std::vector<Rgb> indirectAt = indirect.enabled ? probeIndirect(scene, choice, cacheSettings, indirect, points, timeLimit)
+                                                         : std::vector<Rgb>{};
 
     DirectEstimators estimators(scene, choice, false);
     const DirectEstimateFn estimate = estimators.estimate();
@@ -249,7 +332,8 @@ int runProbe(const std::vector<std::string>& args) {
         const std::string c = columnName(l.name);
         csv << ",E_" << c << "_r,E_" << c << "_g,E_" << c << "_b";
     }
-    csv << ",E_r,E_g,E_b,method,samples,time_s\n";
+    csv << ",E_r,E_g,E_b" << (indirect.enabled ? ",E_indirect_r,E_indirect_g,E_indirect_b" : "")
+        << ",method,samples,time_s\n";
     const std::string method = choice.exact ? std::string("exact") : directMethodName(choice.sampler.method);
 
     Progress progress("probe", points.size());
@@ -270,8 +354,9 @@ int runProbe(const std::vector<std::string>& args) {
             csv << "," << e.r << "," << e.g << "," << e.b;
             total += e;
         }
-        csv << "," << total.r << "," << total.g << "," << total.b << "," << method << ","
-            << choice.passes * int(scene.lights.size()) << "," << seconds << "\n";
+        csv << "," << total.r << "," << total.g << "," << total.b;
+        if (indirect.enabled) csvRgb(csv, indirectAt[i]);
+        csv << "," << method << "," << choice.passes * int(scene.lights.size()) << "," << seconds << "\n";
         progress.update(i + 1);
     }
     progress.finish();

@@ -5,6 +5,7 @@
 #include "CameraOptions.h"
 #include "Commands.h"
 #include "DirectSetup.h"
+#include "IndirectSetup.h"
 #include "Plan.h"
 #include "Progress.h"
 #include "cache/CacheWorker.h"
@@ -78,14 +79,16 @@ private:
 class ConvergenceLog {
 public:
     ConvergenceLog(size_t lights, bool reference) : reference_(reference) {
-        out_ << "seconds,frame,rounds,vertices,samples,estimated_error";
+        out_ << "seconds,frame,rounds,vertices,samples,estimated_error,direct_error,indirect_error,bounces_done,"
+                "indirect_vertices,indirect_samples";
         if (reference) out_ << ",rmse,relative_rmse";
         for (size_t l = 0; l < lights; ++l) out_ << ",light" << l << "_vertices,light" << l << "_samples";
         out_ << "\n";
     }
     void add(double seconds, size_t frame, const CacheSnapshot& s, const ImageRgb* image, const ImageRgb* ref) {
         out_ << seconds << "," << frame << "," << s.rounds << "," << s.vertices << "," << s.samples << ","
-             << s.estimatedError;
+             << s.estimatedError << "," << s.directError << "," << s.indirectError << "," << s.bouncesFinished << ","
+             << s.indirectVertices << "," << s.indirectSamples;
         if (reference_) out_ << "," << rmse(*image, *ref) << "," << relativeRmse(*image, *ref);
         for (const IrradianceMeshView& m : s.direct) {
             uint64_t samples = 0;
@@ -105,8 +108,10 @@ private:
 // call (the caller calls it at snapshot times).
 void printStatus(const CacheSnapshot& s, double seconds, const std::string& what, bool done) {
     static const bool terminal = ::isatty(STDERR_FILENO) != 0;
-    std::fprintf(stderr, "%s%s %.1f s: %zu vertices, %llu samples, estimated error %.3g%%%s", terminal ? "\r" : "",
-                 what.c_str(), seconds, s.vertices, static_cast<unsigned long long>(s.samples),
+    const std::string bounces =
+        s.bounces ? concat(", bounces ", s.bouncesFinished, "/", s.bounces, " (", s.indirectSamples, " gathers)") : "";
+    std::fprintf(stderr, "%s%s %.1f s: %zu vertices, %llu samples%s, estimated error %.3g%%%s", terminal ? "\r" : "",
+                 what.c_str(), seconds, s.vertices, static_cast<unsigned long long>(s.samples), bounces.c_str(),
                  100 * s.estimatedError, terminal && !done ? "   " : "\n");
     std::fflush(stderr);
 }
@@ -122,7 +127,7 @@ int runRender(const std::vector<std::string>& args) {
     declareViewOptions(o);
     o.value("camera-path", "FILE", "walkthrough: one image per line (px,py,pz,tx,ty,tz,ux,uy,uz,fov), all from one "
                                    "cache that keeps refining; --time and --until-error apply per image");
-    o.flag("direct-only", "direct light only (the only light simulated so far)");
+    o.flag("direct-only", "direct light only: no indirect bounces");
     o.value("time", "S", "refine for S seconds of wall-clock time, then write the image");
     o.value("until-error", "E", "stop once the cache's estimated error is below E (default 0.02 when neither "
                                 "--time nor --samples is given)");
@@ -135,6 +140,7 @@ int runRender(const std::vector<std::string>& args) {
     o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
     declareDirectOptions(o);
     declareCacheOptions(o);
+    declareIndirectOptions(o);
     o.value("supersample", "S", "S×S sub-pixels per pixel (box filter)", std::string("4"));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure", std::string("0"));
     o.flag("no-auto-exposure", "do not scale the log-average luminance to middle grey");
@@ -157,6 +163,7 @@ int runRender(const std::vector<std::string>& args) {
         throw InputError("render samples each vertex as often as its noise asks: --passes is for probe; "
                          "use --samples, --time or --until-error");
     const CacheSettings cacheSettings = readCacheSettings(o);
+    IndirectChoice indirect = readIndirectOptions(o);
     ToneMapSettings tone;
     tone.exposureEV = o.number("exposure", -50, 50);
     tone.autoExposure = !o.isSet("no-auto-exposure");
@@ -194,7 +201,8 @@ int runRender(const std::vector<std::string>& args) {
         walkthrough ? loadCameraPath(o.str("camera-path")) : std::vector<Camera>{cameraFromOptions(o, scene, aspect)};
     std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights\n", scene.name.c_str(), scene.meshes.size(),
                 scene.triangleCount(), scene.lights.size());
-    printPlan(scene, choice, cacheSettings, o.isSet("direct-only"));
+    indirect.decide(scene);
+    printPlan(scene, choice, cacheSettings, indirect);
     std::printf("  stop refining each image at %s\n", stop.describe().c_str());
 
     IrradianceCache cache(scene, cacheSettings);
@@ -215,7 +223,10 @@ int runRender(const std::vector<std::string>& args) {
     ConvergenceLog log(scene.lights.size(), o.has("reference"));
 
     auto phases = std::make_shared<DirectPhaseTimes>();
-    CacheWorker worker(cache, directSamplerFactory(scene, choice, phases), workerSettings);
+    const WorkerFactories factories = workerFactories(scene, choice, indirect, phases);
+    std::unique_ptr<IndirectSolver> solver;
+    if (factories.indirect) solver = std::make_unique<IndirectSolver>(scene, indirect.solver);
+    CacheWorker worker(cache, factories.direct, workerSettings, solver.get(), factories.indirect);
     const uint64_t firstSerial = worker.setView(RefinementView{cameras.front(), comp.width, comp.height});
     CacheWorker::Reader reader = worker.reader();
     const auto start = Clock::now();
@@ -223,7 +234,9 @@ int runRender(const std::vector<std::string>& args) {
 
     size_t snapshotIndex = 0;
     double nextTick = every;
-    auto render = [&](const CacheSnapshot& s, const Camera& camera) { return compositor.render(camera, s.direct, comp); };
+    auto render = [&](const CacheSnapshot& s, const Camera& camera) {
+        return compositor.render(camera, s.direct, s.indirect, comp);
+    };
     auto tick = [&](const CacheSnapshot& s, size_t frame) {
         const double seconds = secondsSince(start);
         ImageRgb image;
@@ -293,6 +306,15 @@ int runRender(const std::vector<std::string>& args) {
                 p.weighting, 100 * final->estimatedError, final->converged ? " (converged)" : "");
     std::printf("cache: %.1f MB (%zu bytes per vertex)%s\n", cache.memoryBytes() / 1e6, IrradianceCache::bytesPerVertex(),
                 cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());
+    if (solver) {
+        const IndirectStats& st = final->indirectStats;
+        std::printf("indirect: %d of %d bounces converged, %zu vertices, %llu gathers (%.2f ms each), sources built in "
+                    "%.2f s, %.1f MB held; last source: %s\n",
+                    final->bouncesFinished, final->bounces, final->indirectVertices,
+                    static_cast<unsigned long long>(final->indirectSamples),
+                    st.estimates ? 1e3 * st.estimateSeconds / double(st.estimates) : 0.0, st.buildSeconds,
+                    st.sourceBytes / 1e6, st.source.c_str());
+    }
     std::printf("total %.2f s; wrote %s (%dx%d)\n", secondsSince(t0), lastPath.c_str(), image.width, image.height);
     return 0;
 }

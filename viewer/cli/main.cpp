@@ -16,10 +16,12 @@ const char* kUsage =
     "  probe SCENE    direct irradiance at sensor points from a CSV\n"
     "  reference SCENE --spp N --out REF.exr\n"
     "                 path-traced reference image (and REF.noise.exr, its standard error)\n"
+    "  view SCENE     walk through SCENE in a window while its lighting converges\n"
     "  bench direct   accuracy against time of the direct-light samplers\n"
     "  bench scaling  how cost grows with triangles and with lights\n"
     "  bench convergence\n"
     "                 progressive image against the exact one and the path tracer, in time\n"
+    "  bench view     frame rate, first frame and light-change latency of the viewer\n"
     "  bench report   run the benches and write one HTML page of their results\n"
     "Run 'meshlight <command> --help' for its options.\n";
 
@@ -40,6 +42,7 @@ int main(int argc, char** argv) {
         if (command == "plan") return ml::runPlan(args);
         if (command == "bench") return ml::runBench(args);
         if (command == "reference") return ml::runReference(args);
+        if (command == "view") return ml::runView(args);
         if (command == "--help" || command == "-h" || command == "help") {
             std::fputs(kUsage, stdout);
             return 0;

@@ -1,11 +1,12 @@
 flat in vec3 vKd;
-flat in vec3 vKe;
+flat in int vLight;
 
-layout(location = 0) out vec4 outReflectance;  // Kd
-layout(location = 1) out vec4 outEmission;     // Le towards the camera
+// rgb: Kd. a: 1 for a surface, 2 + l where the front of light l is seen:
+// a light's radiance is uniform (one material), so the compositor looks it
+// up, times the light's weight, instead of storing it per sub-pixel.
+layout(location = 0) out vec4 outSurface;
 
 void main() {
-    outReflectance = vec4(vKd, 1.0);
     // Emitters radiate from their front (counter-clockwise) face only.
-    outEmission = vec4(gl_FrontFacing ? vKe : vec3(0.0), 1.0);
+    outSurface = vec4(vKd, gl_FrontFacing && vLight >= 0 ? 2.0 + float(vLight) : 1.0);
 }

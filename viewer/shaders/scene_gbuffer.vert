@@ -1,17 +1,17 @@
-// Reflectance pass: the scene's own geometry, never the cache's.
+// Surface pass: the scene's own geometry, never the cache's.
 layout(location = 0) in vec3 aPosition;   // relative to the scene's centre
 layout(location = 1) in vec3 aKd;
-layout(location = 2) in vec3 aKe;
+layout(location = 2) in int aLight;       // the light this face emits as, −1 for none
 
 uniform mat4 uClipFromLocal;
 
 flat out vec3 vKd;
-flat out vec3 vKe;
+flat out int vLight;
 
 invariant gl_Position;
 
 void main() {
     vKd = aKd;
-    vKe = aKe;
+    vLight = aLight;
     gl_Position = uClipFromLocal * vec4(aPosition, 1.0);
 }

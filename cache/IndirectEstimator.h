@@ -1,0 +1,55 @@
+// What the cache needs from a method that estimates indirect irradiance.
+//
+// Indirect light is computed bounce by bounce (§5.1): bounce n is the
+// irradiance arriving at a point from surfaces that reflect the irradiance
+// of bounce n−1 (bounce 0 being direct light). An estimator is given that
+// irradiance as cache meshes (setSource), turns it into exitant radiance
+// Lo = Kd/π · ΣE over the scene's surfaces in whatever representation it
+// gathers from (voxel slices, triangles, a 3D texture, later irradiance
+// volumes, propagation volumes or virtual point lights), and then answers
+// irradiance queries at points. Emission is not part of the source: light
+// straight from the emitters is direct light and lives in the direct meshes.
+#pragma once
+
+#include "IrradianceCache.h"
+
+#include <string>
+#include <vector>
+
+namespace ml {
+
+// What building the source and gathering cost so far, for the plan, the
+// log and the bench.
+struct IndirectStats {
+    size_t sourceBytes = 0;       // memory held by every source now built (textures, buffers)
+    double buildSeconds = 0;      // time spent in setSource, all calls
+    uint64_t estimates = 0;       // estimate() calls
+    double estimateSeconds = 0;   // time spent in estimate(), all calls
+    std::string source;           // one line on the last source built: "64x32x64 voxels, 212 of 384 slice faces, 9.1 MB"
+};
+
+class IndirectEstimator {
+public:
+    virtual ~IndirectEstimator() = default;
+
+    // "slices", "perspective", ...
+    virtual std::string name() const = 0;
+    // Builds source `slot` (0, 1, ...; replacing what it held): surfaces
+    // reflecting the sum of these meshes' irradiance (meshes laid over the
+    // scene as IrradianceCache::view makes them: every light's direct mesh,
+    // or one bounce's indirect mesh). Bounce n gathers from slot n−1.
+    // `importance` (0, 1] is the share of light this source gives relative
+    // to bounce 1's (about ā^(n−1) for bounce n): an estimator may spend
+    // less per estimate on a weak bounce (a smaller image, fewer rays).
+    virtual void setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance,
+                           double importance = 1.0) = 0;
+    // Frees a slot's memory; estimating from it again needs setSource.
+    virtual void releaseSource(size_t slot) = 0;
+    // Irradiance (W·m⁻²) at x, unit normal n, arriving from the surfaces of
+    // source `slot`, drawing its randomness (jitter) from `seed`: one
+    // estimate whose mean over seeds is the method's answer.
+    virtual Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) = 0;
+    virtual IndirectStats stats() const = 0;
+};
+
+}  // namespace ml

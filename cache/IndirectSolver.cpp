@@ -1,0 +1,207 @@
+#include "IndirectSolver.h"
+
+#include "core/Error.h"
+#include "core/Random.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ml {
+
+CacheSettings IndirectSettings::defaultCache() {
+    CacheSettings c;
+    c.maxEdgeFraction = 1.0 / 8;    // indirect light varies slowly...
+    // ...and a gather sees the scene at the voxels' resolution (64 along the
+    // longest side by default, a voxel ~1/110 of the diagonal): finer edges
+    // would only resolve the voxels' own steps.
+    c.minEdgeFraction = 1.0 / 64;
+    c.minEdgePixels = 4;
+    // Judged against indirect light's own level, which is a part of what
+    // the image shows (a third to a half in a room lit from above), so
+    // looser than direct light's 1% and 0.5%.
+    c.splitTolerance = 0.04;
+    c.noiseTolerance = 0.03;
+    c.maxSamplesPerVertex = 16;
+    c.singleSampleNoise = 0;  // no visibility steps: samples are never partial
+    // One 40×40 jittered slice gather in the Cornell box: 0.5–2% relative
+    // spread between seeds; assume 3% until a vertex's second sample
+    // measures it. With the noise tolerance equal to it, a vertex is sampled
+    // again only where its measured spread is larger.
+    c.sampleNoise = 0.03;
+    return c;
+}
+
+void IndirectSettings::validate() const {
+    if (bounces < 0 || bounces > 256) throw InputError(concat("bounce count ", bounces, " is not in 0..256"));
+    if (!(albedo >= 0 && albedo <= 1)) throw InputError(concat("albedo ", albedo, " is not in [0, 1]"));
+    if (!(startError > 0 && startError <= 1))
+        throw InputError(concat("indirect start error ", startError, " is not in (0, 1]"));
+    cache.validate();
+}
+
+IndirectSolver::IndirectSolver(const Scene& scene, const IndirectSettings& settings)
+    : scene_(scene), settings_(settings) {
+    settings_.validate();
+}
+
+IndirectSolver::~IndirectSolver() = default;
+
+CacheSettings IndirectSolver::settingsFor(int bounce) const {
+    CacheSettings c = settings_.cache;
+    const double share = std::pow(std::max(settings_.albedo, 1e-3), bounce - 1);
+    c.splitTolerance = std::min(0.5, c.splitTolerance / share);
+    c.noiseTolerance = std::min(0.5, c.noiseTolerance / share);
+    // Every bounce is smoother than the one before: later bounces keep bounce
+    // 1's base mesh (coarser ones would put vertices only in the corners,
+    // where indirect light is lowest, and interpolate the walls too dark)
+    // but are split at most once.
+    if (bounce > 1) c.minEdgeFraction = std::max(c.minEdgeFraction, c.maxEdgeFraction / 2);
+    return c;
+}
+
+void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
+                                   const std::function<std::vector<IrradianceMeshView>()>& direct) {
+    const size_t slot = size_t(bounce - 1);
+    if (sourceBuilt_.size() <= slot) sourceBuilt_.resize(slot + 1, false);
+    if (sourceBuilt_[slot]) return;
+    if (bounce == 1)
+        estimator.setSource(0, direct());
+    else
+        estimator.setSource(slot, {view(bounce - 1)}, std::pow(std::max(settings_.albedo, 1e-3), bounce - 1));
+    sourceBuilt_[slot] = true;
+}
+
+RefineReport IndirectSolver::step(IndirectEstimator& estimator,
+                                  const std::function<std::vector<IrradianceMeshView>()>& direct, size_t budget,
+                                  uint32_t seed, const std::optional<RefinementView>& view) {
+    if (settings_.bounces == 0) return {};
+    // Pass 1: the next bounce's base mesh, gathered once.
+    if (!firstPassDone() && (caches_.empty() || caches_.back()->unsampledCount() == 0)) {
+        const int bounce = int(caches_.size()) + 1;
+        CacheLayout layout;
+        layout.meshes = 1;
+        // Sides of open surfaces as for direct light: a side no light
+        // reaches gets no copy (and shows black). Faces with any scene
+        // behind them would also copy the insides of open boxes, which
+        // gather little but the voxels' leaks and cost as much as the rest.
+        layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
+        layout.insetBorders = true;
+        // The previous bounce's source is not needed until pass 2.
+        if (bounce > 2) {
+            estimator.releaseSource(size_t(bounce - 2));
+            sourceBuilt_[size_t(bounce - 2)] = false;
+        }
+        prepareSource(estimator, bounce, direct);
+        caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
+    }
+    const bool first = !firstPassDone();
+    const int bounce = first ? int(caches_.size()) : allFinished() ? 1 : finished_ + 1;
+    const size_t slot = size_t(bounce - 1);
+    prepareSource(estimator, bounce, direct);
+    const DirectSampleFn gather = [&](size_t, const Vec3& x, const Vec3& n, uint32_t s) {
+        VertexSample sample;
+        sample.irradiance = estimator.estimate(slot, x, n, s);
+        return sample;  // visibility 1, never partial: indirect light has no light to see
+    };
+    // Each bounce draws its own jitter. While vertices have no sample, a
+    // round only samples them (IrradianceCache::refine).
+    RefineReport report = caches_[slot]->refine(gather, budget, seedFor(seed, 0x1d1ec7u, uint32_t(bounce)), view);
+    if (first) {
+        report.candidates = std::max<size_t>(report.candidates, 1);  // the first pass goes on
+        return report;
+    }
+    if (!allFinished() && report.converged()) {
+        ++finished_;
+        // Only bounce 1 keeps refining (for new views): later sources go.
+        if (bounce >= 2) {
+            estimator.releaseSource(slot);
+            sourceBuilt_[slot] = false;
+        }
+        // The next bounce gathers from this one as it now is.
+        if (size_t(bounce) < sourceBuilt_.size() && sourceBuilt_[size_t(bounce)]) {
+            estimator.releaseSource(size_t(bounce));
+            sourceBuilt_[size_t(bounce)] = false;
+        }
+        report.candidates = allFinished() ? 0 : 1;  // not converged while bounces remain
+    }
+    return report;
+}
+
+void fillHiddenVertices(IrradianceMeshView& mesh) {
+    const size_t n = mesh.positions.size();
+    if (n == 0) return;
+    std::vector<std::vector<uint32_t>> ring(n);
+    for (const glm::uvec3& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            ring[t[k]].push_back(t[(k + 1) % 3]);
+            ring[t[k]].push_back(t[(k + 2) % 3]);
+        }
+    double mean = 0;
+    for (const Rgb& e : mesh.irradiance) mean += luminance(e);
+    mean /= double(n);
+    std::vector<bool> hidden(n, false);
+    for (size_t v = 0; v < n; ++v) {
+        if (ring[v].empty() || luminance(mesh.irradiance[v]) >= 0.05 * mean) continue;
+        double around = 0;
+        for (uint32_t u : ring[v]) around += luminance(mesh.irradiance[u]);
+        hidden[v] = luminance(mesh.irradiance[v]) < 0.05 * around / double(ring[v].size());
+    }
+    // Two rings in: a hidden patch a few base triangles across fills in.
+    for (int pass = 0; pass < 2; ++pass) {
+        std::vector<Rgb> next = mesh.irradiance;
+        std::vector<bool> still = hidden;
+        for (size_t v = 0; v < n; ++v) {
+            if (!hidden[v]) continue;
+            Rgb sum(0.0);
+            int count = 0;
+            for (uint32_t u : ring[v])
+                if (!hidden[u]) sum += mesh.irradiance[u], ++count;
+            if (count == 0) continue;
+            next[v] = sum / double(count);
+            still[v] = false;
+        }
+        mesh.irradiance = std::move(next);
+        hidden = std::move(still);
+    }
+}
+
+IrradianceMeshView IndirectSolver::view(int bounce) const {
+    IrradianceMeshView v = caches_.at(size_t(bounce - 1))->view(0);
+    fillHiddenVertices(v);
+    return v;
+}
+
+std::vector<IrradianceMeshView> IndirectSolver::views() const {
+    std::vector<IrradianceMeshView> v;
+    for (int b = 1; b <= started(); ++b) v.push_back(view(b));
+    return v;
+}
+
+size_t IndirectSolver::totalVertices() const {
+    size_t n = 0;
+    for (const auto& c : caches_) n += c->totalVertices();
+    return n;
+}
+
+uint64_t IndirectSolver::totalSamples() const {
+    uint64_t n = 0;
+    for (const auto& c : caches_) n += c->totalSamples();
+    return n;
+}
+
+size_t IndirectSolver::memoryBytes() const {
+    size_t n = 0;
+    for (const auto& c : caches_) n += c->memoryBytes();
+    return n;
+}
+
+double IndirectSolver::estimatedError(const std::optional<RefinementView>& view) const {
+    if (settings_.bounces == 0) return 0;
+    if (!firstPassDone()) return 1;
+    double worst = 0;
+    for (size_t b = 0; b < caches_.size(); ++b)
+        worst = std::max(worst, caches_[b]->estimatedError(view) * std::pow(settings_.albedo, double(b)));
+    return worst;
+}
+
+}  // namespace ml

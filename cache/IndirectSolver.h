@@ -1,0 +1,107 @@
+// Indirect irradiance, bounce by bounce (§5.1), each bounce in a cache mesh
+// of its own laid over the scene like the direct ones.
+//
+// Bounce n is sampled with gathers from a source built from bounce n−1's
+// mesh (bounce 1 gathers from the direct meshes). Work goes in two passes,
+// so that every bounce's light shows early:
+//  1. bounce after bounce, every vertex of the bounce's base mesh is
+//     gathered once, then the next bounce's source is built from it;
+//  2. bounce after bounce, each is refined until it converges, from a source
+//     rebuilt from its predecessor's refined mesh.
+// A bounce's first-pass samples came from its predecessor's base mesh;
+// refinement adds detail, not light, so they stay in its means. Each bounce carries about ā
+// (the albedo light meets) of the light of the one before, so bounce n's
+// split and noise tolerances are bounce 1's divided by ā^(n−1) (up to 0.5):
+// an error in a weak bounce shows less in the image; each bounce is
+// smoother than the one before, so later bounces are split at most once; and
+// the estimator is told each source's share (it may gather more cheaply). Once every bounce has
+// converged, only bounce 1 keeps refining for new views (it holds the
+// indirect light's detail: contact shadows, colour bleeding); the sources of
+// later bounces are released.
+//
+// The direct meshes bounce 1 reflects are taken when it starts; the worker
+// starts it once direct light's estimated error is low (IndirectSettings::
+// startError), so the few percent it may still change by moves indirect light,
+// a fraction of the image, by less.
+#pragma once
+
+#include "IndirectEstimator.h"
+#include "IrradianceCache.h"
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace ml {
+
+struct IndirectSettings {
+    int bounces = 1;          // from planBounces (or --bounces)
+    double albedo = 0.5;      // ā, from planBounces: relaxes later bounces' tolerances
+    // Bounce 1's cache: coarser and smoother than direct light's, since
+    // indirect light has no sharp shadows of its own and each sample is a
+    // whole hemispherical gather.
+    CacheSettings cache = defaultCache();
+    // Direct light's estimated error below which indirect light starts.
+    double startError = 0.05;
+    static CacheSettings defaultCache();
+    void validate() const;
+};
+
+// A vertex that sees almost no indirect light where its neighbours see
+// plenty is hidden: boxed in (the ceiling behind a light hung a hair below
+// it, the floor under a block). It is never seen, but the mesh would
+// interpolate its darkness into the visible surface around it (a base
+// triangle spans a fair part of a wall). Such vertices (below 5% of both
+// their neighbours' mean and the mesh's) take their visible neighbours'
+// mean, two rings deep. A dark corner, dark like its neighbours, is kept.
+void fillHiddenVertices(IrradianceMeshView& mesh);
+
+class IndirectSolver {
+public:
+    IndirectSolver(const Scene& scene, const IndirectSettings& settings);
+    ~IndirectSolver();
+
+    const IndirectSettings& settings() const { return settings_; }
+    int bounces() const { return settings_.bounces; }
+    // Bounces whose cache exists (started: sampled in the first pass), and
+    // of those, refined until converged in the second.
+    int started() const { return int(caches_.size()); }
+    int finished() const { return finished_; }
+    bool firstPassDone() const { return int(caches_.size()) == settings_.bounces && caches_.back()->unsampledCount() == 0; }
+    bool allFinished() const { return finished_ >= settings_.bounces; }
+
+    // One round of up to `budget` gathers: the first pass's next vertices
+    // (starting a bounce, and building its source from `direct()` or the
+    // previous bounce, when need be), or the second pass's refinement of the
+    // bounce in hand, or, once all have converged, of bounce 1 for the
+    // view. Converged when there is nothing left to do.
+    RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshView>()>& direct,
+                      size_t budget, uint32_t seed, const std::optional<RefinementView>& view);
+
+    // One mesh per started bounce, bounce 1 first, hidden vertices filled
+    // (fillHiddenVertices): what is shown and what the next bounce reflects.
+    std::vector<IrradianceMeshView> views() const;
+    IrradianceMeshView view(int bounce) const;
+    size_t totalVertices() const;
+    uint64_t totalSamples() const;
+    size_t memoryBytes() const;
+    // 1 until the first pass is done; then the largest of the bounces'
+    // estimated errors, each scaled by its share of bounce 1's light (ā^(n−1)).
+    double estimatedError(const std::optional<RefinementView>& view) const;
+    const IrradianceCache& cache(int bounce) const { return *caches_.at(size_t(bounce - 1)); }
+
+private:
+    CacheSettings settingsFor(int bounce) const;
+    // Makes sure source `bounce − 1` holds what bounce `bounce` gathers from.
+    void prepareSource(IndirectEstimator& estimator, int bounce,
+                       const std::function<std::vector<IrradianceMeshView>()>& direct);
+
+    const Scene& scene_;
+    IndirectSettings settings_;
+    std::vector<std::unique_ptr<IrradianceCache>> caches_;
+    int finished_ = 0;
+    std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
+};
+
+}  // namespace ml

@@ -1,0 +1,43 @@
+// How many indirect bounces a scene calls for (§5.1): light loses a factor
+// of the albedo it meets at every bounce, so after n bounces of indirect
+// light the reflected light still missing is about ā^(n+1) of its total
+// (direct light is the first reflection), where ā is
+// the albedo that direct light meets, weighted by area and direct
+// irradiance (for a closed scene of uniform albedo a emitting Le: L =
+// Le/(1−a), and n bounces give Le(1−a^(n+2))/(1−a)). The count is the smallest n that
+// leaves less than the set fraction missing, up to a cap; an albedo near 1
+// hits the cap, and the plan says how much energy is then left out.
+#pragma once
+
+#include "core/Scene.h"
+
+#include <optional>
+#include <string>
+
+namespace ml {
+
+struct BouncePlanSettings {
+    // Stop once the radiance still missing is below this fraction of the total.
+    double missingFraction = 0.01;
+    int maxBounces = 24;               // the cap
+    std::optional<int> forced;         // --bounces N: this many, whatever the albedo
+    int points = 4096;                 // surface points the albedo is averaged over
+    int lightSamples = 16;             // shadow rays per light and point
+    uint32_t seed = 1;
+    void validate() const;
+};
+
+struct BouncePlan {
+    Rgb albedo{0.0};        // per channel, area- and direct-irradiance-weighted
+    double meanAlbedo = 0;  // ā: the largest channel (it decays slowest)
+    int bounces = 0;
+    double missing = 0;     // fraction of the reflected light left out: ā^(bounces+1)
+    bool capped = false;    // the cap, not the fraction, set the count
+    std::string reason;     // one line for the plan
+};
+
+// Direct irradiance at the points comes from shadow rays to points on the
+// lights (Embree), so light blocked by walls does not count.
+BouncePlan planBounces(const Scene& scene, const BouncePlanSettings& settings = {});
+
+}  // namespace ml

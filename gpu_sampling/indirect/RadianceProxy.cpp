@@ -1,0 +1,173 @@
+#include "RadianceProxy.h"
+
+#include "core/Error.h"
+#include "core/MeshUtil.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ml {
+
+// Ericson, Real-Time Collision Detection §5.1.5.
+Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+    const Vec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        const double v = d1 / (d1 - d3);
+        return {1 - v, v, 0};
+    }
+    const Vec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        const double w = d2 / (d2 - d6);
+        return {1 - w, 0, w};
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return {0, 1 - w, w};
+    }
+    const double denom = va + vb + vc;
+    if (!(std::abs(denom) > 0)) return {1, 0, 0};
+    const double v = vb / denom, w = vc / denom;
+    return {1 - v - w, v, w};
+}
+
+MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshView& mesh, double cellSize, double tolerance)
+    : mesh_(mesh), cell_(cellSize), tolerance_(tolerance) {
+    Bounds3 b;
+    for (const Vec3& p : mesh.positions) b.extend(p);
+    if (b.empty()) return;
+    origin_ = b.lo - tolerance;
+    for (int a = 0; a < 3; ++a)
+        dims_[size_t(a)] = std::clamp(int(std::ceil((b.hi[a] - b.lo[a] + 2 * tolerance) / cell_)) + 1, 1, 1024);
+    bins_.resize(size_t(dims_[0]) * dims_[1] * dims_[2]);
+    faceNormals_.resize(mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::uvec3 i = mesh.triangles[t];
+        const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
+        const Vec3 n = glm::cross(p1 - p0, p2 - p0);
+        faceNormals_[t] = glm::length(n) > 0 ? glm::normalize(n) : Vec3(0.0);
+        std::array<int, 3> lo{}, hi{};
+        for (int a = 0; a < 3; ++a) {
+            const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance, mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
+            lo[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+            hi[size_t(a)] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x)
+                    bins_[(size_t(z) * dims_[1] + y) * dims_[0] + x].push_back(uint32_t(t));
+    }
+}
+
+Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
+    if (bins_.empty()) return Rgb(0.0);
+    std::array<int, 3> c{};
+    for (int a = 0; a < 3; ++a) {
+        const int i = int(std::floor((p[a] - origin_[a]) / cell_));
+        if (i < 0 || i >= dims_[size_t(a)]) return Rgb(0.0);
+        c[size_t(a)] = i;
+    }
+    double best = tolerance_ * tolerance_;
+    Rgb result(0.0);
+    for (uint32_t t : bins_[(size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0]]) {
+        if (glm::dot(faceNormals_[t], n) < 0.5) continue;  // the other side, or a crease beyond 60°
+        const glm::uvec3 i = mesh_.triangles[t];
+        const Vec3 w = closestBarycentric(p, mesh_.positions[i.x], mesh_.positions[i.y], mesh_.positions[i.z]);
+        const Vec3 q = w.x * mesh_.positions[i.x] + w.y * mesh_.positions[i.y] + w.z * mesh_.positions[i.z];
+        const double d2 = glm::dot(q - p, q - p);
+        if (d2 > best) continue;
+        best = d2;
+        result = w.x * mesh_.irradiance[i.x] + w.y * mesh_.irradiance[i.y] + w.z * mesh_.irradiance[i.z];
+    }
+    return result;
+}
+
+RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(grid) {
+    diagonal_ = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
+    // Uniform subdivision of each triangle into k² pieces, k from its longest
+    // edge; a piece is at most about two voxels across: radiance is
+    // interpolated linearly between its corners, and slices are filled at
+    // twice the voxels' resolution.
+    constexpr int kMaxSplit = 256;
+    for (const Mesh& m : scene.meshes) {
+        const bool closed = isClosedMesh(m);
+        for (size_t t = 0; t < m.triangles.size(); ++t) {
+            const Triangle3 p = m.triangle(t);
+            const Vec3 an = m.areaNormal(t);
+            if (!(glm::length(an) > 0)) continue;
+            const Vec3 n = glm::normalize(an);
+            const double longest = std::max({glm::length(p[1] - p[0]), glm::length(p[2] - p[1]), glm::length(p[0] - p[2])});
+            const int k = std::clamp(int(std::ceil(longest / (2 * grid_.voxel))), 1, kMaxSplit);
+            const Rgb kd = scene.materials[m.materials[t]].kd;
+            // The sides to make: the front always, the back for open objects.
+            for (int side = 0; side < (closed ? 1 : 2); ++side) {
+                const uint32_t base = uint32_t(positions_.size());
+                auto index = [&](int i, int j) { return base + uint32_t(i * (2 * k + 3 - i) / 2 + j); };
+                for (int i = 0; i <= k; ++i)
+                    for (int j = 0; j <= k - i; ++j) {
+                        const double u = double(i) / k, v = double(j) / k;
+                        positions_.push_back(p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0]));
+                        vertexTriangle_.push_back(uint32_t(triangles_.size()));
+                    }
+                auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+                    ProxyTriangle pt;
+                    pt.corners = side == 0 ? glm::uvec3(a, b, c) : glm::uvec3(a, c, b);
+                    pt.normal = side == 0 ? n : -n;
+                    pt.kd = kd;
+                    pt.closed = closed;
+                    triangles_.push_back(pt);
+                };
+                for (int i = 0; i < k; ++i)
+                    for (int j = 0; j < k - i; ++j) {
+                        add(index(i, j), index(i + 1, j), index(i, j + 1));
+                        if (j + 1 < k - i) add(index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
+                    }
+            }
+        }
+    }
+    // Bin by voxel: every voxel the triangle's bounding box touches.
+    bins_.resize(grid_.count());
+    for (size_t t = 0; t < triangles_.size(); ++t) {
+        const glm::uvec3 c = triangles_[t].corners;
+        Bounds3 b;
+        b.extend(positions_[c.x]), b.extend(positions_[c.y]), b.extend(positions_[c.z]);
+        const std::array<int, 3> lo = grid_.cell(b.lo), hi = grid_.cell(b.hi);
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x)
+                    bins_[(size_t(z) * grid_.dims[1] + y) * grid_.dims[0] + x].push_back(uint32_t(t));
+    }
+}
+
+std::vector<Rgb> RadianceProxy::radianceFrom(const std::vector<IrradianceMeshView>& meshes) const {
+    std::vector<Rgb> radiance(positions_.size());
+    const double tolerance = 1e-5 * diagonal_;
+    std::vector<MeshIrradianceLookup> lookups;
+    lookups.reserve(meshes.size());
+    for (const IrradianceMeshView& m : meshes) lookups.emplace_back(m, grid_.voxel, tolerance);
+    for (size_t v = 0; v < positions_.size(); ++v) {
+        const ProxyTriangle& t = triangles_[vertexTriangle_[v]];
+        Rgb e(0.0);
+        for (const MeshIrradianceLookup& l : lookups) e += l.at(positions_[v], t.normal);
+        radiance[v] = t.kd * e / kPi;
+        ML_ASSERT(isFinite(radiance[v]), "non-finite radiance at proxy vertex ", v);
+    }
+    return radiance;
+}
+
+size_t RadianceProxy::memoryBytes() const {
+    size_t n = triangles_.size() * sizeof(ProxyTriangle) + positions_.size() * (sizeof(Vec3) + 4);
+    for (const auto& b : bins_) n += b.capacity() * sizeof(uint32_t) + sizeof(b);
+    return n;
+}
+
+}  // namespace ml

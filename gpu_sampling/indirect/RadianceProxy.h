@@ -1,0 +1,79 @@
+// The surfaces indirect gathers see, with the radiance they reflect.
+//
+// The scene's triangles, cut until no edge is longer than two voxels, one
+// copy per side for open objects (each side reflects its own irradiance),
+// carry at every corner the exitant radiance Lo = Kd/π · ΣE, where E is
+// interpolated from the cache meshes given (every light's direct mesh, or a
+// bounce's indirect mesh). Every gather method (voxel slices, triangles,
+// ray march) draws from this one proxy, so they differ only in how they
+// gather. Triangles are also binned by voxel, for the near field.
+#pragma once
+
+#include "VoxelGrid.h"
+#include "cache/IrradianceCache.h"
+#include "core/Scene.h"
+
+#include <array>
+
+#include <vector>
+
+namespace ml {
+
+struct ProxyTriangle {
+    glm::uvec3 corners{0};     // indices into RadianceProxy::positions()
+    Vec3 normal{0.0};          // unit, the side that reflects
+    Rgb kd{0.0};
+    // The back of this triangle is the inside of a closed object: seen
+    // from behind it is black and opaque. Open objects' triangles come in
+    // pairs instead, one per side, each seen from its front only.
+    bool closed = false;
+};
+
+class RadianceProxy {
+public:
+    RadianceProxy(const Scene& scene, const VoxelGrid& grid);
+
+    const VoxelGrid& grid() const { return grid_; }
+    const std::vector<ProxyTriangle>& triangles() const { return triangles_; }
+    const std::vector<Vec3>& positions() const { return positions_; }
+    // Exitant radiance at each position, W·sr⁻¹·m⁻², when the surfaces
+    // receive the sum of these meshes' irradiance.
+    std::vector<Rgb> radianceFrom(const std::vector<IrradianceMeshView>& meshes) const;
+    // Triangles overlapping voxel (i, j, k).
+    const std::vector<uint32_t>& inVoxel(int i, int j, int k) const {
+        return bins_[(size_t(k) * grid_.dims[1] + j) * grid_.dims[0] + i];
+    }
+    size_t memoryBytes() const;
+
+private:
+    VoxelGrid grid_;
+    double diagonal_ = 1;
+    std::vector<ProxyTriangle> triangles_;
+    std::vector<Vec3> positions_;
+    std::vector<uint32_t> vertexTriangle_;  // a triangle each position belongs to (for its normal and Kd)
+    std::vector<std::vector<uint32_t>> bins_;
+};
+
+// The point of triangle (a, b, c) closest to p, as barycentrics.
+Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Point location in a cache mesh: the irradiance a mesh holds at a point of
+// the scene's surfaces, from the mesh triangle nearest to it among those
+// facing the same side (normals within 60°), linearly interpolated; zero
+// where no such triangle lies within `tolerance` (the mesh does not cover
+// that side, e.g. the back of a wall no light reaches).
+class MeshIrradianceLookup {
+public:
+    MeshIrradianceLookup(const IrradianceMeshView& mesh, double cellSize, double tolerance);
+    Rgb at(const Vec3& p, const Vec3& n) const;
+
+private:
+    const IrradianceMeshView& mesh_;
+    std::vector<Vec3> faceNormals_;
+    Vec3 origin_{0.0};
+    double cell_ = 1, tolerance_ = 0;
+    std::array<int, 3> dims_{1, 1, 1};
+    std::vector<std::vector<uint32_t>> bins_;
+};
+
+}  // namespace ml

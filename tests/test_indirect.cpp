@@ -1,0 +1,432 @@
+// Indirect light (issue 5): the fish-eye slice gather, the bounce solver and
+// the bounce plan, checked against closed forms (the furnace) and against the
+// reference path tracer (near field, jittered averages), and for leaks.
+//
+// Direct light comes from the exact reference (ExactDirect) on the cache
+// meshes, so what is measured is the indirect part alone.
+#include "cache/IndirectSolver.h"
+#include "cache/IrradianceCache.h"
+#include "core/raytrace/BouncePlan.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "core/reference/ExactIrradiance.h"
+#include "core/scenes/CornellBox.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/indirect/RadianceProxy.h"
+#include "gpu_sampling/indirect/SliceGather.h"
+#include "viewer/Compositor.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+namespace ml {
+namespace {
+
+// A quad as two triangles of `material`, counter-clockwise seen from `facing`.
+void addQuad(Mesh& mesh, std::array<Vec3, 4> q, const Vec3& facing, uint32_t material) {
+    if (glm::dot(glm::cross(q[1] - q[0], q[2] - q[0]), facing) < 0) std::swap(q[1], q[3]);
+    const uint32_t base = uint32_t(mesh.positions.size());
+    const Vec3 n = glm::normalize(glm::cross(q[1] - q[0], q[2] - q[0]));
+    for (const Vec3& p : q) mesh.positions.push_back(p), mesh.normals.push_back(n);
+    mesh.triangles.push_back({base, base + 1, base + 2});
+    mesh.triangles.push_back({base, base + 2, base + 3});
+    mesh.materials.push_back(material), mesh.materials.push_back(material);
+    mesh.sourceLines.push_back(0), mesh.sourceLines.push_back(0);
+}
+
+// The six walls of the box [lo, hi], facing in, each a mesh and a material
+// (so each is a planar light when it emits).
+void addBox(Scene& scene, const Vec3& lo, const Vec3& hi, const Rgb& kd, const Rgb& ke) {
+    const Vec3 c = 0.5 * (lo + hi);
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            std::array<Vec3, 4> q;
+            for (int k = 0; k < 4; ++k) {
+                Vec3 p;
+                p[axis] = side ? hi[axis] : lo[axis];
+                p[u] = (k == 1 || k == 2) ? hi[u] : lo[u];
+                p[v] = (k >= 2) ? hi[v] : lo[v];
+                q[size_t(k)] = p;
+            }
+            Mesh m;
+            m.name = concat("wall", axis, side);
+            Material mat;
+            mat.name = m.name;
+            mat.kd = kd;
+            mat.ke = ke;
+            scene.materials.push_back(mat);
+            Vec3 toCenter = c - q[0];
+            toCenter[u] = toCenter[v] = 0;
+            addQuad(m, q, toCenter, uint32_t(scene.materials.size() - 1));
+            scene.meshes.push_back(std::move(m));
+        }
+}
+
+// White furnace: a closed box whose walls all emit Le and reflect a.
+Scene furnace(double a, double le) {
+    Scene scene;
+    scene.name = "furnace";
+    addBox(scene, Vec3(0.0), Vec3(1.0), Rgb(a), Rgb(le));
+    scene.finalize();
+    return scene;
+}
+
+// Direct caches sampled exactly, the indirect solver run to convergence on
+// the slice gather: indirect light alone is what differs from the truth.
+struct Pipeline {
+    std::unique_ptr<GlContext> context = createHeadlessContext(GlBackend::OsMesa);
+    const Scene& scene;
+    ExactDirect exact;
+    IrradianceCache direct;
+    std::unique_ptr<SliceGather> gather;
+    std::unique_ptr<IndirectSolver> solver;
+
+    Pipeline(const Scene& s, const GatherSettings& gs, int bounces, double albedo, double directEdge = 1.0 / 32)
+        : scene(s), exact(s), direct(s, edgeSettings(directEdge)) {
+        sampleEveryVertex(direct, [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) {
+            return exact.irradiance(l, x, n);
+        }, 1, 1);
+        gather = std::make_unique<SliceGather>(*context, scene, gs);
+        IndirectSettings is;
+        is.bounces = bounces;
+        is.albedo = albedo;
+        solver = std::make_unique<IndirectSolver>(scene, is);
+    }
+    static CacheSettings edgeSettings(double edge) {
+        CacheSettings c;
+        c.maxEdgeFraction = edge;
+        return c;
+    }
+    std::vector<IrradianceMeshView> directViews() const {
+        std::vector<IrradianceMeshView> v;
+        for (size_t l = 0; l < direct.lightCount(); ++l) v.push_back(direct.view(l));
+        return v;
+    }
+    void solve(int maxRounds = 4000) {
+        for (int r = 0; r < maxRounds && !solver->allFinished(); ++r)
+            solver->step(*gather, [&] { return directViews(); }, 256, 7, std::nullopt);
+        ASSERT_TRUE(solver->allFinished()) << "the solver did not converge in " << maxRounds << " rounds";
+    }
+};
+
+// ---------------------------------------------------------------------------
+// Furnace: L = Le + a/π·E everywhere and E = π·L over the whole hemisphere,
+// so L = Le/(1 − a) = Le·Σ a^k, k counting reflections. Direct light is one
+// reflection, each indirect bounce one more: with N indirect bounces
+// L = Le(1 − a^(N+2))/(1 − a). (The issue writes Le(1 − a^(N+1))/(1 − a)
+// with N counting every reflection, direct light's included.)
+// ---------------------------------------------------------------------------
+
+// Radiance at the image's pixels, every one a wall seen from inside.
+ImageRgb renderInside(Pipeline& p) {
+    Compositor compositor(*p.context, p.scene);
+    CompositorSettings cs;
+    cs.width = cs.height = 24;
+    cs.supersample = 2;
+    Camera cam;
+    cam.position = Vec3(0.5, 0.5, 0.1);
+    cam.target = Vec3(0.5, 0.5, 1.0);
+    cam.up = Vec3(0, 1, 0);
+    cam.fovYDegrees = 100;
+    return compositor.render(cam, p.directViews(), p.solver->views(), cs);
+}
+
+void expectFurnace(double a, std::optional<int> forced, double tolerance) {
+    const double le = 1.0;
+    const Scene scene = furnace(a, le);
+    BouncePlanSettings bs;
+    bs.forced = forced;
+    const BouncePlan plan = planBounces(scene, bs);
+    EXPECT_NEAR(plan.meanAlbedo, a, 1e-9) << "uniform albedo: the weighting cannot change it";
+    GatherSettings gs;
+    gs.resolution = 32;
+    Pipeline p(scene, gs, plan.bounces, plan.meanAlbedo);
+    p.solve();
+    const double expected = forced ? le * (1 - std::pow(a, *forced + 2)) / (1 - a) : le / (1 - a);
+    const ImageRgb image = renderInside(p);
+    double worst = 0, sum = 0;
+    for (size_t i = 0; i < image.pixelCount(); ++i) {
+        const double g = image.data[3 * i + 1];
+        ASSERT_TRUE(std::isfinite(g));
+        worst = std::max(worst, std::abs(g - expected) / expected);
+        sum += g;
+    }
+    const double mean = sum / double(image.pixelCount());
+    EXPECT_LT(std::abs(mean - expected) / expected, tolerance)
+        << "a = " << a << ", " << plan.bounces << " bounces: mean radiance " << mean << ", expected " << expected;
+    // Pixel by pixel a little more: each shows a few cache vertices, each
+    // the mean of one or two jittered gathers.
+    EXPECT_LT(worst, 1.5 * tolerance) << "a = " << a << ": worst pixel off by " << 100 * worst << "%";
+    if (!forced) {
+        EXPECT_LE(plan.missing, 0.01);  // of the reflected light
+    }
+}
+
+// Tolerance 2% (the issue's): the plan leaves < 1% missing (a^(n+1) < 0.01),
+// and a 40×40 slice gather of a uniform box errs by less than 0.5%: every
+// texel is fully covered (face texels tile the walls exactly) and only the
+// rays along the box's edges can slip between faces.
+TEST(Furnace, HalfAlbedoAutomaticBounces) { expectFurnace(0.5, std::nullopt, 0.02); }
+TEST(Furnace, AlbedoPointEightAutomaticBounces) { expectFurnace(0.8, std::nullopt, 0.02); }
+// With a fixed count the sum is exactly the truncated series.
+TEST(Furnace, FixedBouncesGiveTheTruncatedSeries) {
+    expectFurnace(0.5, 2, 0.02);
+    expectFurnace(0.8, 3, 0.02);
+}
+
+TEST(BouncePlan, CountFromAlbedoAndCap) {
+    const Scene scene = furnace(0.9, 1.0);
+    BouncePlanSettings s;
+    s.maxBounces = 8;
+    const BouncePlan capped = planBounces(scene, s);
+    EXPECT_EQ(capped.bounces, 8);
+    EXPECT_TRUE(capped.capped);
+    EXPECT_NEAR(capped.missing, std::pow(0.9, 9), 1e-12);
+    s.maxBounces = 64;
+    const BouncePlan free = planBounces(scene, s);
+    // 0.9^(n+1) ≤ 0.01 first at n + 1 = 44.
+    EXPECT_EQ(free.bounces, 43);
+    EXPECT_FALSE(free.capped);
+    const Scene black = furnace(0.0, 1.0);
+    EXPECT_EQ(planBounces(black).bounces, 0);
+}
+
+// ---------------------------------------------------------------------------
+// Near field and jitter, against the path tracer's one-bounce indirect light.
+// ---------------------------------------------------------------------------
+
+struct OneBounce {
+    Rgb value{0.0}, error{0.0};
+};
+OneBounce pathOneBounce(const Scene& scene, const Vec3& x, const Vec3& n, int samples) {
+    const EmbreeScene rays(scene);
+    PathTracerSettings ps;
+    ps.maxDepth = 2;
+    const PathTracer tracer(rays, ps);
+    const IrradianceEstimate e = tracer.irradiance(x, n, samples, 1);
+    return {e.indirect, e.indirectError};
+}
+
+class CornellGather : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        scene_ = new Scene(makeCornellBox());
+        GatherSettings gs;
+        pipeline_ = new Pipeline(*scene_, gs, 1, 0.5, 1.0 / 128);
+        pipeline_->gather->setSource(0, pipeline_->directViews());
+    }
+    static void TearDownTestSuite() {
+        delete pipeline_;
+        delete scene_;
+    }
+    static Rgb mean(const Vec3& x, const Vec3& n, int k, uint32_t seed0 = 0) {
+        Rgb s(0.0);
+        for (int i = 0; i < k; ++i) s += pipeline_->gather->estimate(0, x, n, seed0 + uint32_t(i));
+        return s / double(k);
+    }
+    static Scene* scene_;
+    static Pipeline* pipeline_;
+};
+Scene* CornellGather::scene_ = nullptr;
+Pipeline* CornellGather::pipeline_ = nullptr;
+
+// Points in concave corners and next to walls, where the voxels are too
+// coarse and the near field's triangles take over. Tolerance 8%: at 64
+// voxels along the box (a voxel is 8.9 mm), slice faces stand up to a
+// voxel off the surfaces they show and a slanted block face is drawn in
+// steps; bench indirect measures 1–6% at such points. The path tracer's
+// standard error (< 1%) is inside it.
+TEST_F(CornellGather, NearFieldCornersMatchThePathTracer) {
+    struct P {
+        Vec3 x, n;
+        const char* what;
+    };
+    const P points[] = {
+        {{0.0, 5.0, 554.0}, {1, 0, 0}, "right wall, 5 mm from floor and back wall"},
+        {{0.0, 20.0, 540.0}, {1, 0, 0}, "right wall, 20 mm from floor and back wall"},
+        {{278.0, 3.0, 559.2}, {0, 0, -1}, "back wall, 3 mm above the floor"},
+        {{100.0, 548.8, 100.0}, {0, -1, 0}, "ceiling near the front right corner"},
+        {{278.0, 0.0, 400.0}, {0, 1, 0}, "floor, 19 mm from the tall block"},
+    };
+    for (const P& p : points) {
+        const OneBounce ref = pathOneBounce(*scene_, p.x, p.n, 40000);
+        const Rgb got = mean(p.x, p.n, 16);
+        const double rel = std::abs(luminance(got) - luminance(ref.value)) / luminance(ref.value);
+        EXPECT_LT(rel, 0.08) << p.what << ": gather " << luminance(got) << ", path tracer " << luminance(ref.value)
+                             << " ± " << luminance(ref.error);
+        EXPECT_LT(luminance(ref.error) / luminance(ref.value), 0.02) << "reference too noisy at " << p.what;
+    }
+}
+
+// A point exactly in a corner gets the light of the corner's inside (its
+// limit from the wall), not the quarter that an eye on the floor's plane
+// would see.
+TEST_F(CornellGather, CornerPointSeesTheRoomNotTheOutside) {
+    const Rgb corner = mean(Vec3(0.0, 0.0, 559.2), Vec3(1, 0, 0), 8);
+    const Rgb inside = mean(Vec3(0.0, 5.0, 554.0), Vec3(1, 0, 0), 8);
+    EXPECT_GT(luminance(corner), 0.8 * luminance(inside));
+}
+
+// Averaging jittered gathers: the spread of a K-gather mean falls as 1/√K
+// (independent jitter per seed), and the mean settles within the voxels'
+// bias of the path tracer (the tolerance of the test above).
+TEST_F(CornellGather, JitteredGathersConverge) {
+    const Vec3 x(278.0, 274.0, 559.2), n(0, 0, -1);  // the back wall's centre
+    auto spread = [&](int k) {
+        double s1 = 0, s2 = 0;
+        const int trials = 12;
+        for (int t = 0; t < trials; ++t) {
+            const double y = luminance(mean(x, n, k, uint32_t(1000 * (t + 1))));
+            s1 += y, s2 += y * y;
+        }
+        const double m = s1 / trials;
+        return std::sqrt(std::max(0.0, s2 / trials - m * m)) / m;
+    };
+    const double one = spread(1), sixteen = spread(16);
+    EXPECT_GT(one, 0.0) << "jitter must change the estimate";
+    // 1/√16 = 0.25, with room for the spread's own noise over 12 trials.
+    EXPECT_LT(sixteen, 0.45 * one) << "spread of one gather " << one << ", of 16 " << sixteen;
+    const OneBounce ref = pathOneBounce(*scene_, x, n, 40000);
+    const double rel = std::abs(luminance(mean(x, n, 64)) - luminance(ref.value)) / luminance(ref.value);
+    EXPECT_LT(rel, 0.05) << "64 jittered gathers vs the path tracer at the back wall's centre";
+}
+
+// Every estimate finite, also on and next to the light and in corners.
+TEST_F(CornellGather, HardPointsStayFinite) {
+    const Vec3 pts[] = {{278, 548.7, 279.5}, {278, 548.79, 279.5}, {0, 0, 0}, {556, 548.8, 559.2}, {265, 330, 296},
+                        {-1e3, 0, 0}};
+    const Vec3 ns[] = {{0, -1, 0}, {0, -1, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {1, 0, 0}};
+    for (size_t i = 0; i < std::size(pts); ++i) {
+        const Rgb e = pipeline_->gather->estimate(0, pts[i], ns[i], 3);
+        EXPECT_TRUE(isFinite(e)) << i;
+        EXPECT_GE(std::min({e.r, e.g, e.b}), 0.0) << i;
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Leaks: a lit room and a dark room, a thin single-sided wall between them.
+// ---------------------------------------------------------------------------
+
+TEST(Leaks, DarkRoomStaysDark) {
+    Scene scene;
+    scene.name = "two rooms";
+    Material white;
+    white.name = "white";
+    white.kd = Rgb(0.7);
+    Material lamp;
+    lamp.name = "lamp";
+    lamp.kd = Rgb(0.7);
+    lamp.ke = Rgb(10.0);
+    scene.materials = {white, lamp};
+    // Two rooms, [-2, 0] and [0, 2] x [0, 2] x [0, 2], each with its own
+    // floor, ceiling and walls facing in (as rooms are modelled: a cache mesh
+    // never interpolates across the wall), open where they meet.
+    Mesh shell;
+    shell.name = "shell";
+    for (int room = 0; room < 2; ++room) {
+        const Vec3 lo(room ? 0.0 : -2.0, 0, 0), hi(room ? 2.0 : 0.0, 2, 2), c = 0.5 * (lo + hi);
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                if (axis == 0 && side == 1 - room) continue;  // the partition's place
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                std::array<Vec3, 4> q;
+                for (int k = 0; k < 4; ++k) {
+                    Vec3 p;
+                    p[axis] = side ? hi[axis] : lo[axis];
+                    p[u] = (k == 1 || k == 2) ? hi[u] : lo[u];
+                    p[v] = (k >= 2) ? hi[v] : lo[v];
+                    q[size_t(k)] = p;
+                }
+                Vec3 toCenter = c - q[0];
+                toCenter[u] = toCenter[v] = 0;
+                addQuad(shell, q, toCenter, 0);
+            }
+    }
+    // The partition at x = 0: one quad, lit side towards the lamp (x < 0).
+    Mesh wall;
+    wall.name = "partition";
+    addQuad(wall, {Vec3(0, 0, 0), Vec3(0, 2, 0), Vec3(0, 2, 2), Vec3(0, 0, 2)}, Vec3(-1, 0, 0), 0);
+    Mesh light;
+    light.name = "lamp";
+    addQuad(light, {Vec3(-1.3, 1.99, 0.7), Vec3(-0.7, 1.99, 0.7), Vec3(-0.7, 1.99, 1.3), Vec3(-1.3, 1.99, 1.3)},
+            Vec3(0, -1, 0), 1);
+    scene.meshes = {shell, wall, light};
+    scene.finalize();
+
+    GatherSettings gs;
+    gs.resolution = 64;
+    const BouncePlan plan = planBounces(scene);
+    Pipeline p(scene, gs, plan.bounces, plan.meanAlbedo);
+    p.solve();
+    // Indirect irradiance over every bounce, at a point.
+    std::vector<IrradianceMeshView> views = p.solver->views();
+    std::vector<MeshIrradianceLookup> lookups;
+    for (const IrradianceMeshView& v : views) lookups.emplace_back(v, 0.1, 1e-4);
+    auto indirect = [&](const Vec3& x, const Vec3& n) {
+        double e = 0;
+        for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));
+        return e;
+    };
+    double lit = 0;
+    int litCount = 0;
+    for (double x = -1.9; x < -0.1; x += 0.3)
+        for (double z = 0.2; z < 2; z += 0.3) lit += indirect(Vec3(x, 0, z), Vec3(0, 1, 0)), ++litCount;
+    lit /= litCount;
+    ASSERT_GT(lit, 0.1);
+    // The dark room: no light path reaches it, so all light there is leak:
+    // through floor, ceiling and side-wall texels that straddle the
+    // partition (a texel a voxel wide, 6 cm here, averages both rooms'
+    // surfaces) and from there on by further bounces. Bounds, measured
+    // 3.2%, 0.57% and 0.53% (of the lit room's floor, mean): 4% within
+    // 0.4 m of the partition, 1.5% beyond, 1% on average over the dark room.
+    double nearMax = 0, farMax = 0, darkSum = 0;
+    int darkCount = 0;
+    for (double x = 0.05; x < 2; x += 0.15)
+        for (double z = 0.2; z < 2; z += 0.4) {
+            const double e = indirect(Vec3(x, 0, z), Vec3(0, 1, 0)) / lit;
+            (x < 0.4 ? nearMax : farMax) = std::max(x < 0.4 ? nearMax : farMax, e);
+            darkSum += e, ++darkCount;
+        }
+    for (double y = 0.2; y < 2; y += 0.4) {
+        const double e = indirect(Vec3(2, y, 1), Vec3(-1, 0, 0)) / lit;
+        farMax = std::max(farMax, e);
+        darkSum += e, ++darkCount;
+    }
+    std::printf("leak, relative to the lit floor: %.4f near the partition, %.4f beyond, %.4f mean\n", nearMax, farMax,
+                darkSum / darkCount);
+    EXPECT_LT(nearMax, 0.04);
+    EXPECT_LT(farMax, 0.015);
+    EXPECT_LT(darkSum / darkCount, 0.01);
+}
+
+}  // namespace
+}  // namespace ml
+namespace ml {
+namespace {
+
+// In a box whose walls all reflect the same radiance Lo, one gather gives
+// E = π·Lo wherever the point is: face centres, a hair off a wall, on an
+// edge, in a corner (where a cache vertex sits, sampled a hair inside its
+// faces). Tolerance 0.5%: face texels tile the walls exactly, so only rays
+// along the box's edges can slip between faces, a few pixels of 1,256.
+TEST(UniformBox, OneGatherIsPiTimesTheRadiance) {
+    const Scene scene = furnace(0.5, 1.0);
+    GatherSettings gs;
+    gs.resolution = 32;
+    Pipeline p(scene, gs, 1, 0.5);
+    p.gather->setSource(0, p.directViews());  // Lo = a/π · π·Le = 0.5 everywhere
+    const Vec3 pts[] = {{0.5, 0, 0.5}, {0.5, 0.001, 0.5}, {0.02, 0, 0.5}, {0.0, 0, 0.5}, {0, 0, 0},
+                        {0.3, 0, 0.7}, {0.5, 0.5, 0}, {0.97, 0.5, 0.5}, {0.999, 0.5, 0.5}};
+    const Vec3 ns[] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {-1, 0, 0}};
+    for (size_t i = 0; i < std::size(pts); ++i) {
+        Rgb s(0.0);
+        for (int k = 0; k < 4; ++k) s += p.gather->estimate(0, pts[i], ns[i], uint32_t(k));
+        EXPECT_NEAR(s.g / 4 / (kPi * 0.5), 1.0, 0.005) << "point " << i;
+    }
+}
+
+}  // namespace
+}  // namespace ml

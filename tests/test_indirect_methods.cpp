@@ -1,0 +1,336 @@
+// The indirect gathers `bench indirect` compares (slices, slice-quads,
+// raymarch, fisheye-triangles, perspective, hemicube) on values known
+// exactly or independently:
+//   - the exact pixel weights (perspective planes, hemicube faces);
+//   - a closed furnace whose walls all reflect the same radiance Lo: every
+//     direction sees Lo, so E = π·Lo, within each method's discretisation
+//     (the wide perspective plane sees its known share of it);
+//   - the path tracer's one-bounce indirect irradiance in the Cornell box;
+//   - finite, non-negative answers on and beside geometry.
+#include "cache/IrradianceCache.h"
+#include "core/MeshUtil.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "core/reference/ExactIrradiance.h"
+#include "core/scenes/CornellBox.h"
+#include "gpu_sampling/indirect/SliceGather.h"
+#include "gpu_sampling/indirect/TriangleGather.h"
+#include "gpu_sampling/indirect/VoxelMarchGather.h"
+#include "viewer/cli/IndirectSetup.h"
+
+#include "GlTestContext.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+using namespace ml;
+
+namespace {
+
+// --- Methods -------------------------------------------------------------------------
+
+struct Method {
+    std::string name;
+    int imageSize;
+    int resolution;  // voxels, or the triangle proxy's
+};
+
+std::unique_ptr<IndirectEstimator> make(const Method& m, const Scene& scene) {
+    GlContext& context = test::glContext();
+    if (m.name == "slices" || m.name == "slice-quads" || m.name == "raymarch") {
+        GatherSettings g;
+        g.imageSize = m.imageSize;
+        g.resolution = m.resolution;
+        g.quadPerFace = m.name == "slice-quads";
+        if (m.name == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, g);
+        return std::make_unique<SliceGather>(context, scene, g);
+    }
+    TriangleGatherSettings t;
+    t.imageSize = m.imageSize;
+    t.resolution = m.resolution;
+    t.projection = m.name == "perspective" ? TriangleProjection::Perspective
+                   : m.name == "hemicube"  ? TriangleProjection::Hemicube
+                                           : TriangleProjection::Fisheye;
+    return std::make_unique<TriangleGather>(context, scene, t);
+}
+
+// The six methods at test sizes (seconds on llvmpipe, not the bench's).
+std::vector<Method> allMethods(int resolution) {
+    return {{"slices", 40, resolution},       {"slice-quads", 40, resolution},
+            {"raymarch", 40, resolution},     {"fisheye-triangles", 40, resolution},
+            {"perspective", 128, resolution}, {"hemicube", 64, resolution}};
+}
+
+// Luminance of the mean of `k` gathers with seeds 0..k−1.
+double meanOf(IndirectEstimator& e, const Vec3& x, const Vec3& n, int k) {
+    double sum = 0;
+    for (int s = 0; s < k; ++s) sum += luminance(e.estimate(0, x, n, uint32_t(s)));
+    return sum / k;
+}
+
+// The share of a uniform sky's irradiance a square perspective image of
+// this full angle sees: 4 × the corner form factor of a square of half-side
+// tan(angle/2) at distance 1, (4/π)·s·atan(s) with s = sin(angle/2).
+double squarePlaneShare(double degrees) {
+    const double s = std::sin(0.5 * degrees * kPi / 180);
+    return 4 / kPi * s * std::atan(s);
+}
+
+// --- Pixel weights ----------------------------------------------------------------------
+
+TEST(IndirectWeights, PlaneRectangleIntegratesToPiOverTheWholePlane) {
+    EXPECT_NEAR(planeRectangleWeight(-1e7, 1e7, -1e7, 1e7), kPi, 1e-6);
+    // Additive: two halves make the whole.
+    EXPECT_NEAR(planeRectangleWeight(-1, 0.3, -2, 1) + planeRectangleWeight(0.3, 1, -2, 1),
+                planeRectangleWeight(-1, 1, -2, 1), 1e-14);
+    // A tiny pixel at (x, y) weighs dA / (1 + x² + y²)².
+    const double x = 0.7, y = -1.3, h = 1e-4, cx = x + h / 2, cy = y + h / 2;
+    EXPECT_NEAR(planeRectangleWeight(x, x + h, y, y + h) / (h * h), 1 / std::pow(1 + cx * cx + cy * cy, 2), 1e-6);
+}
+
+TEST(IndirectWeights, HemicubeFacesAddUpToPi) {
+    const double top = planeRectangleWeight(-1, 1, -1, 1);
+    const double side = sideRectangleWeight(-1, 1, 0, 1);
+    EXPECT_NEAR(top + 4 * side, kPi, 1e-12);
+    // A tiny side pixel at (y, z) weighs z·dA / (1 + y² + z²)².
+    const double y = 0.4, z = 0.6, h = 1e-4;
+    EXPECT_NEAR(sideRectangleWeight(y, y + h, z, z + h) / (h * h),
+                (z + h / 2) / std::pow(1 + (y + h / 2) * (y + h / 2) + (z + h / 2) * (z + h / 2), 2), 1e-6);
+}
+
+TEST(IndirectWeights, WidePlaneSeesItsKnownShare) {
+    const Scene scene = makeCornellBox();
+    TriangleGatherSettings t;
+    t.projection = TriangleProjection::Perspective;
+    t.resolution = 8;
+    t.imageSize = 64;
+    EXPECT_NEAR(TriangleGather(test::glContext(), scene, t).coverage(), squarePlaneShare(160), 1e-9);
+    // 97.5%: a round 160° image would see sin² 80° = 97.0%.
+    EXPECT_NEAR(squarePlaneShare(160), 0.9752, 1e-4);
+    t.projection = TriangleProjection::Hemicube;
+    EXPECT_NEAR(TriangleGather(test::glContext(), scene, t).coverage(), 1.0, 1e-12);
+}
+
+// --- The furnace ------------------------------------------------------------------------
+
+// A closed cube [−1, 1]³ (metres), every face inward, albedo 0.5: a closed
+// mesh, so the proxy keeps one side per face, its back black and opaque.
+Scene furnaceScene() {
+    Scene scene;
+    scene.name = "furnace";
+    Material wall;
+    wall.name = "wall";
+    wall.kd = Rgb(0.5);
+    scene.materials = {wall};
+    Mesh mesh;
+    mesh.name = "box";
+    auto corner = [](int i) { return Vec3(i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0); };
+    const int faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+    for (const auto& f : faces) {
+        std::array<Vec3, 4> q{corner(f[0]), corner(f[1]), corner(f[2]), corner(f[3])};
+        const Vec3 centre = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+        if (glm::dot(glm::cross(q[1] - q[0], q[2] - q[0]), -centre) < 0) std::swap(q[1], q[3]);
+        const uint32_t base = uint32_t(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), q.begin(), q.end());
+        mesh.triangles.push_back({base, base + 1, base + 2});
+        mesh.triangles.push_back({base, base + 2, base + 3});
+    }
+    mesh.materials.assign(mesh.triangles.size(), 0);
+    mesh.sourceLines.assign(mesh.triangles.size(), 0);
+    computeShadingNormals(mesh, 0.0);
+    scene.meshes.push_back(mesh);
+    scene.finalize();
+    return scene;
+}
+
+// Irradiance E0 everywhere on the walls' inner sides: Lo = Kd/π · E0.
+std::vector<IrradianceMeshView> uniformSource(const Scene& scene, double e0) {
+    IrradianceMeshView v;
+    const Mesh& m = scene.meshes.front();
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const Vec3 n = glm::normalize(m.areaNormal(t));
+        const uint32_t base = uint32_t(v.positions.size());
+        for (int k = 0; k < 3; ++k) {
+            v.positions.push_back(m.positions[m.triangles[t][k]]);
+            v.normals.push_back(n);
+            v.irradiance.push_back(Rgb(e0));
+            v.samples.push_back(1);
+        }
+        v.triangles.push_back({base, base + 1, base + 2});
+    }
+    return {v};
+}
+
+struct FurnacePoint {
+    const char* what;
+    Vec3 x, n;
+};
+const FurnacePoint kFurnacePoints[] = {
+    {"floor centre", {0.1, -1, 0.05}, {0, 1, 0}},
+    {"middle, tilted normal", {0.05, 0.1, -0.2}, glm::normalize(Vec3(0.3, 1, -0.5))},
+    {"floor corner, 4 mm from two walls", {0.996, -1, -0.996}, {0, 1, 0}},
+    {"on a wall next to the floor", {-1, -0.997, 0.3}, {1, 0, 0}},
+    {"on the floor's edge with a wall, exactly", {1, -1, 0.3}, {0, 1, 0}},
+};
+
+TEST(IndirectFurnace, EveryMethodSeesPiTimesLo) {
+    const Scene scene = furnaceScene();
+    const double e0 = 2.0, lo = 0.5 * e0 / kPi, expected = kPi * lo;
+    for (const Method& m : allMethods(16)) {
+        const std::unique_ptr<IndirectEstimator> e = make(m, scene);
+        e->setSource(0, uniformSource(scene, e0));
+        for (const FurnacePoint& p : kFurnacePoints) {
+            SCOPED_TRACE(m.name + " at " + p.what);
+            const double share = m.name == "perspective" ? squarePlaneShare(160) : 1.0;
+            if (m.name == "hemicube" || m.name == "perspective") {
+                // Exact weights, every pixel covered: only float rounding,
+                // whatever the seed (it turns the image).
+                EXPECT_NEAR(luminance(e->estimate(0, p.x, p.n, 7)) / expected, share, 1e-4);
+            } else {
+                // The fish-eye: pixels whose jittered point falls in the
+                // disc, (2/N)² each: a single gather is off by about
+                // √(boundary pixels)/4 × (2/N)² / π = 0.5% at N = 40, the
+                // mean of 16 by a quarter of that. The voxel methods also
+                // let grazing rays out along the slab of a wall the eye
+                // stands in (a voxel is 13 cm here): 1.2% at 4 mm from two walls.
+                const bool nearWall = &p != &kFurnacePoints[0] && &p != &kFurnacePoints[1];
+                const bool voxels = m.name != "fisheye-triangles";
+                EXPECT_NEAR(luminance(e->estimate(0, p.x, p.n, 7)) / expected, 1.0, 0.025);
+                EXPECT_NEAR(meanOf(*e, p.x, p.n, 16) / expected, 1.0, voxels && nearWall ? 0.02 : 0.006);
+            }
+        }
+    }
+}
+
+// The fish-eye's straight edges: a wall 4 mm from the eye, drawn with its
+// proxy triangles (a quarter of a metre across at 16 voxels) as they are,
+// loses much of what it sends; tessellated near the eye, it does not.
+TEST(IndirectFurnace, FisheyeTrianglesNeedTessellationNearTheEye) {
+    const Scene scene = furnaceScene();
+    const double e0 = 2.0, expected = 0.5 * e0;
+    const FurnacePoint& corner = kFurnacePoints[2];
+    TriangleGatherSettings t;
+    t.projection = TriangleProjection::Fisheye;
+    t.resolution = 16;
+    t.imageSize = 40;
+    t.tessellationDegrees = 0;
+    TriangleGather straight(test::glContext(), scene, t);
+    straight.setSource(0, uniformSource(scene, e0));
+    t.tessellationDegrees = 10;
+    TriangleGather tessellated(test::glContext(), scene, t);
+    tessellated.setSource(0, uniformSource(scene, e0));
+    EXPECT_LT(meanOf(straight, corner.x, corner.n, 8) / expected, 0.9);
+    EXPECT_NEAR(meanOf(tessellated, corner.x, corner.n, 8) / expected, 1.0, 0.006);
+}
+
+// --- The Cornell box against the path tracer ------------------------------------------------
+
+// The direct cache's base mesh, sampled exactly: the bench's source.
+std::vector<IrradianceMeshView> cornellSource(const Scene& scene) {
+    IrradianceCache cache(scene);
+    const ExactDirect exact(scene);
+    sampleEveryVertex(
+        cache, [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); }, 1,
+        1);
+    std::vector<IrradianceMeshView> views;
+    for (size_t l = 0; l < cache.lightCount(); ++l) views.push_back(cache.view(l));
+    return views;
+}
+
+// Away from contacts and corners, where the source cache (30 mm triangles)
+// is within about 1% of the true direct light (bench indirect: the floor).
+struct CornellPoint {
+    const char* what;
+    Vec3 x, n;
+};
+const CornellPoint kCornellPoints[] = {
+    {"floor", {400, 0, 120}, {0, 1, 0}},
+    {"ceiling", {420, 548.8, 60}, {0, -1, 0}},
+    {"back wall", {300, 260, 559.2}, {0, 0, -1}},
+    {"right (green) wall", {0, 350, 210}, {1, 0, 0}},
+};
+
+TEST(IndirectCornell, EveryMethodAgreesWithThePathTracer) {
+    const Scene scene = makeCornellBox();
+    const std::vector<IrradianceMeshView> source = cornellSource(scene);
+    const EmbreeScene rays(scene);
+    PathTracerSettings pts;
+    pts.maxDepth = 2;  // direct + one bounce: `indirect` is the first bounce
+    pts.threads = 1;
+    const PathTracer tracer(rays, pts);
+    std::vector<double> reference;
+    for (size_t i = 0; i < std::size(kCornellPoints); ++i) {
+        const IrradianceEstimate r = tracer.irradiance(kCornellPoints[i].x, kCornellPoints[i].n, 1 << 18, uint32_t(i));
+        reference.push_back(luminance(r.indirect));
+        ASSERT_LT(luminance(r.indirectError), 0.005 * reference.back()) << kCornellPoints[i].what;
+    }
+    // Tolerances: the path tracer's noise (< 0.5%) and the source's error
+    // (~1%), plus each method's own at these sizes, with margin over what
+    // was measured: the voxel methods at 32 voxels run 2-8% low here
+    // (partly covered faces let rays through), the triangle proxy at 32
+    // (2-voxel pieces) is within 1.5%, and the wide plane misses the grazing
+    // light (4% low at the walls).
+    for (const Method& m : allMethods(32)) {
+        const std::unique_ptr<IndirectEstimator> e = make(m, scene);
+        e->setSource(0, source);
+        const bool voxels = m.name == "slices" || m.name == "slice-quads" || m.name == "raymarch";
+        const double tolerance = voxels ? 0.10 : m.name == "perspective" ? 0.05 : 0.03;
+        for (size_t i = 0; i < std::size(kCornellPoints); ++i) {
+            const CornellPoint& p = kCornellPoints[i];
+            EXPECT_NEAR(meanOf(*e, p.x, p.n, 8) / reference[i], 1.0, tolerance) << m.name << " at the " << p.what;
+        }
+    }
+}
+
+// --- On and beside geometry ----------------------------------------------------------------------
+
+TEST(IndirectRobustness, FiniteOnAndBesideGeometry) {
+    const Scene scene = makeCornellBox();
+    const std::vector<IrradianceMeshView> source = cornellSource(scene);
+    const struct {
+        Vec3 x, n;
+    } points[] = {
+        {{0, 0, 559.2}, {0, 1, 0}},              // the floor's back-right corner, exactly
+        {{0, 0, 559.2}, {1, 0, 0}},              // the same corner, on the right wall
+        {{0, 0, 559.2}, {0, 0, -1}},             // the same corner, on the back wall
+        {{0, 548.8, 0}, {0, -1, 0}},             // the ceiling's front corner, on the open side
+        {{265, 0, 296}, {0, 1, 0}},              // where the tall block stands on the floor
+        {{265, 330, 296}, {0, 1, 0}},            // the tall block's top corner
+        {{278, 548.8 - 1e-4, 280}, {0, -1, 0}},  // a hair below the ceiling, beside the light
+        {{278, 548.3, 280}, {0, -1, 0}},         // on the light itself
+        {{1e-4, 274, 280}, {1, 0, 0}},           // a hair off the right wall
+        {{278, 274, 280}, {0, 1, 0}},            // mid-air
+    };
+    for (const Method& m : allMethods(16)) {
+        const std::unique_ptr<IndirectEstimator> e = make(m, scene);
+        e->setSource(0, source);
+        for (const auto& p : points)
+            for (uint32_t seed : {0u, 1u}) {
+                const Rgb v = e->estimate(0, p.x, p.n, seed);
+                EXPECT_TRUE(isFinite(v)) << m.name << " at (" << p.x.x << ", " << p.x.y << ", " << p.x.z << ")";
+                EXPECT_GE(std::min({v.r, v.g, v.b}), 0.0) << m.name;
+            }
+    }
+}
+
+// --- The registry --------------------------------------------------------------------------------
+
+TEST(IndirectRegistry, EveryNameMakesItsMethod) {
+    const Scene scene = furnaceScene();
+    IndirectChoice choice;
+    choice.gather.resolution = 8;
+    choice.gather.imageSize = 16;
+    for (const char* name : {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube"}) {
+        const std::vector<std::string> names = indirectMethodNames();
+        EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+        choice.method = name;
+        EXPECT_EQ(makeIndirectEstimator(test::glContext(), scene, choice)->name(), name);
+    }
+}
+
+}  // namespace

@@ -1,0 +1,3 @@
+// Constants of the compositing shaders.
+const float kInvPi = 0.31830988618379067;
+const vec3 kLuminance = vec3(0.2126, 0.7152, 0.0722);  // Rec. 709, as luminance() in core/Math.h

@@ -1,0 +1,28 @@
+// Shades the nearest surface of each pixel as compositeValue() does for a
+// sub-pixel, straight from the face's Kd and light (no float G-buffer to
+// write and read back: the cost that dominates on a software rasteriser),
+// then maps it for display (common_display.glsl).
+flat in vec3 vKd;
+flat in int vLight;
+
+layout(binding = 1) uniform sampler2D uIrradiance;  // Σ weighted cached irradiance, W·m⁻²
+layout(std430, binding = 0) readonly buffer LightEmissionBuffer { vec4 uLightEmission[]; };
+uniform float uEfficacy;   // lm/W
+
+layout(location = 0) out vec4 outColor;
+
+void main() {
+#if QUANTITY == 1
+    vec3 value = vKd;
+#else
+    vec3 e = texelFetch(uIrradiance, ivec2(gl_FragCoord.xy), 0).rgb;
+#if QUANTITY == 2
+    vec3 value = vec3(uEfficacy * dot(e, kLuminance));
+#else
+    // Emitters radiate from their front (counter-clockwise) face only.
+    vec3 le = gl_FrontFacing && vLight >= 0 ? uLightEmission[max(vLight, 0)].rgb : vec3(0.0);
+    vec3 value = vKd * kInvPi * e + le;
+#endif
+#endif
+    outColor = displayColour(value, 1.0);
+}

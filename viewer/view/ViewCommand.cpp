@@ -1,0 +1,117 @@
+// meshlight view: the progressive walkthrough viewer (ViewSession.h), and
+// its scripted twin (--script, ViewScript.h). Everything the user can get
+// wrong, the script included, is checked before the window opens.
+#include "ViewScript.h"
+#include "ViewSession.h"
+#include "viewer/cli/CameraOptions.h"
+#include "viewer/cli/Commands.h"
+#include "viewer/cli/DirectSetup.h"
+#include "viewer/cli/IndirectSetup.h"
+#include "viewer/cli/Plan.h"
+
+#include "core/Error.h"
+#include "core/io/AtomicFile.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace ml {
+
+namespace {
+
+// The built-in scenes' units; an OBJ file says nothing, so metres.
+LengthUnit defaultUnit(const std::string& sceneArg) {
+    if (sceneArg == "cornell") return LengthUnit::Millimetre;  // the measured box is in millimetres
+    return LengthUnit::Metre;
+}
+
+}  // namespace
+
+int runView(const std::vector<std::string>& args) {
+    Options o("view");
+    o.positional("scene", "cornell, bench or an OBJ file");
+    o.value("width", "W", "window width, pixels", std::string("1280"));
+    o.value("height", "H", "window height, pixels", std::string("720"));
+    declareCameraOptions(o);
+    o.value("script", "FILE", "play camera keyframes and actions from FILE (see README: view), then keep the "
+                              "window open unless it says quit");
+    o.value("script-step", "S", "script time advances S seconds per frame instead of with the clock (repeatable "
+                                "timing for recordings)");
+    o.value("samples", "N", "the worker stops after N irradiance samples in all: with the same seed and view, "
+                            "the same cache as 'render --samples N'");
+    o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
+    o.value("cache", "FILE", "resume from this cache file if it exists; 'save cache' and the end of the session "
+                             "save to it");
+    o.value("units", "mm|cm|m", "the scene's length unit, for walking speed, positions and light power (lux does "
+                                "not depend on it); default mm for cornell, m otherwise");
+    o.value("efficacy", "LM_PER_W", "luminous efficacy turning irradiance (W/m2) into lux; 179 is RADIANCE's "
+                                    "equal-energy white",
+            concat(kDefaultEfficacy));
+    o.value("supersample", "S", "S×S sub-pixels per pixel on screen (1..4; screenshots use the same)",
+            std::string("1"));
+    o.value("exposure", "EV", "exposure in stops, on top of the metered exposure", std::string("0"));
+    o.value("tonemap", "OP", "aces, reinhard or clamp", std::string("aces"));
+    o.value("max-fps", "F", "draw at most F frames per second (0: no limit)", std::string("60"));
+    o.flag("direct-only", "direct light only: no indirect bounces");
+    declareDirectOptions(o);
+    declareCacheOptions(o);
+    declareIndirectOptions(o);
+    if (!o.parseOrPrintHelp(args)) return 0;
+
+    ViewSettings s;
+    s.width = o.integer("width", 16, 16384);
+    s.height = o.integer("height", 16, 16384);
+    s.supersample = o.integer("supersample", 1, 4);
+    s.direct = readDirectOptions(o);
+    if (s.direct.passes != 1)
+        throw InputError("view samples each vertex as often as its noise asks: --passes is for probe");
+    s.cache = readCacheSettings(o);
+    s.indirect = readIndirectOptions(o);
+    s.worker.seed = s.direct.seed;
+    s.worker.publishSeconds = o.number("publish", 0, 3600);
+    if (o.has("samples")) s.worker.maxSamples = uint64_t(o.number("samples", 1, 1e15));
+    s.cachePath = o.has("cache") ? o.str("cache") : "";
+    if (!s.cachePath.empty()) checkOutputDirectory(s.cachePath);
+    const std::string sceneArg = o.positionalValue("scene");
+    s.unit = o.has("units") ? parseLengthUnit(o.str("units")) : defaultUnit(sceneArg);
+    s.efficacy = o.number("efficacy", 1e-3, 683);
+    s.display.exposureEV = o.number("exposure", -50, 50);
+    s.display.op = parseToneOperator(o.str("tonemap"));
+    s.maxFps = o.number("max-fps", 0, 1000);
+    if (o.has("script-step")) {
+        if (!o.has("script")) throw InputError("--script-step needs --script");
+        s.scriptStep = o.number("script-step", 1e-6, 3600);
+    }
+    // The script is read and checked (against the scene below) before the window opens.
+    std::optional<ViewScript> script;
+    if (o.has("script")) script = loadViewScript(o.str("script"));
+
+    const Scene scene = loadSceneArgument(sceneArg);
+    for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (script) {
+        std::vector<std::string> names;
+        for (const AreaLight& l : scene.lights) names.push_back(l.name);
+        resolveViewScript(*script, names);
+        s.script = std::move(*script);
+    }
+    s.camera = cameraFromOptions(o, scene, double(s.width) / s.height);
+    std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights; units %s, %g lm/W\n", scene.name.c_str(),
+                scene.meshes.size(), scene.triangleCount(), scene.lights.size(), lengthUnitName(s.unit), s.efficacy);
+    s.indirect.decide(scene);
+    printPlan(scene, s.direct, s.cache, s.indirect);
+    if (s.worker.maxSamples)
+        std::printf("  the worker stops after %llu samples\n", static_cast<unsigned long long>(s.worker.maxSamples));
+
+    if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY"))
+        throw std::runtime_error("view opens a window and there is no display: run it on a desktop, or under "
+                                 "xvfb-run -a -s \"-screen 0 1920x1080x24\"");
+    ViewSession session(scene, s);
+    std::printf("OpenGL: %s\n", session.glDescription().c_str());
+    if (!s.script)
+        std::printf("walk with WASD (Q/E down/up, Shift faster), drag to look, R back to the start; Tab hides the "
+                    "panel, P pauses refinement, F12 saves an image; close the window or Ctrl-C to quit\n");
+    return session.run();
+}
+
+}  // namespace ml

@@ -1,0 +1,852 @@
+#include "ViewSession.h"
+
+#include "Ui.h"
+#include "core/Error.h"
+#include "core/image/Image.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "viewer/Compositor.h"
+#include "viewer/GpuCacheMeshes.h"
+#include "viewer/ToneMap.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace ml {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// Ctrl-C: the first asks the frame loop to end cleanly; a second one, a
+// second or more later, ends the process at once. (Not sooner: `timeout`
+// and some shells send one interrupt to the process and again to its group,
+// which would otherwise count as two.) Only async-signal-safe calls here.
+std::atomic<bool> gInterrupted{false};
+std::atomic<long long> gFirstInterruptNs{0};
+
+long long monotonicNs() {
+    timespec t{};
+    ::clock_gettime(CLOCK_MONOTONIC, &t);
+    return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
+}
+
+extern "C" void onSigint(int) {
+    const long long now = monotonicNs();
+    if (!gInterrupted.exchange(true)) {
+        gFirstInterruptNs.store(now);
+        return;
+    }
+    if (now - gFirstInterruptNs.load() > 1000000000LL) ::_exit(130);
+}
+
+class SigintGuard {
+public:
+    SigintGuard() {
+        static_assert(std::atomic<long long>::is_always_lock_free, "the handler needs lock-free atomics");
+        gInterrupted.store(false);
+        struct sigaction sa {};
+        sa.sa_handler = onSigint;
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = 0;
+        sigaction(SIGINT, &sa, &previous_);
+    }
+    ~SigintGuard() { sigaction(SIGINT, &previous_, nullptr); }
+
+private:
+    struct sigaction previous_ {};
+};
+
+// How long the camera must rest between two views sent to the worker: a
+// new view restarts its scoring, so sending one every frame would waste it.
+constexpr double kViewInterval = 0.1;
+// The share of a frame spent copying a newer snapshot to the GPU.
+constexpr double kUploadBudget = 0.004;
+// Frames drawn after the last activity, so ImGui settles (hover, fades).
+constexpr int kSettleFrames = 3;
+// The worker thread's niceness: below the window's, so a frame never waits
+// for a round; a failure to set it (not permitted) leaves it as it was.
+constexpr int kWorkerNice = 10;
+
+bool sameCamera(const Camera& a, const Camera& b) {
+    return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
+}
+
+// Distinct colours for the meshes' wireframes: hues a golden angle apart.
+Rgb meshColour(size_t i) {
+    const double h = std::fmod(0.08 + 0.6180339887 * double(i), 1.0) * 6.0;
+    const double s = 0.7, v = 1.0;
+    const int sector = int(h);
+    const double f = h - sector, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
+    switch (sector % 6) {
+        case 0: return {v, t, p};
+        case 1: return {q, v, p};
+        case 2: return {p, v, t};
+        case 3: return {p, q, v};
+        case 4: return {t, p, v};
+        default: return {v, p, q};
+    }
+}
+
+// What the user set LP_NUM_THREADS to, read before anything in this
+// process can set it (OsMesaContext does).
+const std::optional<std::string> kUserLlvmpipeThreads = [] {
+    const char* v = std::getenv("LP_NUM_THREADS");
+    return v ? std::optional<std::string>(v) : std::nullopt;
+}();
+
+// llvmpipe reads LP_NUM_THREADS when a screen starts (for GLX: when GLFW
+// starts). The window's image is large and wants every core, but
+// OsMesaContext sets 0 for the whole process (one sampling image is one
+// tile): a window opened after a worker (the bench opens several) would
+// render on one thread. So the window gets llvmpipe's default, one thread
+// per core, unless the user chose, and the variable is put back after.
+std::unique_ptr<GlContext> openWindow(const WindowOptions& options) {
+    const char* before = std::getenv("LP_NUM_THREADS");
+    const std::optional<std::string> saved = before ? std::optional<std::string>(before) : std::nullopt;
+    if (!kUserLlvmpipeThreads)
+        ::setenv("LP_NUM_THREADS", std::to_string(std::max(1u, std::thread::hardware_concurrency())).c_str(), 1);
+    std::unique_ptr<GlContext> window;
+    try {
+        window = createWindowContext(options);
+    } catch (...) {
+        saved ? ::setenv("LP_NUM_THREADS", saved->c_str(), 1) : ::unsetenv("LP_NUM_THREADS");
+        throw;
+    }
+    saved ? ::setenv("LP_NUM_THREADS", saved->c_str(), 1) : ::unsetenv("LP_NUM_THREADS");
+    return window;
+}
+
+}  // namespace
+
+struct ViewSession::Impl : ScriptHost {
+    // What the frame shows of a snapshot, kept after the snapshot itself is gone.
+    struct Shown {
+        bool any = false;
+        uint64_t generation = 0, version = 0;
+        double seconds = 0;
+        size_t vertices = 0, triangles = 0, indirectMeshes = 0;
+        uint64_t samples = 0, rounds = 0, viewSerial = 0;
+        double estimatedError = 1;
+        bool converged = false;
+    };
+    // A cache being saved: the worker is stopped and the file written on
+    // this helper thread, so frames go on meanwhile; a new worker then
+    // continues from the saved state (a resumed cache refines exactly like
+    // one never saved).
+    struct SaveJob {
+        std::string path;
+        std::thread thread;
+        std::atomic<bool> done{false};
+        std::string error;
+    };
+
+    const Scene& scene;
+    ViewSettings settings;
+    Clock::time_point t0 = Clock::now();
+
+    std::vector<LightControl> lightControls;
+    std::vector<Rgb> lightPowers;  // W per channel, at the scene's Ke
+    std::vector<UiLightInfo> lightInfo;
+    DisplayState state;
+
+    IrradianceCache cache;
+    std::shared_ptr<DirectPhaseTimes> phases = std::make_shared<DirectPhaseTimes>();
+    std::unique_ptr<GlContext> window;
+    std::unique_ptr<Compositor> compositor;
+    std::unique_ptr<CacheMeshUploader> uploader;
+    std::unique_ptr<Ui> ui;
+    WalkCamera walk;
+    std::optional<ScriptPlayer> player;
+    std::optional<Clock::time_point> scriptStart;
+    uint64_t frameIndex = 0;
+
+    std::vector<IrradianceMeshView> emptyMeshes;
+    std::unique_ptr<IndirectSolver> solver;  // outlives every worker
+    std::unique_ptr<CacheWorker> worker;
+    mutable CacheWorker::Reader reader;
+    const CacheSnapshot* uploading = nullptr;  // pinned by `reader` while it is copied
+    uint64_t generation = 0;                   // workers started so far
+    Shown shown;
+    bool paused = false;
+
+    // The view the worker serves.
+    Camera sentCamera;
+    int sentWidth = 0, sentHeight = 0;
+    uint64_t sentSerial = 0;
+    double sentAt = -1e30;
+    bool viewDirty = false;
+
+    // Requests for the frame being made.
+    bool quitRequested = false;
+    bool meterExposurePending = false, meterLuxPending = false;
+    double meteredScale = 1;  // autoExposureScale of the metered image
+    bool meteredOnce = false;
+    std::vector<std::string> screenshots;
+    std::optional<Clock::time_point> lightChangedAt;
+    std::unique_ptr<SaveJob> save;
+    std::string workerError, message;
+    double messageUntil = 0;
+    int exitCode = 0;
+
+    // Input between frames (GLFW callbacks) and the mouse drag.
+    uint64_t events = 0, eventsDrawn = ~uint64_t(0);
+    double scroll = 0;
+    std::vector<int> keysPressed;
+    bool dragging = false;
+    double dragX = 0, dragY = 0;
+    int settleFrames = kSettleFrames;
+    Clock::time_point lastFrame = Clock::now();
+    double frameMsAverage = 0, composeMsAverage = 0;
+    double lastStatus = -1e30;
+    std::optional<double> cursorLux;
+    size_t drawnTriangles = 0;  // by the last frame
+    DisplayMode shownMode = DisplayMode::Final;  // the last frame's
+
+    // Measurements.
+    std::vector<FrameRecord> frames;
+    double firstFrame = -1, firstSnapshotFrame = -1;
+    std::vector<double> lightLatencies;
+
+    Impl(const Scene& s, const ViewSettings& vs)
+        : scene(s), settings(vs), state(vs.display), cache(s, vs.cache),
+          walk(vs.camera, std::max(s.bounds.diagonal(), 1e-30) / 8.0) {
+        const double mpu = metresPerUnit(settings.unit);
+        for (const AreaLight& l : scene.lights) {
+            lightControls.emplace_back();
+            const double area = l.area * mpu * mpu;
+            const Rgb power = kPi * l.radiance * area;
+            lightPowers.push_back(power);
+            lightInfo.push_back({l.name, l.radiance, area, power, illuminanceLux(power, settings.efficacy)});
+        }
+        if (!settings.cachePath.empty() && std::filesystem::exists(settings.cachePath)) {
+            cache.load(settings.cachePath);  // refuses a truncated, corrupt or mismatched file
+            std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
+                        cache.totalVertices(), static_cast<unsigned long long>(cache.totalSamples()));
+        }
+        if (settings.script) player.emplace(*settings.script);
+
+        WindowOptions wo;
+        wo.width = settings.width;
+        wo.height = settings.height;
+        wo.title = "Meshlight - " + scene.name;
+        window = openWindow(wo);
+        GLFWwindow* w = window->window();
+        glfwSwapInterval(0);  // frames are paced by maxFps, not by the display
+        glfwSetWindowUserPointer(w, this);
+        // Installed before ImGui's, which chain to them.
+        glfwSetKeyCallback(w, [](GLFWwindow* win, int key, int, int action, int) {
+            Impl* self = static_cast<Impl*>(glfwGetWindowUserPointer(win));
+            ++self->events;
+            if (action == GLFW_PRESS) self->keysPressed.push_back(key);
+        });
+        glfwSetScrollCallback(w, [](GLFWwindow* win, double, double dy) {
+            Impl* self = static_cast<Impl*>(glfwGetWindowUserPointer(win));
+            ++self->events;
+            self->scroll += dy;
+        });
+        glfwSetCursorPosCallback(w, [](GLFWwindow* win, double, double) {
+            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
+        });
+        glfwSetMouseButtonCallback(w, [](GLFWwindow* win, int, int, int) {
+            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
+        });
+        glfwSetFramebufferSizeCallback(w, [](GLFWwindow* win, int, int) {
+            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
+        });
+        glfwSetWindowRefreshCallback(w, [](GLFWwindow* win) {
+            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
+        });
+        compositor = std::make_unique<Compositor>(*window, scene);
+        uploader = std::make_unique<CacheMeshUploader>(window->gl(), scene.bounds.center());
+        // Until the first snapshot, every light has an empty mesh: the
+        // frames show the emitters and the controls, nothing lit yet.
+        emptyMeshes.resize(scene.lights.size());
+        uploader->start(emptyMeshes, {});
+        uploader->step(1e9);
+        ui = std::make_unique<Ui>(w, settings.screenshotPath,
+                                  settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
+    }
+
+    ~Impl() override {
+        // The worker may still be saving (its helper stops it): finish that first.
+        if (save && save->thread.joinable()) save->thread.join();
+        destroyWorker();
+        glfwSetWindowUserPointer(window->window(), nullptr);
+    }
+
+    double now() const { return secondsBetween(t0, Clock::now()); }
+
+    // --- The worker ---------------------------------------------------------------
+
+    // The one place a worker is made: its samplers (made on its thread),
+    // settings and indirect solver, as `render` makes them. A worker made
+    // again after a save continues the same cache and solver.
+    std::unique_ptr<CacheWorker> createWorker() {
+        const WorkerFactories factories = workerFactories(scene, settings.direct, settings.indirect, phases);
+        if (factories.indirect && !solver) solver = std::make_unique<IndirectSolver>(scene, settings.indirect.solver);
+        // The factory runs first on the worker thread: it lowers that
+        // thread's priority before the sampler (and its GL threads) exist.
+        // Frames then take the processor when they need it and refinement
+        // the rest: the frame rate does not depend on refinement even where
+        // the two share too few cores (llvmpipe renders both on the CPU).
+        CacheWorker::SamplerFactory direct = [f = factories.direct] {
+            ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice);
+            return f();
+        };
+        return std::make_unique<CacheWorker>(cache, direct, settings.worker, solver.get(), factories.indirect);
+    }
+
+    void startWorker(const Camera& camera, int width, int height) {
+        worker = createWorker();
+        reader = worker->reader();
+        ++generation;
+        sendView(camera, width, height);
+        if (paused) worker->pause();
+        worker->start();
+    }
+
+    // Ends the worker (joining it) and frees it on a thread of its own: its
+    // sampler factory may keep the worker's headless GL context alive until
+    // the worker object goes, and destroying an OSMesa context unbinds it
+    // from the calling thread's GL state, shared by every Mesa context in the
+    // process: on this thread, the window's context would stop answering.
+    void destroyWorker() {
+        reader = CacheWorker::Reader();
+        uploading = nullptr;
+        if (!worker) return;
+        std::unique_ptr<CacheWorker> w = std::move(worker);
+        std::thread([&w] { w.reset(); }).join();
+    }
+
+    void sendView(const Camera& camera, int width, int height) {
+        sentSerial = worker->setView(RefinementView{camera, width, height});
+        sentCamera = camera;
+        sentWidth = width;
+        sentHeight = height;
+        sentAt = now();
+        viewDirty = false;
+    }
+
+    // The camera the user sees is the one refined first.
+    void followView(int width, int height) {
+        const Camera c = walk.camera();
+        if (!sameCamera(c, sentCamera) || width != sentWidth || height != sentHeight) viewDirty = true;
+        if (viewDirty && !save && now() - sentAt >= kViewInterval) sendView(c, width, height);
+    }
+
+    void checkWorker() {
+        if (!worker || !workerError.empty()) return;
+        try {
+            worker->rethrowIfFailed();
+        } catch (const std::exception& e) {
+            workerError = e.what();
+            std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", e.what());
+            if (player) {
+                exitCode = 1;
+                quitRequested = true;
+            }
+        }
+    }
+
+    // Ends a save once its file is written and no snapshot of the old worker is being copied.
+    void finishSave(int width, int height) {
+        if (!save || !save->done.load() || uploader->busy()) return;
+        save->thread.join();
+        if (save->error.empty()) {
+            showMessage(concat("saved the cache to ", save->path, " (", cache.totalVertices(), " vertices)"));
+            std::printf("saved the cache to %s\n", save->path.c_str());
+        } else {
+            showMessage("could not save the cache: " + save->error);
+            std::fprintf(stderr, "meshlight: could not save the cache: %s\n", save->error.c_str());
+            if (player) exitCode = 1, quitRequested = true;
+        }
+        save.reset();
+        checkWorker();  // a failure before the stop is still reported
+        destroyWorker();
+        if (workerError.empty()) startWorker(walk.camera(), width, height);
+    }
+
+    // Takes the latest snapshot and copies it to the GPU, a slice per frame.
+    // Returns true when a newer snapshot became the one shown.
+    bool pumpSnapshots(double& uploadMs) {
+        if (!worker) return false;
+        const auto start = Clock::now();
+        if (!uploader->busy()) {
+            const CacheSnapshot* s = reader.acquire();
+            if (s && (!shown.any || shown.generation != generation || s->version != shown.version)) {
+                uploading = s;
+                uploader->start(s->direct, s->indirect);
+            }
+        }
+        bool swapped = false;
+        if (uploader->busy()) {
+            // The first snapshot is copied whole: there is nothing to show before it.
+            swapped = uploader->step(shown.any ? kUploadBudget : 1e9);
+            if (swapped) {
+                const CacheSnapshot& s = *uploading;
+                shown.any = true;
+                shown.generation = generation;
+                shown.version = s.version;
+                shown.seconds = s.seconds;
+                shown.vertices = s.vertices;
+                shown.triangles = uploader->front().triangleCount();
+                shown.indirectMeshes = s.indirect.size();
+                shown.samples = s.samples;
+                shown.rounds = s.rounds;
+                shown.viewSerial = s.viewSerial;
+                shown.estimatedError = s.estimatedError;
+                shown.converged = s.converged;
+                uploading = nullptr;
+            }
+        }
+        uploadMs = 1e3 * secondsBetween(start, Clock::now());
+        return swapped;
+    }
+
+    // --- ScriptHost -----------------------------------------------------------------
+
+    Camera camera() const override { return walk.camera(); }
+    void setCamera(const Camera& c) override { walk.set(c); }
+    DisplayState& display() override { return state; }
+    std::vector<LightControl>& lights() override { return lightControls; }
+    void lightsChanged() override {
+        if (!lightChangedAt) lightChangedAt = Clock::now();
+        if (state.mode == DisplayMode::Illuminance && state.luxAuto) meterLuxPending = true;
+    }
+    void meterExposure() override { meterExposurePending = true; }
+    void meterLuxRange() override { meterLuxPending = true; }
+    void setPaused(bool p) override {
+        paused = p;
+        if (worker) p ? worker->pause() : worker->resume();
+    }
+    uint64_t shownSamples() const override { return shown.any ? shown.samples : 0; }
+    double shownError() const override { return shown.any ? shown.estimatedError : 1.0; }
+    bool refinementDone() const override {
+        if (!worker || save || !shown.any || shown.generation != generation || uploader->busy()) return false;
+        if (!workerError.empty() || paused) return true;
+        // Nothing newer published since the snapshot shown (safe to acquire:
+        // no copy is in progress).
+        const CacheSnapshot* latest = reader.acquire();
+        const bool newest = latest && latest->version == shown.version;
+        if (worker->finished()) return newest;
+        return newest && shown.converged && shown.viewSerial >= sentSerial && !viewDirty;
+    }
+    void screenshot(const std::string& path) override { screenshots.push_back(path); }
+    void saveCache(const std::string& path) override {
+        if (save || !worker) return;
+        save = std::make_unique<SaveJob>();
+        save->path = path;
+        SaveJob* job = save.get();
+        CacheWorker* w = worker.get();
+        IrradianceCache* c = &cache;
+        showMessage("saving the cache to " + path + "...");
+        job->thread = std::thread([job, w, c] {
+            try {
+                w->stop();  // the round in progress ends first; the cache is ours after the join
+                c->save(job->path);
+            } catch (const std::exception& e) {
+                job->error = e.what();
+            }
+            job->done.store(true);
+        });
+    }
+    bool busySaving() const override { return save != nullptr; }
+    void quit() override { quitRequested = true; }
+
+    void showMessage(const std::string& m) {
+        message = m;
+        messageUntil = now() + 6;
+    }
+
+    // --- One frame ------------------------------------------------------------------
+
+    // Keys and the mouse, unless the controls have them.
+    void handleInput(double dt, int fbWidth, int fbHeight) {
+        GLFWwindow* w = window->window();
+        const bool keyboard = !ui->wantsKeyboard();
+        const bool mouse = !ui->wantsMouse();
+        for (int key : keysPressed) {
+            if (!keyboard) break;
+            if (key == GLFW_KEY_R || key == GLFW_KEY_HOME) walk.reset();
+            if (key == GLFW_KEY_P) setPaused(!paused);
+            if (key == GLFW_KEY_TAB) state.showUi = !state.showUi;
+            if (key == GLFW_KEY_F12) screenshots.push_back(ui->screenshotPath());
+        }
+        keysPressed.clear();
+        if (mouse && scroll != 0) walk.setSpeed(walk.speed() * std::pow(1.25, scroll));
+        scroll = 0;
+
+        WalkInput in;
+        if (keyboard) {
+            auto down = [&](int k) { return glfwGetKey(w, k) == GLFW_PRESS ? 1.0 : 0.0; };
+            in.forward = down(GLFW_KEY_W) + down(GLFW_KEY_UP) - down(GLFW_KEY_S) - down(GLFW_KEY_DOWN);
+            in.right = down(GLFW_KEY_D) + down(GLFW_KEY_RIGHT) - down(GLFW_KEY_A) - down(GLFW_KEY_LEFT);
+            in.up = down(GLFW_KEY_E) + down(GLFW_KEY_PAGE_UP) - down(GLFW_KEY_Q) - down(GLFW_KEY_PAGE_DOWN);
+            if (down(GLFW_KEY_LEFT_SHIFT) || down(GLFW_KEY_RIGHT_SHIFT)) in.speedFactor = 4;
+            if (down(GLFW_KEY_LEFT_CONTROL) || down(GLFW_KEY_RIGHT_CONTROL)) in.speedFactor = 0.25;
+        }
+        const bool pressed = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS ||
+                             glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+        double x, y;
+        glfwGetCursorPos(w, &x, &y);
+        if (pressed && (dragging || mouse)) {
+            if (dragging) {
+                in.lookRight = x - dragX;
+                in.lookDown = y - dragY;
+            }
+            dragging = true;
+            dragX = x, dragY = y;
+        } else {
+            dragging = false;
+        }
+        int winWidth, winHeight;
+        glfwGetWindowSize(w, &winWidth, &winHeight);
+        const double radiansPerPixel = glm::radians(walk.camera().fovYDegrees) / std::max(winHeight, 1);
+        walk.update(in, dt, radiansPerPixel);
+
+        // Illuminance under the mouse (framebuffer pixels can differ from window units).
+        cursorLux.reset();
+        if (state.mode == DisplayMode::Illuminance && mouse && x >= 0 && y >= 0 && x < winWidth && y < winHeight &&
+            glfwGetWindowAttrib(w, GLFW_HOVERED)) {
+            cursorPixel = {int(x * fbWidth / std::max(winWidth, 1)), int(y * fbHeight / std::max(winHeight, 1))};
+        } else {
+            cursorPixel.reset();
+        }
+    }
+    std::optional<std::pair<int, int>> cursorPixel;
+
+    // Does this iteration need a frame? Idle frames are skipped, so the
+    // worker has the processor while nothing on screen would change.
+    bool wantsFrame(bool newSnapshot) {
+        GLFWwindow* w = window->window();
+        // A snapshot being copied needs no frame until it is whole (newSnapshot).
+        bool active = newSnapshot || events != eventsDrawn || dragging ||
+                      (player && !player->finished()) || !screenshots.empty() || meterExposurePending ||
+                      meterLuxPending || lightChangedAt || save || quitRequested || firstFrame < 0;
+        if (!active && glfwGetWindowAttrib(w, GLFW_FOCUSED)) {
+            for (int k : {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E, GLFW_KEY_UP,
+                          GLFW_KEY_DOWN, GLFW_KEY_LEFT, GLFW_KEY_RIGHT, GLFW_KEY_PAGE_UP, GLFW_KEY_PAGE_DOWN})
+                active = active || glfwGetKey(w, k) == GLFW_PRESS;
+        }
+        if (active) settleFrames = kSettleFrames;
+        return active || settleFrames > 0;
+    }
+
+    UiModel uiModel() {
+        UiModel m;
+        m.display = &state;
+        m.lights = &lightControls;
+        m.lightInfo = lightInfo;
+        m.indirectWeight = indirectWeight(lightControls, lightPowers);
+        UiStats& s = m.stats;
+        s.elapsed = now();
+        s.snapshot = shown.any;
+        s.workerSeconds = shown.seconds;
+        s.vertices = shown.vertices;
+        s.triangles = shown.triangles;
+        s.drawnTriangles = drawnTriangles;
+        s.indirectMeshes = shown.indirectMeshes;
+        s.samples = shown.samples;
+        s.rounds = shown.rounds;
+        s.estimatedError = shown.estimatedError;
+        s.converged = shown.converged;
+        s.finished = worker && worker->finished() && !save;
+        s.paused = paused;
+        s.saving = save != nullptr;
+        s.uploadProgress = uploader->busy() ? uploader->progress() : 1.0;
+        s.frameMs = frameMsAverage;
+        s.fps = frameMsAverage > 0 ? 1e3 / frameMsAverage : 0;
+        s.composeMs = composeMsAverage;
+        m.camera = walk.camera();
+        m.speed = walk.speed();
+        m.unit = settings.unit;
+        m.efficacy = settings.efficacy;
+        m.supersample = settings.supersample;
+        const GpuCacheMeshes& meshes = uploader->front();
+        for (size_t i = 0; i < meshes.directCount() + meshes.indirectCount(); ++i)
+            m.meshColours.emplace_back(
+                i < meshes.directCount() ? concat("light ", i, " '", scene.lights[i].name, "'")
+                                         : concat("indirect, bounce ", i - meshes.directCount() + 1),
+                meshColour(i));
+        m.cursorLux = cursorLux;
+        m.error = workerError;
+        if (now() < messageUntil) m.message = message;
+        return m;
+    }
+
+    void applyRequests(const UiRequests& r) {
+        if (r.resetCamera) walk.reset();
+        if (r.meterExposure) meterExposurePending = true;
+        if (r.meterLux) meterLuxPending = true;
+        if (r.lightsChanged) lightsChanged();
+        if (r.pause) setPaused(*r.pause);
+        if (r.screenshot) screenshots.push_back(*r.screenshot);
+        if (r.saveCache) saveCache(*r.saveCache);
+        if (r.speedFactor != 1) walk.setSpeed(walk.speed() * r.speedFactor);
+        if (r.supersample > 0) settings.supersample = r.supersample;
+    }
+
+    CompositorSettings compositeSettings(int fbWidth, int fbHeight, CompositeQuantity q) const {
+        CompositorSettings cs;
+        cs.width = fbWidth;
+        cs.height = fbHeight;
+        cs.supersample = settings.supersample;
+        cs.quantity = q;
+        cs.efficacy = settings.efficacy;
+        return cs;
+    }
+
+    // Auto exposure and the lux range, from this frame's image (composited
+    // once more in the quantity they need when the mode shows another).
+    void meter(int fbWidth, int fbHeight, const LightWeights& weights) {
+        if (!meterExposurePending && !meterLuxPending) return;
+        const Camera c = walk.camera();
+        const CompositeQuantity shownQuantity = compositeQuantity(state.mode);
+        auto pixelsOf = [&](CompositeQuantity q, const LightWeights& w) {
+            if (q != shownQuantity) compositor->compose(c, uploader->front(), w, compositeSettings(fbWidth, fbHeight, q));
+            ImageRgb image = compositor->readPixels();
+            if (q != shownQuantity)
+                compositor->compose(c, uploader->front(), weights, compositeSettings(fbWidth, fbHeight, shownQuantity));
+            return image;
+        };
+        if (meterExposurePending) {
+            DisplayState final = state;
+            if (shownQuantity != CompositeQuantity::Radiance) final.mode = DisplayMode::Final;
+            meteredScale = autoExposureScale(
+                pixelsOf(CompositeQuantity::Radiance, compositeWeights(final, lightControls, lightPowers)));
+            meterExposurePending = false;
+        }
+        if (meterLuxPending) {
+            const ImageRgb lux = pixelsOf(CompositeQuantity::Illuminance, weights);
+            // A few tens of thousands of pixels give the percentiles to a pixel's worth.
+            const int step = std::max(1, int(std::sqrt(double(lux.pixelCount()) / 65536.0)));
+            std::vector<double> values;
+            for (int y = 0; y < lux.height; y += step)
+                for (int x = 0; x < lux.width; x += step) values.push_back(lux.at(x, y).r);
+            const auto [lo, hi] = autoLuxRange(std::move(values));
+            state.luxMin = lo;
+            state.luxMax = hi;
+            meterLuxPending = false;
+        }
+    }
+
+    void writeScreenshots(int fbWidth, int fbHeight) {
+        for (const std::string& path : screenshots) {
+            try {
+                checkOutputPath(path);
+                if (outputFormat(path) == ImageFormat::Png) {
+                    // What the window shows, read from the back buffer before the swap.
+                    const GlApi& gl = window->gl();
+                    std::vector<uint8_t> rgb(size_t(fbWidth) * fbHeight * 3), rows(rgb.size());
+                    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+                    gl.ReadBuffer(GL_BACK);
+                    gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+                    gl.ReadPixels(0, 0, fbWidth, fbHeight, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+                    checkGl(gl, "reading the window for a screenshot");
+                    const size_t row = size_t(fbWidth) * 3;
+                    for (int y = 0; y < fbHeight; ++y)  // GL rows start at the bottom
+                        std::copy_n(&rgb[size_t(fbHeight - 1 - y) * row], row, &rows[size_t(y) * row]);
+                    writeImage8(path, rows, fbWidth, fbHeight);
+                } else {
+                    writeImageLinear(path, compositor->readImage());
+                }
+                std::printf("screenshot: wrote %s (%dx%d, %s, %llu samples)\n", path.c_str(), fbWidth, fbHeight,
+                            displayModeName(state.mode), static_cast<unsigned long long>(shownSamples()));
+                showMessage("wrote " + path);
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "meshlight: screenshot %s: %s\n", path.c_str(), e.what());
+                showMessage(concat("screenshot failed: ", e.what()));
+                if (player) exitCode = 1, quitRequested = true;
+            }
+        }
+        screenshots.clear();
+    }
+
+    void printStatus() {
+        if (!settings.printProgress || !shown.any || now() - lastStatus < 1.0) return;
+        static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+        lastStatus = now();
+        std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s%s",
+                     terminal ? "\r" : "", lastStatus, shown.vertices, static_cast<unsigned long long>(shown.samples),
+                     100 * shown.estimatedError, frameMsAverage > 0 ? 1e3 / frameMsAverage : 0.0,
+                     terminal ? "   " : "\n");
+        std::fflush(stderr);
+    }
+
+    // One pass of the loop: checks the worker and snapshots, then draws a
+    // frame when something could have changed.
+    void iterate() {
+        checkWorker();
+        int fbWidth = 0, fbHeight = 0;
+        glfwGetFramebufferSize(window->window(), &fbWidth, &fbHeight);
+        if (fbWidth <= 0 || fbHeight <= 0) return;  // minimised
+        finishSave(fbWidth, fbHeight);
+        double uploadMs = 0;
+        const bool newSnapshot = pumpSnapshots(uploadMs);
+        if (!wantsFrame(newSnapshot)) return;
+        const auto frameStart = Clock::now();
+        const double dt = std::min(secondsBetween(lastFrame, frameStart), 0.25);
+        lastFrame = frameStart;
+        eventsDrawn = events;
+        --settleFrames;
+
+        // Input, the script and the controls, in that order, before the
+        // image: what any of them changes shows in this very frame (the
+        // controls, laid out last, show the script's changes too).
+        handleInput(dt, fbWidth, fbHeight);
+        if (player && !player->finished()) {
+            if (!scriptStart) scriptStart = frameStart;
+            const double t = settings.scriptStep > 0 ? double(frameIndex) * settings.scriptStep
+                                                     : secondsBetween(*scriptStart, frameStart);
+            player->advance(t, *this);
+        }
+        UiModel model = uiModel();
+        applyRequests(ui->build(model));
+        // Entering lux mode with an automatic range: take it from this frame.
+        if (state.mode == DisplayMode::Illuminance && shownMode != DisplayMode::Illuminance && state.luxAuto)
+            meterLuxPending = true;
+        shownMode = state.mode;
+        // The worker starts once the first frame's camera is known (a
+        // script's first keyframe), so its first view is the one shown.
+        if (!worker && !save)
+            startWorker(walk.camera(), fbWidth, fbHeight);
+        else
+            followView(fbWidth, fbHeight);
+        if (newSnapshot && !meteredOnce) {
+            meteredOnce = true;
+            meterExposurePending = true;  // the first light seen sets the exposure
+            if (state.luxAuto) meterLuxPending = true;
+        }
+
+        // The image.
+        const auto composeStart = Clock::now();
+        const LightWeights weights = compositeWeights(state, lightControls, lightPowers);
+        const CompositeQuantity quantity = compositeQuantity(state.mode);
+        compositor->compose(walk.camera(), uploader->front(), weights,
+                            compositeSettings(fbWidth, fbHeight, quantity));
+        drawnTriangles = compositor->drawnTriangles();
+        meter(fbWidth, fbHeight, weights);
+        DisplaySettings ds;
+        ds.exposure = meteredScale * std::exp2(state.exposureEV);
+        ds.op = state.op;
+        ds.luxMin = state.luxMin;
+        ds.luxMax = state.luxMax;
+        ds.contours = state.contours;
+        compositor->display(0, ds);
+        if (state.wireframe) {
+            std::vector<Rgb> colours;
+            for (size_t i = 0; i < uploader->front().directCount() + uploader->front().indirectCount(); ++i)
+                colours.push_back(meshColour(i));
+            if (!colours.empty()) compositor->drawWireframe(0, uploader->front(), colours);
+        }
+        if (cursorPixel) cursorLux = compositor->readIlluminance(cursorPixel->first, cursorPixel->second);
+        const double composeMs = 1e3 * secondsBetween(composeStart, Clock::now());
+        ui->render();
+        writeScreenshots(fbWidth, fbHeight);
+        glfwSwapBuffers(window->window());
+        if (lightChangedAt) {
+            window->gl().Finish();  // the frame showing the change is on screen
+            lightLatencies.push_back(secondsBetween(*lightChangedAt, Clock::now()));
+            lightChangedAt.reset();
+        }
+        const auto frameEnd = Clock::now();
+        const double frameSeconds = secondsBetween(frameStart, frameEnd);
+        if (firstFrame < 0) firstFrame = secondsBetween(t0, frameEnd);
+        if (firstSnapshotFrame < 0 && shown.any) firstSnapshotFrame = secondsBetween(t0, frameEnd);
+        frameMsAverage = frameMsAverage > 0 ? 0.9 * frameMsAverage + 0.1 * frameSeconds * 1e3 : frameSeconds * 1e3;
+        composeMsAverage = composeMsAverage > 0 ? 0.9 * composeMsAverage + 0.1 * composeMs : composeMs;
+        frames.push_back({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, shown.samples,
+                          shown.triangles, drawnTriangles, shown.any});
+        ++frameIndex;
+        printStatus();
+        if (settings.maxFps > 0) {
+            const double rest = 1.0 / settings.maxFps - secondsBetween(frameStart, Clock::now());
+            if (rest > 0) std::this_thread::sleep_for(std::chrono::duration<double>(rest));
+        }
+    }
+
+    int run() {
+        SigintGuard guard;
+        bool interrupted = false;
+        for (;;) {
+            // Wait for events only when the last pass drew nothing (idle).
+            if (settleFrames > 0 || uploader->busy() || (player && !player->finished()))
+                glfwPollEvents();
+            else
+                glfwWaitEventsTimeout(0.05);
+            if (gInterrupted.load()) {
+                interrupted = true;
+                break;
+            }
+            if (glfwWindowShouldClose(window->window()) || quitRequested) break;
+            try {
+                iterate();
+            } catch (const InputError& e) {
+                // A script line that only fails while playing (a keyframe's
+                // inherited up along its view).
+                std::fprintf(stderr, "\nmeshlight: error: %s\n", e.what());
+                exitCode = 2;
+                break;
+            }
+        }
+        if (settings.printProgress && shown.any) {
+            lastStatus = -1e30;
+            printStatus();
+        }
+        if (interrupted) std::fprintf(stderr, "\nmeshlight: interrupted; stopping the worker\n");
+        if (!frames.empty()) {
+            std::vector<double> ms;
+            for (const FrameRecord& f : frames) ms.push_back(1e3 * f.seconds);
+            std::sort(ms.begin(), ms.end());
+            std::printf("view: %zu frames drawn, median %.1f ms, 95th percentile %.1f ms; first frame after %.2f s, "
+                        "first lit frame after %.2f s\n",
+                        ms.size(), ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 95 / 100)], firstFrame,
+                        firstSnapshotFrame);
+        }
+        if (save && save->thread.joinable()) save->thread.join();
+        save.reset();
+        reader = CacheWorker::Reader();
+        uploading = nullptr;
+        if (worker) {
+            worker->stop();
+            checkWorker();
+        }
+        if (!settings.cachePath.empty() && worker && workerError.empty()) {
+            cache.save(settings.cachePath);
+            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(), cache.totalVertices());
+        }
+        if (player && !player->finished() && exitCode == 0 && !interrupted)
+            std::printf("script: the window was closed at %s\n", player->where().c_str());
+        return interrupted && exitCode == 0 ? 130 : exitCode;
+    }
+};
+
+ViewSession::ViewSession(const Scene& scene, const ViewSettings& settings)
+    : impl_(std::make_unique<Impl>(scene, settings)) {}
+ViewSession::~ViewSession() = default;
+
+int ViewSession::run() { return impl_->run(); }
+const std::vector<FrameRecord>& ViewSession::frames() const { return impl_->frames; }
+double ViewSession::firstFrameSeconds() const { return impl_->firstFrame; }
+double ViewSession::firstSnapshotFrameSeconds() const { return impl_->firstSnapshotFrame; }
+const std::vector<double>& ViewSession::lightChangeLatencies() const { return impl_->lightLatencies; }
+std::string ViewSession::glDescription() const { return impl_->window->describe(); }
+
+}  // namespace ml
