@@ -266,6 +266,7 @@ struct Compositor::Impl {
         gl.Disable(GL_BLEND);
         gl.Disable(GL_STENCIL_TEST);
         gl.Disable(GL_DEPTH_TEST);
+        gl.Disable(GL_FRAMEBUFFER_SRGB);
         gl.Viewport(0, 0, width, height);
         gl.DepthMask(GL_TRUE);
         gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

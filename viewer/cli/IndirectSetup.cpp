@@ -18,9 +18,13 @@ void IndirectChoice::decide(const Scene& scene) {
 }
 
 std::string IndirectChoice::describe() const {
-    return concat(method, ": ", gather.imageSize, "x", gather.imageSize, " fish-eye gathers over ", gather.resolution,
-                  " voxels along the longest side (slices ", gather.sliceSupersample, "x supersampled), triangles within ",
-                  gather.nearVoxels, " voxel", gather.nearVoxels == 1 ? "" : "s", " of the point");
+    if (method == "slices" || method == "slice-quads" || method == "raymarch")
+        return concat(method, ": ", gather.imageSize, "x", gather.imageSize, " fish-eye gathers over ", gather.resolution,
+                      " voxels along the longest side (slices ", gather.sliceSupersample,
+                      "x supersampled), triangles within ", gather.nearVoxels, " voxel",
+                      gather.nearVoxels == 1 ? "" : "s", " of the point");
+    return concat(method, ": the radiance proxy's triangles (", gather.resolution,
+                  " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }
 
 void declareIndirectOptions(Options& o) {
@@ -93,7 +97,7 @@ WorkerFactories workerFactories(const Scene& scene, const DirectChoice& direct, 
     WorkerFactories f;
     f.direct = [&scene, direct, totals, shared, gl]() -> DirectSampleFn {
         auto estimators = std::make_shared<DirectEstimators>(scene, direct, gl);
-        *shared = estimators;
+        if (gl) *shared = estimators;  // for the indirect factory, which takes it at once
         return [estimators, totals](size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
             const VertexSample s = estimators->sampleOne(light, x, n, seed);
             *totals = estimators->totals();
@@ -119,7 +123,10 @@ WorkerFactories workerFactories(const Scene& scene, const DirectChoice& direct, 
                 IndirectStats stats() const override { return inner->stats(); }
             };
             auto owned = std::make_unique<Owned>();
-            owned->keep = *shared;
+            // Taken, not copied: the factories outlive the worker thread, and
+            // the GL context must die on the thread it was made on (OSMesa
+            // breaks the calling thread's current context otherwise).
+            owned->keep = std::move(*shared);
             owned->inner = makeIndirectEstimator(*owned->keep->context(), scene, indirect);
             return owned;
         };
