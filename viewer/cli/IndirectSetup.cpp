@@ -21,8 +21,10 @@ std::string IndirectChoice::describe() const {
     if (method == "slices" || method == "slice-quads" || method == "raymarch")
         return concat(method, ": ", gather.imageSize, "x", gather.imageSize, " fish-eye gathers over ", gather.resolution,
                       " voxels along the longest side (slices ", gather.sliceSupersample,
-                      "x supersampled), triangles within ", gather.nearVoxels, " voxel",
-                      gather.nearVoxels == 1 ? "" : "s", " of the point");
+                      "x supersampled), and the proxy's triangles near the point (",
+                      gather.nearVoxels == 0 ? std::string("its own voxel")
+                                             : concat("its voxel and ", gather.nearVoxels, " more each way"),
+                      ")");
     return concat(method, ": the radiance proxy's triangles (", gather.resolution,
                   " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }

@@ -76,7 +76,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "largest channel\n",
                 b.albedo.r, b.albedo.g, b.albedo.b, b.meanAlbedo);
     if (!indirect.enabled) {
-        std::printf("  indirect light: not simulated (--direct-only); about %.3g%% of the radiance is left out\n",
+        std::printf("  indirect light: not simulated (--direct-only); about %.3g%% of the reflected light is left out\n",
                     100 * b.meanAlbedo);
     } else if (indirect.solver.bounces == 0) {
         std::printf("  indirect light: none: %s\n", b.reason.c_str());
@@ -87,7 +87,8 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
                     "(empty faces are freed)\n",
                     grid.describe().c_str(), grid.voxel, 2 * (grid.dims[0] + grid.dims[1] + grid.dims[2]),
-                    16.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
+                    // RGBA32F radiance and R32F depth per texel, two faces per slice, three axes.
+                    20.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
         const CacheSettings& ic = indirect.solver.cache;
         std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene, split tolerance "
                     "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
