@@ -14,14 +14,10 @@ void WorkerSettings::validate() const {
 }
 
 CacheWorker::CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
-                         IndirectSolver* indirect, IndirectFactory indirectFactory)
-    : cache_(cache),
-      factory_(std::move(factory)),
-      indirect_(indirect),
-      indirectFactory_(std::move(indirectFactory)),
-      settings_(settings) {
+                         IndirectSolver* indirect)
+    : cache_(cache), factory_(std::move(factory)), indirect_(indirect), settings_(settings) {
     settings_.validate();
-    ML_ASSERT(!indirect_ || indirectFactory_, "indirect light needs an estimator factory");
+    ML_ASSERT(factory_, "the cache worker needs a sampler factory");
 }
 
 uint64_t CacheWorker::totalSamples() const {
@@ -57,13 +53,13 @@ void CacheWorker::stop() {
     if (thread_.joinable()) thread_.join();
 }
 
-uint64_t CacheWorker::setView(const std::optional<RefinementView>& view) {
+uint64_t CacheWorker::setCamera(const std::optional<RefinementCamera>& view) {
     uint64_t serial;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         view_ = view;
         viewChanged_ = true;
-        serial = ++viewSerial_;
+        serial = ++cameraSerial_;
     }
     wake_.notify_all();
     return serial;
@@ -80,12 +76,12 @@ bool CacheWorker::waitForVersion(uint64_t version, double timeoutSeconds) {
                           [&] { return published_ >= version || finished_; });
 }
 
-void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementView>& view,
-                          uint64_t viewSerial, const IndirectEstimator* estimator) {
+void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementCamera>& view,
+                          uint64_t cameraSerial, const WorkerSamplers& samplers) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
     for (size_t l = 0; l < cache_.lightCount(); ++l) {
-        snap->direct.push_back(cache_.view(l));
+        snap->direct.push_back(cache_.copyMesh(l));
         snap->verticesPerMesh.push_back(cache_.vertexCount(l));
     }
     snap->vertices = cache_.totalVertices();
@@ -93,7 +89,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->rounds = cache_.rounds();
     snap->directError = cache_.estimatedError(view);
     if (indirect_) {
-        snap->indirect = indirect_->views();
+        snap->indirect = indirect_->copyMeshes();
         snap->bounces = indirect_->bounces();
         snap->bouncesFinished = indirect_->finished();
         snap->indirectVertices = indirect_->totalVertices();
@@ -101,11 +97,12 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->vertices += snap->indirectVertices;
         snap->samples += snap->indirectSamples;
         snap->indirectError = indirect_->estimatedError(view);
-        if (estimator) snap->indirectStats = estimator->stats();
+        if (samplers.indirect) snap->indirectStats = samplers.indirect->stats();
     }
+    if (samplers.direct) snap->directPhases = samplers.direct->phaseTimes();
     snap->estimatedError = std::max(snap->directError, snap->indirectError);
     snap->converged = converged;
-    snap->viewSerial = viewSerial;
+    snap->cameraSerial = cameraSerial;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         snap->version = ++published_;
@@ -119,21 +116,19 @@ void CacheWorker::run() {
     const auto start = Clock::now();
     auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     try {
-        const DirectSampleFn sample = factory_();
-        const std::unique_ptr<IndirectEstimator> estimator = indirect_ ? indirectFactory_() : nullptr;
-        const auto directViews = [&] {
-            std::vector<IrradianceMeshView> v;
-            for (size_t l = 0; l < cache_.lightCount(); ++l) v.push_back(cache_.view(l));
-            return v;
-        };
+        const WorkerSamplers samplers = factory_();
+        ML_ASSERT(samplers.direct, "the sampler factory made no direct sampler");
+        ML_ASSERT(!indirect_ || samplers.indirect, "indirect light needs an estimator from the sampler factory");
+        DirectSampler& sample = *samplers.direct;
+        const auto directMeshes = [&] { return cache_.copyMeshes(); };
         double lastPublish = -1e30;
         bool converged = false, directConverged = false, indirectStarted = false;
         double lastDirectError = 1, lastIndirectError = 1;
         uint64_t rounds = 0;
-        std::optional<RefinementView> lastView;
+        std::optional<RefinementCamera> lastView;
         uint64_t serial = 0;
         for (;;) {
-            std::optional<RefinementView> view;
+            std::optional<RefinementCamera> view;
             {
                 std::unique_lock<std::mutex> lock(mutex_);
                 // Idle while paused, or converged for this view, until told otherwise.
@@ -143,7 +138,7 @@ void CacheWorker::run() {
                 viewChanged_ = false;
                 view = view_;
                 lastView = view;
-                serial = viewSerial_;
+                serial = cameraSerial_;
             }
             // No round takes more than what is left of the sample budget.
             const auto capped = [&](size_t budget) {
@@ -179,18 +174,18 @@ void CacheWorker::run() {
                                                                      : cache_.totalVertices() / std::max<size_t>(cache_.lightCount(), 1);
                         budget = std::clamp<size_t>(vertices / 8, 16, 512);
                     }
-                    const RefineReport r = indirect_->step(*estimator, directViews, capped(budget), settings_.seed, view);
+                    const RefineReport r = indirect_->step(*samplers.indirect, directMeshes, capped(budget), settings_.seed, view);
                     indirectConverged = r.converged();
                     if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
             }
             converged = directConverged && indirectConverged;
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
-                publish(seconds(), converged, view, serial, estimator.get());
+                publish(seconds(), converged, view, serial, samplers);
                 lastPublish = seconds();
             }
         }
-        publish(seconds(), converged, lastView, serial, estimator.get());
+        publish(seconds(), converged, lastView, serial, samplers);
     } catch (...) {
         std::lock_guard<std::mutex> lock(mutex_);
         failure_ = std::current_exception();

@@ -5,10 +5,11 @@
 // and after each round (at most every `publishSeconds`) it publishes a
 // snapshot, a complete copy of every light's mesh. Renderers read snapshots
 // through a SnapshotExchange reader: no lock on the render path, never a
-// torn read. The sampler is made on the worker thread by a factory, so a GL
-// context lives and dies on the thread that uses it.
+// torn read. The samplers are made on the worker thread by a factory, so a
+// GL context lives and dies on the thread that uses it.
 #pragma once
 
+#include "DirectSampler.h"
 #include "IndirectEstimator.h"
 #include "IndirectSolver.h"
 #include "IrradianceCache.h"
@@ -28,11 +29,11 @@ namespace ml {
 struct CacheSnapshot {
     uint64_t version = 0;             // 1, 2, ... in publication order
     double seconds = 0;               // worker time since start()
-    std::vector<IrradianceMeshView> direct;  // one per light, in the scene's order
+    std::vector<IrradianceMeshCopy> direct;  // one per light, in the scene's order
     // Indirect irradiance, one mesh per bounce (bounce 1 first); empty with
     // direct light only or before the indirect pass has started. The
     // irradiance a surface receives is Σ direct + Σ indirect.
-    std::vector<IrradianceMeshView> indirect;
+    std::vector<IrradianceMeshCopy> indirect;
     int bounces = 0;                  // indirect bounces planned
     int bouncesFinished = 0;          // of those, converged once
     size_t indirectVertices = 0;      // over the indirect meshes (also in `vertices`)
@@ -40,13 +41,14 @@ struct CacheSnapshot {
     double directError = 0;           // direct meshes' estimated error
     double indirectError = 0;         // IndirectSolver::estimatedError (1 until every bounce is done)
     IndirectStats indirectStats;      // the estimator's memory and times
+    DirectPhaseTimes directPhases;    // the direct sampler's time per phase, all samples so far
     size_t vertices = 0;              // over all meshes
     std::vector<size_t> verticesPerMesh;
     uint64_t samples = 0;             // estimates taken, all meshes
     uint64_t rounds = 0;
     double estimatedError = 0;        // the larger of directError and indirectError
     bool converged = false;           // the last round found nothing to do
-    uint64_t viewSerial = 0;          // the setView() call the last round served (0: none)
+    uint64_t cameraSerial = 0;          // the setCamera() call the last round served (0: none)
 };
 
 struct WorkerSettings {
@@ -70,20 +72,23 @@ struct WorkerSettings {
     void validate() const;
 };
 
+// The samplers of one worker, made and destroyed on its thread.
+struct WorkerSamplers {
+    std::unique_ptr<DirectSampler> direct;
+    // Null with direct light only. Declared after `direct`, so destroyed
+    // before it: it may draw with the direct sampler's GL context.
+    std::unique_ptr<IndirectEstimator> indirect;
+};
+// Called once on the worker thread, before its first round.
+using SamplerFactory = std::function<WorkerSamplers()>;
+
 class CacheWorker {
 public:
-    // Returns the sampler, made on the worker thread; what it captures is
-    // released on that thread too.
-    using SamplerFactory = std::function<DirectSampleFn()>;
-
-    // Returns the indirect estimator, made on the worker thread after the
-    // direct sampler (so it may share the sampler's GL context).
-    using IndirectFactory = std::function<std::unique_ptr<IndirectEstimator>()>;
-
     // `cache` (and `indirect`, if given) must outlive the worker and not be
-    // touched while it runs. Without `indirect` only direct light is refined.
+    // touched while it runs. Without `indirect` only direct light is refined;
+    // with it, the factory must make an indirect estimator too.
     CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
-                IndirectSolver* indirect = nullptr, IndirectFactory indirectFactory = {});
+                IndirectSolver* indirect = nullptr);
     ~CacheWorker();  // stops and joins
     CacheWorker(const CacheWorker&) = delete;
     CacheWorker& operator=(const CacheWorker&) = delete;
@@ -97,9 +102,9 @@ public:
     // The worker has ended: stopped, out of samples, or failed.
     bool finished() const { return finished_.load(); }
     // The camera to serve: refined first, and no finer than its pixels.
-    // Returns the call's serial: snapshots with this viewSerial or later
+    // Returns the call's serial: snapshots with this cameraSerial or later
     // were made for this view.
-    uint64_t setView(const std::optional<RefinementView>& view);
+    uint64_t setCamera(const std::optional<RefinementCamera>& view);
 
     using Reader = SnapshotExchange<CacheSnapshot>::Reader;
     // One per reading thread; see SnapshotExchange.
@@ -114,14 +119,13 @@ public:
 
 private:
     void run();
-    void publish(double seconds, bool converged, const std::optional<RefinementView>& view, uint64_t viewSerial,
-                 const IndirectEstimator* estimator);
+    void publish(double seconds, bool converged, const std::optional<RefinementCamera>& view, uint64_t cameraSerial,
+                 const WorkerSamplers& samplers);
     uint64_t totalSamples() const;
 
     IrradianceCache& cache_;
     SamplerFactory factory_;
     IndirectSolver* indirect_;
-    IndirectFactory indirectFactory_;
     WorkerSettings settings_;
     SnapshotExchange<CacheSnapshot> snapshots_;
     std::thread thread_;
@@ -129,9 +133,9 @@ private:
     mutable std::mutex mutex_;  // control only: pause, view, failure, waits
     std::condition_variable wake_;
     std::atomic<bool> paused_{false}, stopping_{false}, finished_{false};
-    std::optional<RefinementView> view_;
+    std::optional<RefinementCamera> view_;
     bool viewChanged_ = false;
-    uint64_t viewSerial_ = 0;
+    uint64_t cameraSerial_ = 0;
     std::exception_ptr failure_;
     uint64_t published_ = 0;
 };

@@ -41,7 +41,7 @@ public:
     // `importance` (0, 1] is the share of light this source gives relative
     // to bounce 1's (about ā^(n−1) for bounce n): an estimator may spend
     // less per estimate on a weak bounce (a smaller image, fewer rays).
-    virtual void setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance,
+    virtual void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance,
                            double importance = 1.0) = 0;
     // Frees a slot's memory; estimating from it again needs setSource.
     virtual void releaseSource(size_t slot) = 0;

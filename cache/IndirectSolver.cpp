@@ -60,20 +60,20 @@ CacheSettings IndirectSolver::settingsFor(int bounce) const {
 }
 
 void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
-                                   const std::function<std::vector<IrradianceMeshView>()>& direct) {
+                                   const std::function<std::vector<IrradianceMeshCopy>()>& direct) {
     const size_t slot = size_t(bounce - 1);
     if (sourceBuilt_.size() <= slot) sourceBuilt_.resize(slot + 1, false);
     if (sourceBuilt_[slot]) return;
     if (bounce == 1)
         estimator.setSource(0, direct());
     else
-        estimator.setSource(slot, {view(bounce - 1)}, std::pow(std::max(settings_.albedo, 1e-3), bounce - 1));
+        estimator.setSource(slot, {copyMesh(bounce - 1)}, std::pow(std::max(settings_.albedo, 1e-3), bounce - 1));
     sourceBuilt_[slot] = true;
 }
 
 RefineReport IndirectSolver::step(IndirectEstimator& estimator,
-                                  const std::function<std::vector<IrradianceMeshView>()>& direct, size_t budget,
-                                  uint32_t seed, const std::optional<RefinementView>& view) {
+                                  const std::function<std::vector<IrradianceMeshCopy>()>& direct, size_t budget,
+                                  uint32_t seed, const std::optional<RefinementCamera>& view) {
     if (settings_.bounces == 0) return {};
     // Pass 1: the next bounce's base mesh, gathered once.
     if (!firstPassDone() && (caches_.empty() || caches_.back()->unsampledCount() == 0)) {
@@ -98,11 +98,17 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     const int bounce = first ? int(caches_.size()) : allFinished() ? 1 : finished_ + 1;
     const size_t slot = size_t(bounce - 1);
     prepareSource(estimator, bounce, direct);
-    const DirectSampleFn gather = [&](size_t, const Vec3& x, const Vec3& n, uint32_t s) {
-        VertexSample sample;
-        sample.irradiance = estimator.estimate(slot, x, n, s);
-        return sample;  // visibility 1, never partial: indirect light has no light to see
-    };
+    // The bounce's one mesh is filled by gathers from its source slot.
+    struct Gather : VertexSampler {
+        IndirectEstimator& estimator;
+        size_t slot;
+        Gather(IndirectEstimator& e, size_t s) : estimator(e), slot(s) {}
+        VertexSample sample(size_t, const Vec3& x, const Vec3& n, uint32_t seed) override {
+            VertexSample sample;
+            sample.irradiance = estimator.estimate(slot, x, n, seed);
+            return sample;  // visibility 1, never partial: indirect light has no light to see
+        }
+    } gather(estimator, slot);
     // Each bounce draws its own jitter. While vertices have no sample, a
     // round only samples them (IrradianceCache::refine).
     RefineReport report = caches_[slot]->refine(gather, budget, seedFor(seed, 0x1d1ec7u, uint32_t(bounce)), view);
@@ -127,7 +133,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     return report;
 }
 
-void fillHiddenVertices(IrradianceMeshView& mesh) {
+void fillHiddenVertices(IrradianceMeshCopy& mesh) {
     const size_t n = mesh.positions.size();
     if (n == 0) return;
     std::vector<std::vector<uint32_t>> ring(n);
@@ -165,15 +171,15 @@ void fillHiddenVertices(IrradianceMeshView& mesh) {
     }
 }
 
-IrradianceMeshView IndirectSolver::view(int bounce) const {
-    IrradianceMeshView v = caches_.at(size_t(bounce - 1))->view(0);
+IrradianceMeshCopy IndirectSolver::copyMesh(int bounce) const {
+    IrradianceMeshCopy v = caches_.at(size_t(bounce - 1))->copyMesh(0);
     fillHiddenVertices(v);
     return v;
 }
 
-std::vector<IrradianceMeshView> IndirectSolver::views() const {
-    std::vector<IrradianceMeshView> v;
-    for (int b = 1; b <= started(); ++b) v.push_back(view(b));
+std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
+    std::vector<IrradianceMeshCopy> v;
+    for (int b = 1; b <= started(); ++b) v.push_back(copyMesh(b));
     return v;
 }
 
@@ -195,7 +201,7 @@ size_t IndirectSolver::memoryBytes() const {
     return n;
 }
 
-double IndirectSolver::estimatedError(const std::optional<RefinementView>& view) const {
+double IndirectSolver::estimatedError(const std::optional<RefinementCamera>& view) const {
     if (settings_.bounces == 0) return 0;
     if (!firstPassDone()) return 1;
     double worst = 0;

@@ -36,8 +36,8 @@
 namespace ml {
 
 struct IndirectSettings {
-    int bounces = 1;          // from planBounces (or --bounces)
-    double albedo = 0.5;      // ā, from planBounces: relaxes later bounces' tolerances
+    int bounces = 1;          // from countBounces (or --bounces)
+    double albedo = 0.5;      // ā, from countBounces: relaxes later bounces' tolerances
     // Bounce 1's cache: coarser and smoother than direct light's, since
     // indirect light has no sharp shadows of its own and each sample is a
     // whole hemispherical gather.
@@ -55,7 +55,7 @@ struct IndirectSettings {
 // triangle spans a fair part of a wall). Such vertices (below 5% of both
 // their neighbours' mean and the mesh's) take their visible neighbours'
 // mean, two rings deep. A dark corner, dark like its neighbours, is kept.
-void fillHiddenVertices(IrradianceMeshView& mesh);
+void fillHiddenVertices(IrradianceMeshCopy& mesh);
 
 class IndirectSolver {
 public:
@@ -76,26 +76,26 @@ public:
     // previous bounce, when need be), or the second pass's refinement of the
     // bounce in hand, or, once all have converged, of bounce 1 for the
     // view. Converged when there is nothing left to do.
-    RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshView>()>& direct,
-                      size_t budget, uint32_t seed, const std::optional<RefinementView>& view);
+    RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshCopy>()>& direct,
+                      size_t budget, uint32_t seed, const std::optional<RefinementCamera>& view);
 
     // One mesh per started bounce, bounce 1 first, hidden vertices filled
     // (fillHiddenVertices): what is shown and what the next bounce reflects.
-    std::vector<IrradianceMeshView> views() const;
-    IrradianceMeshView view(int bounce) const;
+    std::vector<IrradianceMeshCopy> copyMeshes() const;
+    IrradianceMeshCopy copyMesh(int bounce) const;
     size_t totalVertices() const;
     uint64_t totalSamples() const;
     size_t memoryBytes() const;
     // 1 until the first pass is done; then the largest of the bounces'
     // estimated errors, each scaled by its share of bounce 1's light (ā^(n−1)).
-    double estimatedError(const std::optional<RefinementView>& view) const;
+    double estimatedError(const std::optional<RefinementCamera>& view) const;
     const IrradianceCache& cache(int bounce) const { return *caches_.at(size_t(bounce - 1)); }
 
 private:
     CacheSettings settingsFor(int bounce) const;
     // Makes sure source `bounce − 1` holds what bounce `bounce` gathers from.
     void prepareSource(IndirectEstimator& estimator, int bounce,
-                       const std::function<std::vector<IrradianceMeshView>()>& direct);
+                       const std::function<std::vector<IrradianceMeshCopy>()>& direct);
 
     const Scene& scene_;
     IndirectSettings settings_;

@@ -296,9 +296,15 @@ void IrradianceCache::addSample(size_t l, size_t v, const VertexSample& sample) 
     detail::addVertexSample(impl_->state, l, v, sample);
 }
 
-IrradianceMeshView IrradianceCache::view(size_t l) const {
+std::vector<IrradianceMeshCopy> IrradianceCache::copyMeshes() const {
+    std::vector<IrradianceMeshCopy> meshes;
+    for (size_t l = 0; l < lightCount(); ++l) meshes.push_back(copyMesh(l));
+    return meshes;
+}
+
+IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     const detail::LightMesh& lm = impl_->state.meshes.at(l);
-    IrradianceMeshView out;
+    IrradianceMeshCopy out;
     const size_t n = lm.mesh.n_vertices();
     out.positions.reserve(n);
     out.normals.reserve(n);
@@ -404,13 +410,13 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     return x + 1e-3 * shortest * glm::normalize(inward);
 }
 
-VertexSample sampleVertex(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t v, uint32_t seed) {
+VertexSample sampleVertex(VertexSampler& sampler, const CacheState& s, size_t light, size_t v, uint32_t seed) {
     const LightMesh& lm = s.meshes[light];
     const auto vh = CacheTriMesh::VertexHandle(int(v));
     const Vec3 x = samplePoint(s, lm.mesh, vh), n = toVec3(lm.mesh.normal(vh));
     const uint32_t count = lm.stats[v].count;
     try {
-        return fn(light, x, n, seedFor(seed, uint32_t(v), uint32_t(light), count));
+        return sampler.sample(light, x, n, seedFor(seed, uint32_t(v), uint32_t(light), count));
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
@@ -422,11 +428,11 @@ VertexSample sampleVertex(const DirectSampleFn& fn, const CacheState& s, size_t 
 
 }  // namespace detail
 
-size_t IrradianceCache::sampleUnsampled(const DirectSampleFn& fn, uint32_t seed,
+size_t IrradianceCache::sampleUnsampled(VertexSampler& sampler, uint32_t seed,
                                         const std::function<void(size_t, size_t)>& progress) {
     const size_t todo = detail::unsampledCount(impl_->state);
     size_t done = 0;
-    detail::sampleUnsampled(impl_->state, fn, seed, todo, [&] {
+    detail::sampleUnsampled(impl_->state, sampler, seed, todo, [&] {
         if (progress && (++done % 256 == 0 || done == todo)) progress(done, todo);
     });
     return todo;
@@ -443,20 +449,20 @@ size_t unsampledCount(const CacheState& s) {
     return n;
 }
 
-size_t sampleUnsampled(CacheState& s, const DirectSampleFn& fn, uint32_t seed, size_t budget,
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
                        const std::function<void()>& each) {
     size_t done = 0;
     for (size_t l = 0; l < s.meshes.size() && done < budget; ++l) {
         LightMesh& lm = s.meshes[l];
         for (size_t v = 0; v < lm.stats.size() && done < budget; ++v) {
             if (lm.stats[v].count) continue;
-            addVertexSample(s, l, v, sampleVertex(fn, s, l, v, seed));
+            addVertexSample(s, l, v, sampleVertex(sampler, s, l, v, seed));
             ++done;
             if (each) each();
         }
         for (size_t g = 0; g < lm.gridStats.size() && done < budget; ++g) {
             if (lm.gridStats[g].count) continue;
-            addGridSample(s, l, g, sampleGrid(fn, s, l, g, seed));
+            addGridSample(s, l, g, sampleGrid(sampler, s, l, g, seed));
             ++done;
             if (each) each();
         }
@@ -487,13 +493,13 @@ const GridObject& gridOf(const CacheState& s, size_t g) {
     return s.grids.front();
 }
 
-VertexSample sampleGrid(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t g, uint32_t seed) {
+VertexSample sampleGrid(VertexSampler& sampler, const CacheState& s, size_t light, size_t g, uint32_t seed) {
     const GridObject& o = gridOf(s, g);
     const size_t k = g - o.firstSample;
     const Vec3 x = o.grid->samplePosition(k), n = o.grid->sampleNormal(k);
     const uint32_t count = s.meshes[light].gridStats[g].count;
     try {
-        return fn(light, x, n, seedFor(seed, kGridSeedBase + uint32_t(g), uint32_t(light), count));
+        return sampler.sample(light, x, n, seedFor(seed, kGridSeedBase + uint32_t(g), uint32_t(light), count));
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
@@ -505,12 +511,8 @@ VertexSample sampleGrid(const DirectSampleFn& fn, const CacheState& s, size_t li
 
 }  // namespace detail
 
-void sampleEveryVertex(IrradianceCache& cache, const DirectEstimateFn& estimate, int passes, uint32_t seed,
+void sampleEveryVertex(IrradianceCache& cache, VertexSampler& sampler, int passes, uint32_t seed,
                        const std::function<void(size_t, size_t)>& progress) {
-    // Irradiance only: without visibility, every sample counts as unoccluded.
-    const DirectSampleFn fn = [&](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
-        return VertexSample{estimate(l, x, n, s), 1.0, false};
-    };
     size_t total = 0, done = 0;
     for (size_t l = 0; l < cache.lightCount(); ++l) total += cache.vertexCount(l);
     for (size_t l = 0; l < cache.lightCount(); ++l) {
@@ -518,7 +520,7 @@ void sampleEveryVertex(IrradianceCache& cache, const DirectEstimateFn& estimate,
             for (int p = 0; p < passes; ++p) {
                 try {
                     const uint32_t s = seedFor(seed, uint32_t(v), uint32_t(l), uint32_t(p));
-                    cache.addSample(l, v, fn(l, cache.position(l, v), cache.normal(l, v), s));
+                    cache.addSample(l, v, sampler.sample(l, cache.position(l, v), cache.normal(l, v), s));
                 } catch (const InputError&) {
                     throw;
                 } catch (const std::exception& e) {

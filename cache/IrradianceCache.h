@@ -13,6 +13,7 @@
 // OpenMesh stays inside cache/: the public types are Meshlight's own.
 #pragma once
 
+#include "VertexSampler.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
 
@@ -61,18 +62,8 @@ struct CacheSettings {
     void validate() const;  // InputError on a bad value
 };
 
-// One irradiance estimate at a vertex, with what the sampler saw of the light.
-struct VertexSample {
-    Rgb irradiance{0.0};  // W·m⁻²
-    // Visible fraction of the light's cosine-weighted solid angle, in [0, 1]
-    // (1 where nothing occludes the light).
-    double visibility = 1;
-    // Some but not all of the light's samples were visible: a penumbra.
-    bool partial = false;
-};
-
 // An immutable copy of one cache mesh, for drawing and for tests.
-struct IrradianceMeshView {
+struct IrradianceMeshCopy {
     std::vector<Vec3> positions;
     std::vector<Vec3> normals;             // unit, the side that was sampled
     std::vector<glm::uvec3> triangles;
@@ -82,17 +73,11 @@ struct IrradianceMeshView {
 
 // A camera the refinement should serve: what it sees is refined first and
 // no finer than `CacheSettings::minEdgePixels` of its image.
-struct RefinementView {
+struct RefinementCamera {
     Camera camera;
     int width = 512;
     int height = 512;
 };
-
-// An irradiance estimate of light `light` at x (unit normal n), drawing its
-// randomness from `seed`: the GPU sampler, the exact reference, ...
-using DirectSampleFn = std::function<VertexSample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed)>;
-// The same, irradiance only.
-using DirectEstimateFn = std::function<Rgb(size_t light, const Vec3& x, const Vec3& n, uint32_t seed)>;
 
 // What one refinement round did.
 struct RefineReport {
@@ -152,13 +137,16 @@ public:
 
     // Adds one irradiance estimate at a vertex (running mean).
     void addSample(size_t light, size_t vertex, const VertexSample& sample);
-    IrradianceMeshView view(size_t light) const;
+    // A copy of mesh `mesh` (a light's, or the one mesh of an indirect
+    // bounce), and of every mesh in order.
+    IrradianceMeshCopy copyMesh(size_t mesh) const;
+    std::vector<IrradianceMeshCopy> copyMeshes() const;
 
     // Samples every vertex that has none yet, in (light, vertex) order, with
     // seeds from (seed, vertex, light, sample index): a run repeats bit for
     // bit. Returns the number of estimates. Errors are rethrown with the
     // light, vertex and point where they happened.
-    size_t sampleUnsampled(const DirectSampleFn& sample, uint32_t seed,
+    size_t sampleUnsampled(VertexSampler& sampler, uint32_t seed,
                            const std::function<void(size_t, size_t)>& progress = {});
 
     // One refinement round. While vertices have no sample yet, a round
@@ -167,8 +155,8 @@ public:
     // `budget` estimates are done, and every new vertex is sampled. Deterministic: the same cache state,
     // budget, seed and view give the same result whatever happened before
     // (a cache saved and loaded refines exactly like one never saved).
-    RefineReport refine(const DirectSampleFn& sample, size_t budget, uint32_t seed,
-                        const std::optional<RefinementView>& view = std::nullopt);
+    RefineReport refine(VertexSampler& sampler, size_t budget, uint32_t seed,
+                        const std::optional<RefinementCamera>& view = std::nullopt);
 
     // The error the cache itself predicts, relative to the displayed level:
     // the RMS (area-weighted over every mesh) of the interpolation error
@@ -177,7 +165,7 @@ public:
     // no sample yet. It tracks the relative RMSE of the
     // image against a converged one; compare both with `render --log`.
     // With a view, what it sees weighs 10× more than the rest.
-    double estimatedError(const std::optional<RefinementView>& view = std::nullopt) const;
+    double estimatedError(const std::optional<RefinementCamera>& view = std::nullopt) const;
 
     // Bytes held by the meshes and their properties.
     size_t memoryBytes() const;
@@ -197,11 +185,11 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-// Adds `passes` estimates at every vertex of every light's mesh. Seeds come
+// Adds `passes` estimates at every vertex of every mesh. Seeds come
 // from (seed, light, vertex, pass), so a run repeats bit for bit. The
 // callback, if any, gets (vertices done, vertices in all) now and then.
 // Errors are rethrown with the light, vertex and pass where they happened.
-void sampleEveryVertex(IrradianceCache& cache, const DirectEstimateFn& estimate, int passes, uint32_t seed,
+void sampleEveryVertex(IrradianceCache& cache, VertexSampler& sampler, int passes, uint32_t seed,
                        const std::function<void(size_t, size_t)>& progress = {});
 
 }  // namespace ml

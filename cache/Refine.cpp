@@ -63,7 +63,7 @@ double displayLevel(double lum, double white) {
 // can be seen there.
 class ViewMetric {
 public:
-    ViewMetric(const std::optional<RefinementView>& view, double sceneMinLength, double minPixels)
+    ViewMetric(const std::optional<RefinementCamera>& view, double sceneMinLength, double minPixels)
         : sceneMin_(sceneMinLength), minPixels_(minPixels) {
         if (!view) return;
         has_ = true;
@@ -198,7 +198,7 @@ std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
     return area;
 }
 
-Scoring score(const CacheState& s, const std::optional<RefinementView>& view, bool collect) {
+Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, bool collect) {
     const CacheSettings& cs = s.settings;
     std::vector<std::vector<double>> areas;
     for (const LightMesh& lm : s.meshes) areas.push_back(vertexAreas(lm.mesh));
@@ -363,13 +363,13 @@ bool isTouched(const std::vector<char>& touched, FH f) {
 
 }  // namespace
 
-double IrradianceCache::estimatedError(const std::optional<RefinementView>& view) const {
+double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& view) const {
     if (detail::unsampledCount(impl_->state) > 0) return 1;  // not every vertex sampled yet: unknown
     return score(impl_->state, view, false).error;
 }
 
-RefineReport IrradianceCache::refine(const DirectSampleFn& fn, size_t budget, uint32_t seed,
-                                     const std::optional<RefinementView>& view) {
+RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint32_t seed,
+                                     const std::optional<RefinementCamera>& view) {
     ML_ASSERT(budget > 0, "refinement budget 0");
     CacheState& s = impl_->state;
     RefineReport report;
@@ -379,7 +379,7 @@ RefineReport IrradianceCache::refine(const DirectSampleFn& fn, size_t budget, ui
     const size_t unsampled = detail::unsampledCount(s);
     if (unsampled > 0) {
         report.estimatedError = 1;
-        report.estimates = detail::sampleUnsampled(s, fn, seed, budget);
+        report.estimates = detail::sampleUnsampled(s, sampler, seed, budget);
         report.candidates = unsampled - report.estimates + 1;  // at least the scoring is still to come
         ++s.rounds;
         return report;
@@ -425,16 +425,16 @@ RefineReport IrradianceCache::refine(const DirectSampleFn& fn, size_t budget, ui
         cost += added;
     }
 
-    report.estimates += detail::sampleUnsampled(s, fn, seed, ~size_t(0));
+    report.estimates += detail::sampleUnsampled(s, sampler, seed, ~size_t(0));
     std::sort(resample.begin(), resample.end());
     for (const auto& [l, v] : resample) {
-        detail::addVertexSample(s, l, v, detail::sampleVertex(fn, s, l, v, seed));
+        detail::addVertexSample(s, l, v, detail::sampleVertex(sampler, s, l, v, seed));
         ++report.estimates;
         ++report.resamples;
     }
     std::sort(resampleGrid.begin(), resampleGrid.end());
     for (const auto& [l, g] : resampleGrid) {
-        detail::addGridSample(s, l, g, detail::sampleGrid(fn, s, l, g, seed));
+        detail::addGridSample(s, l, g, detail::sampleGrid(sampler, s, l, g, seed));
         ++report.estimates;
         ++report.resamples;
     }

@@ -3,6 +3,7 @@
 // resumes, which files are refused, and what readers of snapshots see.
 #include "cache/CacheWorker.h"
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/scenes/BenchScene.h"
@@ -52,9 +53,12 @@ VertexSample noisyStep(size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
     return s;
 }
 
-IrradianceMeshView viewOf(const IrradianceCache& c) { return c.view(0); }
+using SampleFunction = VertexSample (*)(size_t, const Vec3&, const Vec3&, uint32_t);
+FunctionSampler<SampleFunction> stepSampler(step), noisyStepSampler(noisyStep);
 
-void expectSameView(const IrradianceMeshView& a, const IrradianceMeshView& b) {
+IrradianceMeshCopy viewOf(const IrradianceCache& c) { return c.copyMesh(0); }
+
+void expectSameView(const IrradianceMeshCopy& a, const IrradianceMeshCopy& b) {
     ASSERT_EQ(a.positions.size(), b.positions.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());
     for (size_t i = 0; i < a.positions.size(); ++i) {
@@ -79,7 +83,7 @@ void expectSameView(const IrradianceMeshView& a, const IrradianceMeshView& b) {
 
 // Total length of the edges used by exactly one triangle: the mesh's border.
 // A T-vertex inside an object would add border where there was none.
-double borderLength(const IrradianceMeshView& m) {
+double borderLength(const IrradianceMeshCopy& m) {
     std::map<std::pair<uint32_t, uint32_t>, int> uses;
     for (const glm::uvec3& t : m.triangles)
         for (int k = 0; k < 3; ++k) {
@@ -103,9 +107,9 @@ TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
     // signal, on any ring and at borders: nothing to split, nothing to
     // resample, and the predicted error is zero up to rounding.
     IrradianceCache cache(bench(), coarse());
-    const DirectSampleFn linear = [](size_t, const Vec3& x, const Vec3&, uint32_t) {
+    auto linear = samplerOf([](size_t, const Vec3& x, const Vec3&, uint32_t) {
         return VertexSample{Rgb(1 + 0.3 * x.x + 0.2 * x.z + 0.1 * x.y), 1.0, false};
-    };
+    });
     cache.refine(linear, 1 << 20, 1);  // samples the base mesh
     const RefineReport r = cache.refine(linear, 1 << 20, 1);
     EXPECT_EQ(0u, r.splits);
@@ -117,8 +121,8 @@ TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
 TEST(CacheRefinement, NewVerticesGoWhereTheSignalSteps) {
     IrradianceCache cache(bench(), coarse());
     const size_t base = cache.vertexCount(0);
-    for (int round = 0; round < 12; ++round) cache.refine(step, 400, 1);
-    const IrradianceMeshView m = viewOf(cache);
+    for (int round = 0; round < 12; ++round) cache.refine(stepSampler, 400, 1);
+    const IrradianceMeshCopy m = viewOf(cache);
     ASSERT_GT(m.positions.size(), base + 500);
     // Within two base edges of the step (0.54 here), for every new vertex
     // but those that longest-edge propagation adds to keep the mesh
@@ -145,8 +149,8 @@ TEST(CacheRefinement, SplitsAreConformingAndRespectTheMinimumSize) {
     CacheSettings s = coarse();
     IrradianceCache cache(bench(), s);
     const double border = borderLength(viewOf(cache));
-    for (int round = 0; round < 30; ++round) cache.refine(step, 2000, 1);
-    const IrradianceMeshView m = viewOf(cache);
+    for (int round = 0; round < 30; ++round) cache.refine(stepSampler, 2000, 1);
+    const IrradianceMeshCopy m = viewOf(cache);
     // The border is the objects' outlines: refinement adds none (relative
     // 1e-12: sums of the same lengths split in halves, in another order).
     EXPECT_NEAR(border, borderLength(m), 1e-12 * border);
@@ -164,7 +168,7 @@ TEST(CacheRefinement, TheVertexBudgetHolds) {
     IrradianceCache probe(bench(), s);
     s.maxVertices = probe.totalVertices() + 300;
     IrradianceCache cache(bench(), s);
-    for (int round = 0; round < 20; ++round) cache.refine(step, 2000, 1);
+    for (int round = 0; round < 20; ++round) cache.refine(stepSampler, 2000, 1);
     // An action is taken only while 2 more vertices fit; a longest-edge
     // chain can add a few more (at most its length, 48).
     EXPECT_LE(cache.totalVertices(), s.maxVertices + 48);
@@ -177,8 +181,8 @@ TEST(CacheRefinement, PenumbraVerticesAreResampledUntilQuiet) {
     CacheSettings s = coarse();
     s.singleSampleNoise = 0.014;
     IrradianceCache cache(bench(), s);
-    for (int round = 0; round < 40; ++round) cache.refine(noisyStep, 4000, 3);
-    const IrradianceMeshView m = viewOf(cache);
+    for (int round = 0; round < 40; ++round) cache.refine(noisyStepSampler, 4000, 3);
+    const IrradianceMeshCopy m = viewOf(cache);
     size_t resampled = 0, partial = 0;
     for (size_t v = 0; v < m.positions.size(); ++v) {
         const VertexSample s = step(0, m.positions[v], m.normals[v], 0);
@@ -199,16 +203,16 @@ TEST(CacheRefinement, PenumbraVerticesAreResampledUntilQuiet) {
 TEST(CacheFile, ALoadedCacheRefinesExactlyLikeOneNeverSaved) {
     const std::string path = tempPath("resume.mlc");
     IrradianceCache straight(bench(), coarse());
-    for (int round = 0; round < 8; ++round) straight.refine(noisyStep, 300, 5);
+    for (int round = 0; round < 8; ++round) straight.refine(noisyStepSampler, 300, 5);
 
     {
         IrradianceCache first(bench(), coarse());
-        for (int round = 0; round < 4; ++round) first.refine(noisyStep, 300, 5);
+        for (int round = 0; round < 4; ++round) first.refine(noisyStepSampler, 300, 5);
         first.save(path);
     }
     IrradianceCache resumed(bench(), coarse());
     resumed.load(path);
-    for (int round = 0; round < 4; ++round) resumed.refine(noisyStep, 300, 5);
+    for (int round = 0; round < 4; ++round) resumed.refine(noisyStepSampler, 300, 5);
     EXPECT_EQ(straight.rounds(), resumed.rounds());
     EXPECT_EQ(straight.totalSamples(), resumed.totalSamples());
     expectSameView(viewOf(straight), viewOf(resumed));
@@ -218,7 +222,7 @@ TEST(CacheFile, ALoadedCacheRefinesExactlyLikeOneNeverSaved) {
 TEST(CacheFile, BadFilesAreRefusedAndLeaveTheCacheAsItWas) {
     const std::string path = tempPath("good.mlc");
     IrradianceCache saved(bench(), coarse());
-    for (int round = 0; round < 3; ++round) saved.refine(step, 300, 1);
+    for (int round = 0; round < 3; ++round) saved.refine(stepSampler, 300, 1);
     saved.save(path);
     std::string bytes;
     {
@@ -244,8 +248,8 @@ TEST(CacheFile, BadFilesAreRefusedAndLeaveTheCacheAsItWas) {
         {tempPath("missing.mlc"), "cannot open"},
     };
     IrradianceCache target(bench(), coarse());
-    target.refine(step, 100, 1);
-    const IrradianceMeshView before = viewOf(target);
+    target.refine(stepSampler, 100, 1);
+    const IrradianceMeshCopy before = viewOf(target);
     for (const auto& [file, why] : cases) {
         try {
             target.load(file);
@@ -281,7 +285,7 @@ TEST(CacheWorker, ReadersSeeWholeSnapshotsInOrderWhileRefinementRuns) {
     // Deterministic and checkable: every vertex's value is a function of
     // its position, so a torn snapshot (positions of one version, values of
     // another) shows as a mismatch.
-    CacheWorker worker(cache, [] { return DirectSampleFn(step); }, ws);
+    CacheWorker worker(cache, test::functionSamplers(step), ws);
     CacheWorker::Reader reader = worker.reader();
     worker.start();
     uint64_t last = 0, seen = 0;
@@ -294,7 +298,7 @@ TEST(CacheWorker, ReadersSeeWholeSnapshotsInOrderWhileRefinementRuns) {
         last = s->version;
         ++seen;
         ASSERT_EQ(1u, s->direct.size());
-        const IrradianceMeshView& m = s->direct[0];
+        const IrradianceMeshCopy& m = s->direct[0];
         ASSERT_EQ(m.positions.size(), s->vertices);
         for (const glm::uvec3& t : m.triangles) ASSERT_LT(std::max({t.x, t.y, t.z}), m.positions.size());
         for (size_t v = 0; v < m.positions.size(); ++v)
@@ -310,7 +314,7 @@ TEST(CacheWorker, PausesResumesAndStops) {
     WorkerSettings ws;
     ws.publishSeconds = 0;
     ws.roundBudget = 32;
-    CacheWorker worker(cache, [] { return DirectSampleFn(noisyStep); }, ws);
+    CacheWorker worker(cache, test::functionSamplers(noisyStep), ws);
     CacheWorker::Reader reader = worker.reader();
     worker.start();
     ASSERT_TRUE(worker.waitForVersion(3, 10));
@@ -323,17 +327,20 @@ TEST(CacheWorker, PausesResumesAndStops) {
     worker.resume();
     EXPECT_TRUE(worker.waitForVersion(paused + 2, 10));
     worker.stop();
-    EXPECT_TRUE(worker.finished());
+    // Stopped means no round runs any more: nothing is published after it.
+    const uint64_t last = reader.acquire()->version;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_EQ(last, reader.acquire()->version) << "a stopped worker published again";
     worker.rethrowIfFailed();
 }
 
 TEST(CacheWorker, AFailureReachesTheMainThreadWithWhereItHappened) {
     IrradianceCache cache(bench(), coarse());
-    const DirectSampleFn failing = [](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
+    const auto failing = [](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
         if (x.x > 1.0) throw std::runtime_error("sampler broke");
         return step(l, x, n, s);
     };
-    CacheWorker worker(cache, [failing] { return failing; }, WorkerSettings{});
+    CacheWorker worker(cache, test::functionSamplers(failing), WorkerSettings{});
     worker.start();
     worker.waitForVersion(1u << 30, 20);  // returns when the worker ends
     ASSERT_TRUE(worker.finished());
@@ -355,7 +362,7 @@ TEST(CacheWorker, ASampleBudgetEndsTheWorkerAndRepeatsExactly) {
         WorkerSettings ws;
         ws.maxSamples = 3000;
         ws.seed = 9;
-        CacheWorker worker(*cache, [] { return DirectSampleFn(noisyStep); }, ws);
+        CacheWorker worker(*cache, test::functionSamplers(noisyStep), ws);
         worker.start();
         worker.waitForVersion(1u << 30, 60);
         EXPECT_TRUE(worker.finished());
@@ -411,14 +418,14 @@ TEST(CacheGrid, ADenseObjectIsSampledOnAGridAndInterpolatedToItsVertices) {
     // A linear field: the grid reproduces it within 1.5 cells × |∇f|₁ (see
     // GridCache), cells being the base edge length here.
     const Vec3 gradient(0.3, 0.1, 0.2);
-    const DirectSampleFn linear = [&](size_t, const Vec3& x, const Vec3&, uint32_t) {
+    auto linear = samplerOf([&](size_t, const Vec3& x, const Vec3&, uint32_t) {
         return VertexSample{Rgb(2 + glm::dot(gradient, x)), 1.0, false};
-    };
+    });
     cache.refine(linear, 1 << 22, 1);
     const uint64_t samples = cache.totalSamples();
     // Far fewer samples than the sphere alone has vertices.
     EXPECT_LT(samples - plainBench.totalVertices(), sphereVertices / 4);
-    const IrradianceMeshView m = cache.view(0);
+    const IrradianceMeshCopy m = cache.copyMesh(0);
     ASSERT_EQ(cache.totalVertices() + sphereVertices, m.positions.size());
     const double cell = coarse().maxEdgeFraction * scene.bounds.diagonal();
     const double bound = 1.5 * cell * (gradient.x + gradient.y + gradient.z);
@@ -431,6 +438,6 @@ TEST(CacheGrid, ADenseObjectIsSampledOnAGridAndInterpolatedToItsVertices) {
     cache.save(path);
     IrradianceCache loaded(scene, coarse());
     loaded.load(path);
-    expectSameView(m, loaded.view(0));
+    expectSameView(m, loaded.copyMesh(0));
     std::filesystem::remove(path);
 }

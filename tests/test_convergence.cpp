@@ -4,12 +4,13 @@
 // Budgets are counted in samples, not seconds, so the results do not depend
 // on the machine's speed or load.
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/image/ImageMetrics.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
-#include "viewer/Compositor.h"
+#include "viewer/compositor/Compositor.h"
 #include "viewer/bench/ExactDirectImage.h"
 
 #include "GlTestContext.h"
@@ -22,7 +23,7 @@ using namespace ml;
 
 namespace {
 
-DirectSampleFn samplerFn(DirectLightSampler& sampler) {
+test::SampleFn samplerFn(DirectLightSampler& sampler) {
     return [&sampler](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
         const DirectSample s = sampler.sample(l, x, n, seed);
         const double vis = s.unoccluded > 0 ? std::clamp(s.cosineSolidAngle / s.unoccluded, 0.0, 1.0) : 1.0;
@@ -31,10 +32,11 @@ DirectSampleFn samplerFn(DirectLightSampler& sampler) {
 }
 
 // Refines until the cache has taken at least `samples` samples.
-void refineUntil(IrradianceCache& cache, const DirectSampleFn& fn, uint64_t samples,
-                 const std::optional<RefinementView>& view) {
+void refineUntil(IrradianceCache& cache, const test::SampleFn& fn, uint64_t samples,
+                 const std::optional<RefinementCamera>& view) {
+    auto sampler = samplerOf(fn);
     while (cache.totalSamples() < samples) {
-        const RefineReport r = cache.refine(fn, 512, 1, view);
+        const RefineReport r = cache.refine(sampler, 512, 1, view);
         if (r.converged()) break;
     }
 }
@@ -61,11 +63,11 @@ TEST(Convergence, CornellDirectErrorFallsAsTheSampleBudgetDoubles) {
     const uint64_t base = cache.totalVertices();
     DirectLightSampler sampler(test::glContext(), scene, DirectSamplerSettings{});
     Compositor compositor(test::glContext(), scene);
-    const RefinementView view{camera, cs.width, cs.height};
+    const RefinementCamera view{camera, cs.width, cs.height};
     std::vector<double> errors;
     for (int k = 0; k < 4; ++k) {
         refineUntil(cache, samplerFn(sampler), base << k, view);
-        const ImageRgb image = compositor.render(camera, {cache.view(0)}, cs);
+        const ImageRgb image = compositor.render(camera, {cache.copyMesh(0)}, cs);
         errors.push_back(relativeRmse(image, exact));
         std::printf("budget %llu samples: %zu vertices, relative RMSE %.4f%%, estimated error %.4f%%\n",
                     static_cast<unsigned long long>(base << k), cache.totalVertices(), 100 * errors.back(),
@@ -95,7 +97,7 @@ TEST(Convergence, NewVerticesLandInsideTheExactPenumbra) {
     // the penumbra counts as in it: the split that made it was caused by
     // the penumbra's edge.
     const ExactDirect exact(scene);
-    const IrradianceMeshView m = cache.view(0);
+    const IrradianceMeshCopy m = cache.copyMesh(0);
     size_t inside = 0, lit = 0;
     for (size_t v = base; v < m.positions.size(); ++v) {
         const double unoccluded = exact.unoccludedCosineSolidAngle(0, m.positions[v], m.normals[v]);

@@ -1,7 +1,7 @@
 // Images: pixel filter, files (EXR/HDR/PNG, atomic writes, path checks) and
 // tone mapping, checked against values known exactly.
 #include "core/image/Image.h"
-#include "viewer/ToneMap.h"
+#include "core/image/ToneMap.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

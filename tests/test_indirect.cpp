@@ -5,8 +5,9 @@
 // Direct light comes from the exact reference (ExactDirect) on the cache
 // meshes, so what is measured is the indirect part alone.
 #include "cache/IndirectSolver.h"
+#include "TestSamplers.h"
 #include "cache/IrradianceCache.h"
-#include "core/raytrace/BouncePlan.h"
+#include "core/raytrace/BounceCount.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
 #include "core/reference/ExactIrradiance.h"
@@ -14,7 +15,7 @@
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/RadianceProxy.h"
 #include "gpu_sampling/indirect/SliceGather.h"
-#include "viewer/Compositor.h"
+#include "viewer/compositor/Compositor.h"
 
 #include <gtest/gtest.h>
 
@@ -100,7 +101,7 @@ struct Pipeline {
 
     Pipeline(const Scene& s, const GatherSettings& gs, int bounces, double albedo, double directEdge = 1.0 / 32)
         : scene(s), exact(s), direct(s, edgeSettings(directEdge)) {
-        sampleEveryVertex(direct, [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) {
+        test::sampleEveryVertex(direct, [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) {
             return exact.irradiance(l, x, n);
         }, 1, 1);
         gather = std::make_unique<SliceGather>(*context, scene, gs);
@@ -114,14 +115,13 @@ struct Pipeline {
         c.maxEdgeFraction = edge;
         return c;
     }
-    std::vector<IrradianceMeshView> directViews() const {
-        std::vector<IrradianceMeshView> v;
-        for (size_t l = 0; l < direct.lightCount(); ++l) v.push_back(direct.view(l));
+    std::vector<IrradianceMeshCopy> directMeshes() const {
+        std::vector<IrradianceMeshCopy> v = direct.copyMeshes();
         return v;
     }
     void solve(int maxRounds = 4000) {
         for (int r = 0; r < maxRounds && !solver->allFinished(); ++r)
-            solver->step(*gather, [&] { return directViews(); }, 256, 7, std::nullopt);
+            solver->step(*gather, [&] { return directMeshes(); }, 256, 7, std::nullopt);
         ASSERT_TRUE(solver->allFinished()) << "the solver did not converge in " << maxRounds << " rounds";
     }
 };
@@ -145,15 +145,15 @@ ImageRgb renderInside(Pipeline& p) {
     cam.target = Vec3(0.5, 0.5, 1.0);
     cam.up = Vec3(0, 1, 0);
     cam.fovYDegrees = 100;
-    return compositor.render(cam, p.directViews(), p.solver->views(), cs);
+    return compositor.render(cam, p.directMeshes(), p.solver->copyMeshes(), cs);
 }
 
 void expectFurnace(double a, std::optional<int> forced, double tolerance) {
     const double le = 1.0;
     const Scene scene = furnace(a, le);
-    BouncePlanSettings bs;
+    BounceCountSettings bs;
     bs.forced = forced;
-    const BouncePlan plan = planBounces(scene, bs);
+    const BounceCount plan = countBounces(scene, bs);
     EXPECT_NEAR(plan.meanAlbedo, a, 1e-9) << "uniform albedo: the weighting cannot change it";
     GatherSettings gs;
     gs.resolution = 32;
@@ -191,21 +191,21 @@ TEST(Furnace, FixedBouncesGiveTheTruncatedSeries) {
     expectFurnace(0.8, 3, 0.02);
 }
 
-TEST(BouncePlan, CountFromAlbedoAndCap) {
+TEST(BounceCount, CountFromAlbedoAndCap) {
     const Scene scene = furnace(0.9, 1.0);
-    BouncePlanSettings s;
+    BounceCountSettings s;
     s.maxBounces = 8;
-    const BouncePlan capped = planBounces(scene, s);
+    const BounceCount capped = countBounces(scene, s);
     EXPECT_EQ(capped.bounces, 8);
     EXPECT_TRUE(capped.capped);
     EXPECT_NEAR(capped.missing, std::pow(0.9, 9), 1e-12);
     s.maxBounces = 64;
-    const BouncePlan free = planBounces(scene, s);
+    const BounceCount free = countBounces(scene, s);
     // 0.9^(n+1) ≤ 0.01 first at n + 1 = 44.
     EXPECT_EQ(free.bounces, 43);
     EXPECT_FALSE(free.capped);
     const Scene black = furnace(0.0, 1.0);
-    EXPECT_EQ(planBounces(black).bounces, 0);
+    EXPECT_EQ(countBounces(black).bounces, 0);
 }
 
 // ---------------------------------------------------------------------------
@@ -230,7 +230,7 @@ protected:
         scene_ = new Scene(makeCornellBox());
         GatherSettings gs;
         pipeline_ = new Pipeline(*scene_, gs, 1, 0.5, 1.0 / 128);
-        pipeline_->gather->setSource(0, pipeline_->directViews());
+        pipeline_->gather->setSource(0, pipeline_->directMeshes());
     }
     static void TearDownTestSuite() {
         delete pipeline_;
@@ -356,13 +356,13 @@ TEST(Leaks, DarkRoomStaysDark) {
 
     GatherSettings gs;
     gs.resolution = 64;
-    const BouncePlan plan = planBounces(scene);
+    const BounceCount plan = countBounces(scene);
     Pipeline p(scene, gs, plan.bounces, plan.meanAlbedo);
     p.solve();
     // Indirect irradiance over every bounce, at a point.
-    std::vector<IrradianceMeshView> views = p.solver->views();
+    std::vector<IrradianceMeshCopy> views = p.solver->copyMeshes();
     std::vector<MeshIrradianceLookup> lookups;
-    for (const IrradianceMeshView& v : views) lookups.emplace_back(v, 0.1, 1e-4);
+    for (const IrradianceMeshCopy& v : views) lookups.emplace_back(v, 0.1, 1e-4);
     auto indirect = [&](const Vec3& x, const Vec3& n) {
         double e = 0;
         for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));
@@ -415,7 +415,7 @@ TEST(UniformBox, OneGatherIsPiTimesTheRadiance) {
     GatherSettings gs;
     gs.resolution = 32;
     Pipeline p(scene, gs, 1, 0.5);
-    p.gather->setSource(0, p.directViews());  // Lo = a/π · π·Le = 0.5 everywhere
+    p.gather->setSource(0, p.directMeshes());  // Lo = a/π · π·Le = 0.5 everywhere
     const Vec3 pts[] = {{0.5, 0, 0.5}, {0.5, 0.001, 0.5}, {0.02, 0, 0.5}, {0.0, 0, 0.5}, {0, 0, 0},
                         {0.3, 0, 0.7}, {0.5, 0.5, 0}, {0.97, 0.5, 0.5}, {0.999, 0.5, 0.5}};
     const Vec3 ns[] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {-1, 0, 0}};

@@ -8,6 +8,7 @@
 //   - the path tracer's one-bounce indirect irradiance in the Cornell box;
 //   - finite, non-negative answers on and beside geometry.
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/MeshUtil.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
@@ -16,7 +17,7 @@
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
 #include "gpu_sampling/indirect/VoxelMarchGather.h"
-#include "viewer/cli/IndirectSetup.h"
+#include "gpu_sampling/SamplerFactory.h"
 
 #include "GlTestContext.h"
 
@@ -149,8 +150,8 @@ Scene furnaceScene() {
 }
 
 // Irradiance E0 everywhere on the walls' inner sides: Lo = Kd/π · E0.
-std::vector<IrradianceMeshView> uniformSource(const Scene& scene, double e0) {
-    IrradianceMeshView v;
+std::vector<IrradianceMeshCopy> uniformSource(const Scene& scene, double e0) {
+    IrradianceMeshCopy v;
     const Mesh& m = scene.meshes.front();
     for (size_t t = 0; t < m.triangles.size(); ++t) {
         const Vec3 n = glm::normalize(m.areaNormal(t));
@@ -231,14 +232,13 @@ TEST(IndirectFurnace, FisheyeTrianglesNeedTessellationNearTheEye) {
 // --- The Cornell box against the path tracer ------------------------------------------------
 
 // The direct cache's base mesh, sampled exactly: the bench's source.
-std::vector<IrradianceMeshView> cornellSource(const Scene& scene) {
+std::vector<IrradianceMeshCopy> cornellSource(const Scene& scene) {
     IrradianceCache cache(scene);
     const ExactDirect exact(scene);
-    sampleEveryVertex(
+    test::sampleEveryVertex(
         cache, [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); }, 1,
         1);
-    std::vector<IrradianceMeshView> views;
-    for (size_t l = 0; l < cache.lightCount(); ++l) views.push_back(cache.view(l));
+    std::vector<IrradianceMeshCopy> views = cache.copyMeshes();
     return views;
 }
 
@@ -257,7 +257,7 @@ const CornellPoint kCornellPoints[] = {
 
 TEST(IndirectCornell, EveryMethodAgreesWithThePathTracer) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshView> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
     const EmbreeScene rays(scene);
     PathTracerSettings pts;
     pts.maxDepth = 2;  // direct + one bounce: `indirect` is the first bounce
@@ -291,7 +291,7 @@ TEST(IndirectCornell, EveryMethodAgreesWithThePathTracer) {
 
 TEST(IndirectRobustness, FiniteOnAndBesideGeometry) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshView> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
     const struct {
         Vec3 x, n;
     } points[] = {

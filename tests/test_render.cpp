@@ -1,11 +1,12 @@
 // The first image end to end: cache v0 sampled by the GPU sampler or the
 // exact reference, composited, on a small Cornell box render.
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/gl/GlContext.h"
-#include "viewer/Compositor.h"
+#include "viewer/compositor/Compositor.h"
 
 #include "GlTestContext.h"
 
@@ -30,11 +31,10 @@ CacheSettings coarseCache() {
     return s;
 }
 
-ImageRgb renderWith(const DirectEstimateFn& estimate, uint32_t seed, int passes = 1) {
+ImageRgb renderWith(const test::IrradianceFn& estimate, uint32_t seed, int passes = 1) {
     IrradianceCache cache(cornell(), coarseCache());
-    sampleEveryVertex(cache, estimate, passes, seed);
-    std::vector<IrradianceMeshView> views;
-    for (size_t l = 0; l < cache.lightCount(); ++l) views.push_back(cache.view(l));
+    test::sampleEveryVertex(cache, estimate, passes, seed);
+    std::vector<IrradianceMeshCopy> views = cache.copyMeshes();
     Compositor compositor(test::glContext(), cornell());
     CompositorSettings cs;
     cs.width = 64;
@@ -43,7 +43,7 @@ ImageRgb renderWith(const DirectEstimateFn& estimate, uint32_t seed, int passes 
     return compositor.render(*cornell().camera, views, cs);
 }
 
-DirectEstimateFn samplerEstimate(DirectLightSampler& sampler) {
+test::IrradianceFn samplerEstimate(DirectLightSampler& sampler) {
     return [&sampler](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
         return sampler.sample(l, x, n, seed).irradiance;
     };
@@ -119,8 +119,8 @@ TEST(Render, UnoccludedCacheVerticesHoldLambertsValue) {
     IrradianceCache cache(cornell(), coarseCache());
     DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ExactDirect exact(cornell());
-    sampleEveryVertex(cache, samplerEstimate(sampler), 1, 5);
-    const IrradianceMeshView view = cache.view(0);
+    test::sampleEveryVertex(cache, samplerEstimate(sampler), 1, 5);
+    const IrradianceMeshCopy view = cache.copyMesh(0);
     size_t checked = 0;
     for (size_t v = 0; v < view.positions.size(); ++v) {
         const Vec3& p = view.positions[v];

@@ -32,6 +32,7 @@
 //             largest value it interpolates: a pixel may err by 1e-4 of its
 //             own value (1,600 roundings) plus 1e-7 of the image's largest.
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/Error.h"
 #include "core/loaders/ObjLoader.h"
 #include "core/reference/ExactIrradiance.h"
@@ -40,7 +41,7 @@
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/Jitter.h"
 #include "gpu_sampling/gl/GlContext.h"
-#include "viewer/Compositor.h"
+#include "viewer/compositor/Compositor.h"
 
 #include "GlTestContext.h"
 
@@ -138,19 +139,19 @@ DirectSamplerSettings samplerSettings(DirectEstimator estimator = DirectEstimato
     return s;
 }
 
-DirectEstimateFn samplerEstimate(DirectLightSampler& sampler) {
+test::IrradianceFn samplerEstimate(DirectLightSampler& sampler) {
     return [&sampler](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
         return sampler.sample(l, x, n, seed).irradiance;
     };
 }
 
-DirectEstimateFn exactEstimate(const ExactDirect& exact) {
+test::IrradianceFn exactEstimate(const ExactDirect& exact) {
     return [&exact](size_t l, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(l, x, n); };
 }
 
 // --- the pipeline and its universal checks -----------------------------------
 
-void expectFiniteNonNegative(const IrradianceMeshView& view, const std::string& what) {
+void expectFiniteNonNegative(const IrradianceMeshCopy& view, const std::string& what) {
     size_t bad = 0;
     for (size_t v = 0; v < view.irradiance.size(); ++v) {
         const Rgb& e = view.irradiance[v];
@@ -185,21 +186,21 @@ Camera benchCamera() {
 }
 
 struct Rendered {
-    std::vector<IrradianceMeshView> caches;  // one per light
+    std::vector<IrradianceMeshCopy> caches;  // one per light
     ImageRgb image;
 };
 
 // Caches every light with `estimate` (one pass), checks every cached value,
 // renders and checks every pixel.
-Rendered renderScene(const Scene& scene, const DirectEstimateFn& estimate, const Camera& camera,
+Rendered renderScene(const Scene& scene, const test::IrradianceFn& estimate, const Camera& camera,
                      const std::string& what, double maxEdgeFraction = 1.0 / 24.0) {
     CacheSettings cs;
     cs.maxEdgeFraction = maxEdgeFraction;
     IrradianceCache cache(scene, cs);
-    sampleEveryVertex(cache, estimate, 1, 1);
+    test::sampleEveryVertex(cache, estimate, 1, 1);
     Rendered out;
     for (size_t l = 0; l < cache.lightCount(); ++l) {
-        out.caches.push_back(cache.view(l));
+        out.caches.push_back(cache.copyMesh(l));
         expectFiniteNonNegative(out.caches.back(), what + ", light " + std::to_string(l));
     }
     Compositor compositor(test::glContext(), scene);
@@ -219,8 +220,8 @@ struct CacheError {
     size_t vertices = 0, worst = 0;
 };
 
-CacheError cacheError(const Scene& scene, const std::vector<IrradianceMeshView>& sampled,
-                      const std::vector<IrradianceMeshView>& exact) {
+CacheError cacheError(const Scene& scene, const std::vector<IrradianceMeshCopy>& sampled,
+                      const std::vector<IrradianceMeshCopy>& exact) {
     const ExactDirect reference(scene);
     CacheError err;
     double sum = 0;
@@ -531,7 +532,7 @@ bool coversFacing(const Triangle3& t, const Vec3& p, const Vec3& n) {
 // not lost, and none is doubled; the cache may add reversed copies for
 // backs, which face the other way), with no edge longer than the
 // bisection's limit and unit normals on each triangle's front side.
-void expectCacheCoversTheScene(const Scene& scene, const IrradianceMeshView& view, double maxEdgeFraction,
+void expectCacheCoversTheScene(const Scene& scene, const IrradianceMeshCopy& view, double maxEdgeFraction,
                                const std::string& what) {
     std::vector<Triangle3> cacheTriangles;
     const double maxEdge = maxEdgeFraction * scene.bounds.diagonal();
@@ -629,7 +630,7 @@ TEST(Stability, BookOfPagesThroughLoaderAndCache) {
         CacheSettings cs;
         cs.maxEdgeFraction = maxEdgeFraction;
         IrradianceCache cache(scene, cs);
-        const IrradianceMeshView view = cache.view(0);
+        const IrradianceMeshCopy view = cache.copyMesh(0);
         expectCacheCoversTheScene(scene, view, maxEdgeFraction, "book");
         // Each page is bisected on its own along the shared spine, at
         // midpoints: every page must end with the same spine vertices, or
@@ -711,7 +712,7 @@ TEST(Stability, CacheKeepsNonManifoldFacesWhole) {
         CacheSettings cs;
         cs.maxEdgeFraction = fraction;
         IrradianceCache cache(scene, cs);
-        expectCacheCoversTheScene(scene, cache.view(0), fraction, concat("fins, edges below ", fraction));
+        expectCacheCoversTheScene(scene, cache.copyMesh(0), fraction, concat("fins, edges below ", fraction));
     }
     const ExactDirect exact(scene);
     DirectLightSampler cv(test::glContext(), scene, samplerSettings());
@@ -753,7 +754,7 @@ TEST(Stability, CornellBoxFromAMillimetreToAHundredKilometres) {
     const Rendered unitRender = renderScene(unit, samplerEstimate(cvUnit), *unit.camera, "Cornell box 1 across", edges);
     // Every other cache vertex of the unit box, scaled, are the receivers at
     // every scale.
-    const IrradianceMeshView& points = unitRender.caches[0];
+    const IrradianceMeshCopy& points = unitRender.caches[0];
     for (double size : {1e-3, 1e5}) {
         const Scene scene = scaledCornell(size);
         const double s = size / unit.bounds.diagonal();
@@ -827,7 +828,7 @@ TEST(Stability, LightRadianceFromMicroToMega) {
     const Rendered unitRender = render(unitScene, "radiance x1");
     {
         const ExactDirect exact(unitScene);
-        const IrradianceMeshView& view = unitRender.caches[0];
+        const IrradianceMeshCopy& view = unitRender.caches[0];
         const double l = unitScene.lights[0].radiance.r;  // the largest channel
         for (size_t v = 0; v < view.positions.size(); v += 8) {
             const double open = l * exact.unoccludedCosineSolidAngle(0, view.positions[v], view.normals[v]);
@@ -836,7 +837,7 @@ TEST(Stability, LightRadianceFromMicroToMega) {
                 EXPECT_NEAR(view.irradiance[v][c], e[c], 0.02 * open) << "[single], vertex " << v;
         }
     }
-    auto expectCacheScaled = [](const IrradianceMeshView& view, const IrradianceMeshView& unit, double factor,
+    auto expectCacheScaled = [](const IrradianceMeshCopy& view, const IrradianceMeshCopy& unit, double factor,
                                 const std::string& what) {
         ASSERT_EQ(view.irradiance.size(), unit.irradiance.size()) << what;
         for (size_t v = 0; v < view.irradiance.size(); ++v)

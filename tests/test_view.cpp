@@ -14,19 +14,20 @@
 //  [8-bit]   the GPU display against toneMap() on the CPU: float against
 //            double arithmetic before rounding to 8 bits: one level.
 #include "cache/IrradianceCache.h"
+#include "TestSamplers.h"
 #include "core/Error.h"
 #include "core/loaders/ObjLoader.h"
 #include "core/scenes/CornellBox.h"
 #include "core/scenes/ScalingScene.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/gl/GlObjects.h"
-#include "viewer/Compositor.h"
-#include "viewer/GpuCacheMeshes.h"
-#include "viewer/Illuminance.h"
-#include "viewer/ToneMap.h"
-#include "viewer/view/DisplayState.h"
-#include "viewer/view/ViewScript.h"
-#include "viewer/view/WalkCamera.h"
+#include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/GpuCacheMeshes.h"
+#include "core/image/Illuminance.h"
+#include "core/image/ToneMap.h"
+#include "viewer/window/DisplayState.h"
+#include "viewer/window/ViewScript.h"
+#include "viewer/window/WalkCamera.h"
 
 #include "GlTestContext.h"
 
@@ -456,19 +457,19 @@ namespace {
 // from; distinct per light and channel so mix-ups show).
 struct TwoLights {
     Scene scene = makeCornellLightGrid(2);
-    std::vector<IrradianceMeshView> direct;
+    std::vector<IrradianceMeshCopy> direct;
     TwoLights() {
         CacheSettings cs;
         cs.maxEdgeFraction = 1.0 / 12;
         IrradianceCache cache(scene, cs);
-        sampleEveryVertex(
+        test::sampleEveryVertex(
             cache,
             [](size_t l, const Vec3& x, const Vec3&, uint32_t) {
                 const double s = 1 + 0.5 * std::sin(0.01 * x.x + 0.02 * x.z + double(l));
                 return l == 0 ? Rgb(2 * s, 1.5 * s, 0.5 * s) : Rgb(0.3 * s, 0.8 * s, 2.5 * s);
             },
             1, 1);
-        for (size_t l = 0; l < cache.lightCount(); ++l) direct.push_back(cache.view(l));
+        direct = cache.copyMeshes();
     }
     Camera camera() const { return scene.cameraOrDefault(1.0); }
 };
@@ -512,8 +513,8 @@ bool identical(const ImageRgb& a, const ImageRgb& b) {
     return a.data.size() == b.data.size() && std::memcmp(a.data.data(), b.data.data(), a.data.size() * 4) == 0;
 }
 
-GpuCacheMeshes uploaded(const std::vector<IrradianceMeshView>& direct,
-                        const std::vector<IrradianceMeshView>& indirect = {}) {
+GpuCacheMeshes uploaded(const std::vector<IrradianceMeshCopy>& direct,
+                        const std::vector<IrradianceMeshCopy>& indirect = {}) {
     GpuCacheMeshes m(test::glContext().gl(), twoLights().scene.bounds.center());
     m.upload(direct, indirect);
     return m;
@@ -564,7 +565,7 @@ TEST(ViewCompositor, IndirectMeshesAddToDirectAndShowAlone) {
     const TwoLights& t = twoLights();
     Compositor c(test::glContext(), t.scene);
     // A made-up bounce: light A's mesh at a third of its irradiance.
-    IrradianceMeshView bounce = t.direct[0];
+    IrradianceMeshCopy bounce = t.direct[0];
     for (Rgb& e : bounce.irradiance) e /= 3.0;
     const GpuCacheMeshes directOnly = uploaded(t.direct);
     const GpuCacheMeshes withBounce = uploaded(t.direct, {bounce});
@@ -756,9 +757,8 @@ TEST(ViewCompositor, AFaceLitFromBehindShowsItsCopyEverywhere) {
     const Scene scene = loadObj(std::string(MESHLIGHT_TEST_DATA) + "/view_lit_from_behind.obj");
     IrradianceCache cache(scene, CacheSettings{});
     ASSERT_GT(cache.backFaceCount(), 0u);
-    sampleEveryVertex(cache, [](size_t, const Vec3&, const Vec3&, uint32_t) { return Rgb(1.0); }, 1, 1);
-    std::vector<IrradianceMeshView> direct;
-    for (size_t l = 0; l < cache.lightCount(); ++l) direct.push_back(cache.view(l));
+    test::sampleEveryVertex(cache, [](size_t, const Vec3&, const Vec3&, uint32_t) { return Rgb(1.0); }, 1, 1);
+    std::vector<IrradianceMeshCopy> direct = cache.copyMeshes();
     Compositor c(test::glContext(), scene);
     GpuCacheMeshes meshes(test::glContext().gl(), scene.bounds.center());
     meshes.upload(direct, {});
@@ -801,10 +801,10 @@ TEST(ViewCompositor, LargeMeshesSortedIntoCellsAndCulledGiveTheSameImage) {
     CacheSettings cs;
     cs.maxEdgeFraction = 1.0 / 90;
     IrradianceCache cache(scene, cs);
-    sampleEveryVertex(
+    test::sampleEveryVertex(
         cache, [](size_t, const Vec3& x, const Vec3&, uint32_t) { return Rgb(1 + 0.002 * x.x, 1 + 0.001 * x.y, 2.0); },
         1, 1);
-    const std::vector<IrradianceMeshView> direct = {cache.view(0)};
+    const std::vector<IrradianceMeshCopy> direct = {cache.copyMesh(0)};
     ASSERT_GE(direct[0].triangles.size(), GpuCacheMeshes::kCellMinTriangles);
     CacheMeshUploader uploader(test::glContext().gl(), scene.bounds.center());
     uploader.start(direct, {});
@@ -846,7 +846,7 @@ TEST(ViewCompositor, UploadsInSlicesShowOneWholeSnapshot) {
     const TwoLights& t = twoLights();
     Compositor c(test::glContext(), t.scene);
     CacheMeshUploader uploader(test::glContext().gl(), t.scene.bounds.center());
-    std::vector<IrradianceMeshView> empty(2);
+    std::vector<IrradianceMeshCopy> empty(2);
     uploader.start(empty, {});
     EXPECT_TRUE(uploader.step(0));  // empty meshes take no slice
     EXPECT_EQ(uploader.front().triangleCount(), 0u);

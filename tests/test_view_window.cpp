@@ -16,7 +16,7 @@
 //  [linear] Images of the same cache with other light weights: sums in float
 //           (test_view.cpp): 1e-5 of the value plus 1e-6 of the largest.
 #include "core/image/Image.h"
-#include "viewer/ToneMap.h"
+#include "core/image/ToneMap.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

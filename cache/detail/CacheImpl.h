@@ -23,9 +23,9 @@ CacheTriMesh::VertexHandle splitAtMidpoint(CacheTriMesh& mesh, CacheTriMesh::Edg
 Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh);
 // One estimate at vertex v of light `light`'s mesh, seeded from (seed, v,
 // light, samples so far); errors carry the light, vertex and point.
-VertexSample sampleVertex(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t v, uint32_t seed);
+VertexSample sampleVertex(VertexSampler& sampler, const CacheState& s, size_t light, size_t v, uint32_t seed);
 // The same at grid sample g (over all grid objects).
-VertexSample sampleGrid(const DirectSampleFn& fn, const CacheState& s, size_t light, size_t g, uint32_t seed);
+VertexSample sampleGrid(VertexSampler& sampler, const CacheState& s, size_t light, size_t g, uint32_t seed);
 const GridObject& gridOf(const CacheState& s, size_t g);  // the object grid sample g belongs to
 void addVertexSample(CacheState& s, size_t light, size_t v, const VertexSample& sample);
 void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sample);
@@ -33,7 +33,7 @@ void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sa
 size_t unsampledCount(const CacheState& s);
 // Samples up to `budget` of them, in (light, vertex, then grid sample)
 // order; `each`, if given, after each. Returns how many.
-size_t sampleUnsampled(CacheState& s, const DirectSampleFn& fn, uint32_t seed, size_t budget,
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
                        const std::function<void()>& each = {});
 
 }  // namespace detail

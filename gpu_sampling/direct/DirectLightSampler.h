@@ -4,6 +4,7 @@
 // can be compared.
 #pragma once
 
+#include "cache/DirectSampler.h"  // DirectPhaseTimes
 #include "core/Scene.h"
 
 #include <cstdint>
@@ -72,15 +73,6 @@ struct DirectSample {
 
     // A penumbra: some but not all of the light's samples are visible.
     bool partiallyVisible() const { return visibleSamples > 0 && visibleSamples < lightSamples; }
-};
-
-// Wall-clock seconds of each phase of the last sample (the paper's Fig. 9).
-struct DirectPhaseTimes {
-    double setup = 0;      // frusta, culling, uniforms (CPU)
-    double draw = 0;       // light and occluders (GPU, up to glFinish)
-    double readback = 0;   // glReadPixels / query results
-    double weighting = 0;  // per-sample weights (CPU)
-    double total() const { return setup + draw + readback + weighting; }
 };
 
 // How far above a receiver at x the sampling camera sits, along its normal:

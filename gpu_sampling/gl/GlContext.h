@@ -1,6 +1,7 @@
 // One abstraction for an OpenGL 4.5 core context with three back ends:
 // OSMesa (headless, CPU: tests and CI), EGL (headless, GPU machines) and a
-// GLFW window (the viewer).
+// GLFW window (the viewer's, in viewer/window/GlfwWindow.h: headless code
+// never sees GLFW).
 //
 // A context is owned by one thread (Filament's driver-thread rule): create it,
 // make it current and use it on that thread; other threads send it work.
@@ -10,8 +11,6 @@
 
 #include <memory>
 #include <string>
-
-struct GLFWwindow;
 
 namespace ml {
 
@@ -34,8 +33,6 @@ public:
     // Makes this context current on the calling thread.
     virtual void makeCurrent() = 0;
     virtual GlBackend backend() const = 0;
-    // Null for headless contexts.
-    virtual GLFWwindow* window() const { return nullptr; }
 
     const GlApi& gl() const { return gl_; }
     // "OSMesa: llvmpipe (LLVM 15.0.6, 256 bits), OpenGL 4.5"
@@ -49,14 +46,5 @@ protected:
 // Creates a headless context (OSMesa or EGL; Auto picks) and makes it current.
 // Throws std::runtime_error with the reason when none can be made.
 std::unique_ptr<GlContext> createHeadlessContext(GlBackend backend = GlBackend::Auto);
-
-struct WindowOptions {
-    int width = 1280;     // pixels
-    int height = 720;     // pixels
-    std::string title = "Meshlight";
-    bool visible = true;
-};
-// Opens a GLFW window with a 4.5 core context and makes it current.
-std::unique_ptr<GlContext> createWindowContext(const WindowOptions& options);
 
 }  // namespace ml

@@ -40,7 +40,7 @@ Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
     return {1 - v - w, v, w};
 }
 
-MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshView& mesh, double cellSize, double tolerance)
+MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance)
     : mesh_(mesh), cell_(cellSize), tolerance_(tolerance) {
     Bounds3 b;
     for (const Vec3& p : mesh.positions) b.extend(p);
@@ -148,12 +148,12 @@ RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(
     }
 }
 
-std::vector<Rgb> RadianceProxy::radianceFrom(const std::vector<IrradianceMeshView>& meshes) const {
+std::vector<Rgb> RadianceProxy::radianceFrom(const std::vector<IrradianceMeshCopy>& meshes) const {
     std::vector<Rgb> radiance(positions_.size());
     const double tolerance = 1e-5 * diagonal_;
     std::vector<MeshIrradianceLookup> lookups;
     lookups.reserve(meshes.size());
-    for (const IrradianceMeshView& m : meshes) lookups.emplace_back(m, grid_.voxel, tolerance);
+    for (const IrradianceMeshCopy& m : meshes) lookups.emplace_back(m, grid_.voxel, tolerance);
     for (size_t v = 0; v < positions_.size(); ++v) {
         const ProxyTriangle& t = triangles_[vertexTriangle_[v]];
         Rgb e(0.0);

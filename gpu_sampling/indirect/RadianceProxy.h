@@ -38,7 +38,7 @@ public:
     const std::vector<Vec3>& positions() const { return positions_; }
     // Exitant radiance at each position, W·sr⁻¹·m⁻², when the surfaces
     // receive the sum of these meshes' irradiance.
-    std::vector<Rgb> radianceFrom(const std::vector<IrradianceMeshView>& meshes) const;
+    std::vector<Rgb> radianceFrom(const std::vector<IrradianceMeshCopy>& meshes) const;
     // Triangles overlapping voxel (i, j, k).
     const std::vector<uint32_t>& inVoxel(int i, int j, int k) const {
         return bins_[(size_t(k) * grid_.dims[1] + j) * grid_.dims[0] + i];
@@ -64,11 +64,11 @@ Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
 // that side, e.g. the back of a wall no light reaches).
 class MeshIrradianceLookup {
 public:
-    MeshIrradianceLookup(const IrradianceMeshView& mesh, double cellSize, double tolerance);
+    MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance);
     Rgb at(const Vec3& p, const Vec3& n) const;
 
 private:
-    const IrradianceMeshView& mesh_;
+    const IrradianceMeshCopy& mesh_;
     std::vector<Vec3> faceNormals_;
     Vec3 origin_{0.0};
     double cell_ = 1, tolerance_ = 0;

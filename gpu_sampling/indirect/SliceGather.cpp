@@ -57,7 +57,7 @@ SliceGather::Target& SliceGather::target(int n) {
     return targets_.emplace(n, std::move(t)).first->second;
 }
 
-void SliceGather::setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double importance) {
+void SliceGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance) {
     const auto t0 = Clock::now();
     Slot s;
     s.imageSize = std::min(settings_.imageSize,

@@ -7,6 +7,7 @@
 // irradiance.
 #pragma once
 
+#include "GatherSettings.h"
 #include "NearField.h"
 #include "RadianceProxy.h"
 #include "VoxelSlices.h"
@@ -20,22 +21,6 @@ namespace ml {
 
 class GlContext;
 
-struct GatherSettings {
-    int imageSize = 40;        // N: the fish-eye image is N×N (the paper's 40)
-    int resolution = 64;       // voxels along the scene's longest side (32..128 typical)
-    // The near box: the point's voxel and this many more each way. Its
-    // triangles reach about a voxel beyond it, and each costs a ray test per
-    // pixel: 0 (the paper's "a little") is the default, bench indirect
-    // weighs 1 and 2.
-    int nearVoxels = 0;
-    int sliceSupersample = 2;  // sub-texels per texel side when filling the slices
-    // How the faces are drawn: one full-screen quad per face in front of the
-    // point, nearest hit by depth (the paper's §5.4), or one pass whose
-    // fragment program visits the faces in the order the pixel's ray crosses
-    // them and stops at the first hit (the same hits, found sooner).
-    bool quadPerFace = false;
-    void validate() const;
-};
 
 // Seconds per phase over every gather so far (with `timePhases`, the GPU is
 // waited for after each phase, so the parts add up to the whole).
@@ -55,7 +40,7 @@ public:
     // A source of importance q is gathered with an image of N·√q pixels a
     // side (at least 16): the noise of a gather grows as 1/side, and the
     // error it makes in the image shrinks as q.
-    void setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double importance = 1.0) override;
+    void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
     void releaseSource(size_t slot) override;
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
     IndirectStats stats() const override;

@@ -180,7 +180,7 @@ TriangleGather::TriangleGather(GlContext& context, const Scene& scene, const Tri
 
 TriangleGather::~TriangleGather() = default;
 
-void TriangleGather::setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double) {
+void TriangleGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
     const auto t0 = Clock::now();
     Slot s;
     s.radiance = proxy_.radianceFrom(irradiance);

@@ -36,6 +36,7 @@
 // mean of many gathers converges, where a fixed grid would repeat its error.
 #pragma once
 
+#include "GatherSettings.h"
 #include "NearField.h"
 #include "ProxyClusters.h"
 #include "RadianceProxy.h"
@@ -51,36 +52,7 @@ namespace ml {
 
 class GlContext;
 
-enum class TriangleProjection { Perspective, Hemicube, Fisheye };
 
-// "perspective", "hemicube", "fisheye-triangles": the names of
-// `--indirect-method`.
-const char* triangleProjectionName(TriangleProjection projection);
-
-struct TriangleGatherSettings {
-    TriangleProjection projection = TriangleProjection::Hemicube;
-    // Pixels per side: of the perspective image (the paper: 128 to 256 at
-    // 160°), of a hemicube's top face (its sides are N × N/2, so N is even;
-    // 32..128 typical), of the fish-eye image (40).
-    int imageSize = 64;
-    // The proxy's voxels along the scene's longest side (its triangles are
-    // at most a voxel across; 16..64 typical).
-    int resolution = 32;
-    // Perspective only: the angle across a side of the square image, degrees
-    // in (0, 176]; the paper's 160.
-    double fieldOfViewDegrees = 160;
-    // The seed turns (and, fish-eye, shifts) the image; false: one fixed
-    // grid whatever the seed (regular sampling).
-    bool jitter = true;
-    // Cluster edge in voxels for the culling (ProxyClusters).
-    int clusterVoxels = 4;
-    // Fish-eye only: triangles near the eye are split (1 into 4, again and
-    // again) until no edge spans more than this angle seen from the eye,
-    // degrees; typical 10 (the arc then strays from the chord by under a
-    // sixth of a pixel of a 40×40 image). 0: none, the straight edges of §5.2.
-    double tessellationDegrees = 10;
-    void validate() const;  // InputError naming the bad value
-};
 
 class TriangleGather : public IndirectEstimator {
 public:
@@ -90,7 +62,7 @@ public:
 
     std::string name() const override { return triangleProjectionName(settings_.projection); }
     // `importance` is not used: every source is gathered at the same image size.
-    void setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double importance = 1.0) override;
+    void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
     void releaseSource(size_t slot) override;
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
     IndirectStats stats() const override;

@@ -48,7 +48,7 @@ VoxelMarchGather::VoxelMarchGather(GlContext& context, const Scene& scene, const
 
 VoxelMarchGather::~VoxelMarchGather() = default;
 
-void VoxelMarchGather::setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double) {
+void VoxelMarchGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
     const auto t0 = Clock::now();
     const GlApi& gl = context_.gl();
     const VoxelGrid& grid = proxy_.grid();

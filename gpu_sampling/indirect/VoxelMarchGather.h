@@ -34,7 +34,7 @@ public:
 
     std::string name() const override { return "raymarch"; }
     // `importance` is not used: every source is gathered at the same image size.
-    void setSource(size_t slot, const std::vector<IrradianceMeshView>& irradiance, double importance = 1.0) override;
+    void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
     void releaseSource(size_t slot) override;
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
     IndirectStats stats() const override;

@@ -4,7 +4,7 @@
 #include "ExactDirectImage.h"
 #include "Gnuplot.h"
 
-#include "cache/CacheWorker.h"
+#include "cache/ProgressiveSession.h"
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"
 #include "core/Random.h"
@@ -13,8 +13,8 @@
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
 #include "core/scenes/CornellBox.h"
-#include "viewer/Compositor.h"
-#include "viewer/cli/DirectSetup.h"
+#include "viewer/compositor/Compositor.h"
+#include "gpu_sampling/SamplerFactory.h"
 
 #include <malloc.h>
 #include <unistd.h>
@@ -63,7 +63,7 @@ constexpr int kFirstViewSpp = 4, kLastViewSpp = 1024;
 // halves estimate its noise).
 constexpr int kFirstStillSpp = 2;
 
-struct Plan {
+struct Workload {
     int stillSize;                    // pixels per side
     double stillSeconds;              // Meshlight's budget; the path tracer stops past it
     std::vector<double> checkpoints;  // s since the cache was made: a snapshot composited at each
@@ -80,7 +80,7 @@ struct Plan {
     int viewSize;
 };
 
-Plan planFor(bool quick) {
+Workload workloadFor(bool quick) {
     if (quick) return {64, 3, {0.5, 1, 2, 3}, 16, 3, 32};
     // 5 s joins the issue's times, to read the first target off directly.
     return {256, 30, {0.5, 1, 2, 4, 5, 8, 15, 30}, 48, 30, 48};
@@ -335,20 +335,29 @@ struct StillResult {
 };
 
 // Waits for the worker's first snapshot (the time it takes counts).
-const CacheSnapshot* firstSnapshot(CacheWorker& worker, CacheWorker::Reader& reader) {
+const CacheSnapshot* firstSnapshot(ProgressiveSession& session, CacheWorker::Reader& reader) {
     for (;;) {
-        worker.rethrowIfFailed();
+        session.rethrowIfFailed();
         if (const CacheSnapshot* s = reader.acquire()) return s;
-        ML_ASSERT(!worker.finished(), "the cache worker ended without publishing a snapshot");
-        worker.waitForVersion(1, 0.05);
+        ML_ASSERT(!session.finished(), "the cache worker ended without publishing a snapshot");
+        session.waitForVersion(1, 0.05);
     }
 }
 
-StillResult runStill(const Scene& scene, const Plan& plan, const DirectChoice& choice, Compositor& compositor,
+// Direct light only, sampled as `choice` says, seeded with `seed`.
+std::unique_ptr<ProgressiveSession> directSession(const Scene& scene, const DirectChoice& choice, uint32_t seed) {
+    SessionSettings settings;
+    settings.worker.seed = seed;
+    IndirectChoice none;
+    none.enabled = false;
+    return std::make_unique<ProgressiveSession>(scene, settings, samplerFactory(scene, choice, none));
+}
+
+StillResult runStill(const Scene& scene, const Workload& work, const DirectChoice& choice, Compositor& compositor,
                      uint32_t seed) {
     StillResult r;
     const Camera camera = *scene.camera;
-    const int size = plan.stillSize;
+    const int size = work.stillSize;
     ExactImageSettings exactSettings;
     exactSettings.width = exactSettings.height = size;
     exactSettings.supersample = kSupersample;
@@ -373,21 +382,18 @@ StillResult runStill(const Scene& scene, const Plan& plan, const DirectChoice& c
     r.memory.rssBefore = residentBytesTrimmed();
     {
         const Clock::time_point start = Clock::now();
-        IrradianceCache cache(scene);
+        const std::unique_ptr<ProgressiveSession> session = directSession(scene, choice, seed);
+        const IrradianceCache& cache = session->cache();
         r.cacheBuildSeconds = secondsSince(start);
         r.memory.baseVertices = cache.totalVertices();
-        WorkerSettings ws;
-        ws.seed = seed;
-        CacheWorker worker(cache, directSamplerFactory(scene, choice, std::make_shared<DirectPhaseTimes>()), ws);
-        worker.setView(RefinementView{camera, size, size});
-        CacheWorker::Reader reader = worker.reader();
-        worker.start();
-        for (double due : plan.checkpoints) {
+        session->start(RefinementCamera{camera, size, size});
+        CacheWorker::Reader reader = session->reader();
+        for (double due : work.checkpoints) {
             for (double left; (left = due - secondsSince(start)) > 0;) {
-                worker.rethrowIfFailed();
+                session->rethrowIfFailed();
                 std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.05)));
             }
-            const CacheSnapshot* s = firstSnapshot(worker, reader);
+            const CacheSnapshot* s = firstSnapshot(*session, reader);
             MeshlightPoint p;
             p.checkpoint = due;
             p.seconds = secondsSince(start);
@@ -406,8 +412,8 @@ StillResult runStill(const Scene& scene, const Plan& plan, const DirectChoice& c
                         p.seconds, 100 * p.error, 100 * p.errorOffLight, p.vertices,
                         static_cast<unsigned long long>(p.samples), 100 * p.estimatedError);
         }
-        worker.stop();
-        worker.rethrowIfFailed();
+        session->stop();
+        session->rethrowIfFailed();
         r.memory.rssAfter = residentBytesTrimmed();
         r.memory.bytesPerVertex = IrradianceCache::bytesPerVertex();
         r.memory.cacheBytes = cache.memoryBytes();
@@ -424,20 +430,20 @@ StillResult runStill(const Scene& scene, const Plan& plan, const DirectChoice& c
         r.path.push_back(p);
         std::printf("  path tracer %4d spp %6.2f s: relative RMSE %.3f%% (%.3f%% off the light)\n", p.spp, p.seconds,
                     100 * p.error, 100 * p.errorOffLight);
-    } while (r.path.back().seconds <= plan.stillSeconds);
+    } while (r.path.back().seconds <= work.stillSeconds);
 
     // How much of the path tracer's floor is the exact image's sub-pixel
     // centres: around the light, the exact image at 4×4 and at 8×8
     // sub-pixels, and the path tracer at its last sample count.
     t = Clock::now();
-    const Camera cropCamera = lightCropCamera(scene, camera, size, plan.cropSize);
+    const Camera cropCamera = lightCropCamera(scene, camera, size, work.cropSize);
     ExactImageSettings crop;
-    crop.width = crop.height = plan.cropSize;
+    crop.width = crop.height = work.cropSize;
     crop.supersample = kSupersample;
     const ImageRgb coarseCrop = renderExactDirect(scene, cropCamera, crop);
     crop.supersample = kFineSupersample;
     const ImageRgb fineCrop = renderExactDirect(scene, cropCamera, crop);
-    DoublingPathTracer cropTracer(rays, cropCamera, plan.cropSize, seedFor(seed, 0xc0u), kFirstStillSpp);
+    DoublingPathTracer cropTracer(rays, cropCamera, work.cropSize, seedFor(seed, 0xc0u), kFirstStillSpp);
     while (cropTracer.spp() < tracer.spp()) cropTracer.step();
     r.cropSeconds = secondsSince(t);
     r.cropSpp = cropTracer.spp();
@@ -446,7 +452,7 @@ StillResult runStill(const Scene& scene, const Plan& plan, const DirectChoice& c
     r.pathVsFine = relativeRmse(cropTracer.image(), fineCrop);
     std::printf("  %dx%d crop around the light: exact 4x4 vs 8x8 %.3f%%; path tracer (%d spp) vs 4x4 %.3f%%, "
                 "vs 8x8 %.3f%% (%.1f s)\n",
-                plan.cropSize, plan.cropSize, 100 * r.exactGap, r.cropSpp, 100 * r.pathVsCoarse, 100 * r.pathVsFine,
+                work.cropSize, work.cropSize, 100 * r.exactGap, r.cropSpp, 100 * r.pathVsCoarse, 100 * r.pathVsFine,
                 r.cropSeconds);
     return r;
 }
@@ -508,11 +514,11 @@ struct WalkthroughResult {
     }
 };
 
-WalkthroughResult runWalkthrough(const Scene& scene, const Plan& plan, const DirectChoice& choice,
+WalkthroughResult runWalkthrough(const Scene& scene, const Workload& work, const DirectChoice& choice,
                                  Compositor& compositor, uint32_t seed) {
     WalkthroughResult r;
-    const int size = plan.viewSize;
-    const std::vector<Camera> cameras = walkthroughCameras(scene, plan.views);
+    const int size = work.viewSize;
+    const std::vector<Camera> cameras = walkthroughCameras(scene, work.views);
     Clock::time_point t = Clock::now();
     const EmbreeScene rays(scene);
     r.pathSetupSeconds = secondsSince(t);
@@ -538,28 +544,23 @@ WalkthroughResult runWalkthrough(const Scene& scene, const Plan& plan, const Dir
     comp.width = comp.height = size;
     comp.supersample = kSupersample;
     const Clock::time_point start = Clock::now();
-    IrradianceCache cache(scene);
+    const std::unique_ptr<ProgressiveSession> session = directSession(scene, choice, seed);
     r.cacheBuildSeconds = secondsSince(start);
-    WorkerSettings ws;
-    ws.seed = seed;
-    CacheWorker worker(cache, directSamplerFactory(scene, choice, std::make_shared<DirectPhaseTimes>()), ws);
-    CacheWorker::Reader reader = worker.reader();
+    std::optional<CacheWorker::Reader> reader;
     for (size_t v = 0; v < cameras.size(); ++v) {
         ViewResult& out = r.views[v];
         const Clock::time_point viewStart = v == 0 ? start : Clock::now();
-        const uint64_t serial = worker.setView(RefinementView{cameras[v], size, size});
-        if (v == 0) worker.start();
-        // Only snapshots made for this view (CacheSnapshot::viewSerial) count.
-        bool done = false;
-        for (;;) {
-            worker.rethrowIfFailed();
-            const CacheSnapshot* s = reader.acquire();
-            done = s && s->viewSerial >= serial && (s->converged || s->estimatedError <= kViewEstimatedError);
-            const double left = kViewSecondsLimit - secondsSince(viewStart);
-            if (done || left <= 0 || worker.finished()) break;
-            worker.waitForVersion((s ? s->version : 0) + 1, left);
-        }
-        const CacheSnapshot* s = firstSnapshot(worker, reader);  // the latest
+        const RefinementCamera view{cameras[v], size, size};
+        const uint64_t serial = v == 0 ? session->start(view) : session->setCamera(view);
+        if (v == 0) reader = session->reader();
+        // Only snapshots made for this view (CacheSnapshot::cameraSerial) count.
+        StopRule stop;
+        stop.seconds = std::max(0.0, kViewSecondsLimit - secondsSince(viewStart));
+        stop.error = kViewEstimatedError;
+        const CacheSnapshot* latest = session->refineUntil(*reader, stop, serial);
+        const bool done = latest && latest->cameraSerial >= serial &&
+                          (latest->converged || latest->estimatedError <= kViewEstimatedError);
+        const CacheSnapshot* s = firstSnapshot(*session, *reader);  // the latest
         out.waitSeconds = secondsSince(viewStart);
         const Clock::time_point c = Clock::now();
         const ImageRgb image = compositor.render(cameras[v], s->direct, comp);
@@ -572,8 +573,8 @@ WalkthroughResult runWalkthrough(const Scene& scene, const Plan& plan, const Dir
                     out.seconds(), 100 * out.error, out.vertices, 100 * out.estimatedError,
                     out.estimateReached ? "" : " (time limit)");
     }
-    worker.stop();
-    worker.rethrowIfFailed();
+    session->stop();
+    session->rethrowIfFailed();
 
     // The path tracer, per view, up to Meshlight's error on that view.
     for (size_t v = 0; v < cameras.size(); ++v) {
@@ -657,12 +658,12 @@ struct TargetRow {
     std::string target, method, value, status;
 };
 
-std::vector<TargetRow> targetRows(const StillResult& still, const WalkthroughResult& walk, const Plan& plan) {
+std::vector<TargetRow> targetRows(const StillResult& still, const WalkthroughResult& walk, const Workload& work) {
     std::vector<TargetRow> rows;
     auto stillRows = [&](double target, double seconds) {
         const std::string name = concat("still <= ", 100 * target, "% within ", seconds, " s");
-        if (plan.stillSeconds < seconds) {
-            const std::string why = concat("not measured (this run stops at ", plan.stillSeconds, " s)");
+        if (work.stillSeconds < seconds) {
+            const std::string why = concat("not measured (this run stops at ", work.stillSeconds, " s)");
             for (const char* method : {"meshlight", "path-tracer"}) rows.push_back({name, method, "-", why});
             return;
         }
@@ -734,7 +735,7 @@ const std::vector<GnuplotOutput> kPlots = {
     {"out_walk_error", "convergence_walkthrough_error.png"},
 };
 
-std::string gnuplotScript(const StillResult& still, const WalkthroughResult& walk, const Plan& plan) {
+std::string gnuplotScript(const StillResult& still, const WalkthroughResult& walk, const Workload& work) {
     std::ostringstream gp;
     gp << "# Written by 'meshlight bench convergence'; run with gnuplot in this folder.\n"
        << gnuplotOutputDefaults(kPlots)
@@ -764,7 +765,7 @@ std::string gnuplotScript(const StillResult& still, const WalkthroughResult& wal
     for (const MeshlightPoint& p : still.meshlight) tMin = std::min(tMin, p.seconds), tMax = std::max(tMax, p.seconds);
     for (const PathPoint& p : still.path) tMin = std::min(tMin, p.seconds), tMax = std::max(tMax, p.seconds);
     gp << "set output out_still\n"
-          "set title 'Cornell box, direct light, " << plan.stillSize << "^2 pixels: relative RMSE against the exact "
+          "set title 'Cornell box, direct light, " << work.stillSize << "^2 pixels: relative RMSE against the exact "
           "image (" << kSupersample << "x" << kSupersample << " sub-pixels)'\n"
           "set logscale xy\n"
           "set xrange [" << tMin / 1.3 << ":" << tMax * 1.3 << "]\n"
@@ -790,7 +791,7 @@ std::string gnuplotScript(const StillResult& still, const WalkthroughResult& wal
           "unset arrow 1\nunset arrow 2\n";
 
     gp << "set output out_walk\n"
-          "set title 'Walkthrough, " << walk.views.size() << " views of " << plan.viewSize << "^2 pixels: cumulative "
+          "set title 'Walkthrough, " << walk.views.size() << " views of " << work.viewSize << "^2 pixels: cumulative "
           "time (path tracer: samples doubled per view until its error is at most Meshlight)'\n"
           "unset logscale\n"
           "set autoscale x\n"
@@ -859,7 +860,7 @@ std::string loadAverage() {
     return one;
 }
 
-std::string summaryMarkdown(const std::string& context, const BenchConvergenceOptions& options, const Plan& plan,
+std::string summaryMarkdown(const std::string& context, const BenchConvergenceOptions& options, const Workload& work,
                             const StillResult& still, const WalkthroughResult& walk,
                             const std::vector<TargetRow>& targets, double wallSeconds, const std::string& loadStart,
                             const std::string& loadEnd) {
@@ -882,7 +883,7 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
 
     md << "## Targets\n\n" << markdownTable(targetsTable(targets)) << "\n";
 
-    md << "## Still image, " << plan.stillSize << "×" << plan.stillSize << "\n\n"
+    md << "## Still image, " << work.stillSize << "×" << work.stillSize << "\n\n"
        << "Exact image: " << benchNumber(still.exactSeconds) << " s. Cache made in "
        << benchNumber(still.cacheBuildSeconds) << " s; path tracer BVH " << benchNumber(still.pathSetupSeconds)
        << " s. Meshlight's snapshots are taken at the checkpoints (seconds: when taken, after the previous "
@@ -894,7 +895,7 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
           "compositor) average " << kSupersample << "×" << kSupersample << " sub-pixel centres; where a pixel holds "
           "a bright and a dark part, the two differ by much of the pixel. From the box's camera the light is a thin "
           "sliver against the black ceiling (direct light only: the ceiling gets none), so its silhouette pixels "
-          "dominate. On a " << plan.cropSize << "×" << plan.cropSize << " crop around the light (same pixel size, "
+          "dominate. On a " << work.cropSize << "×" << work.cropSize << " crop around the light (same pixel size, "
        << benchNumber(still.cropSeconds) << " s): the " << kSupersample << "×" << kSupersample
        << " exact image differs from an " << kFineSupersample << "×" << kFineSupersample << " one by "
        << pct(still.exactGap) << "%; the path tracer at " << still.cropSpp << " spp differs from the "
@@ -902,11 +903,11 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
        << kFineSupersample << "×" << kFineSupersample << " one by " << pct(still.pathVsFine)
        << "%. What the finer grid removes is sub-pixel approximation, not path-tracing noise. off_light_rmse: the "
           "same metric without the " << still.lightPixels << " pixels whose sub-pixel centres see the light, grown by "
-          "one pixel (" << pct(double(still.lightPixels) / (double(plan.stillSize) * plan.stillSize))
+          "one pixel (" << pct(double(still.lightPixels) / (double(work.stillSize) * work.stillSize))
        << "% of the image); the path tracer's remaining floor there is its noise and the geometric edges.\n\n";
 
     const bool reached = walk.pathReachedAll(), reachedTarget = walk.pathReachedTargetAll();
-    md << "## Walkthrough, " << walk.views.size() << " views of " << plan.viewSize << "×" << plan.viewSize << "\n\n"
+    md << "## Walkthrough, " << walk.views.size() << " views of " << work.viewSize << "×" << work.viewSize << "\n\n"
        << "Per view: setView, then the first snapshot made for the view whose estimated error is at most "
        << pct(kViewEstimatedError) << "% (or that converged), else the latest after " << kViewSecondsLimit
        << " s; its time includes compositing (and, for view 0, making the cache: "
@@ -916,7 +917,7 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
           "first within " << pct(kViewTarget) << "%; where none does, the last count's time (a lower bound). Its "
           "BVH build (" << benchNumber(walk.pathSetupSeconds) << " s) counts once. The exact references took "
        << benchNumber(walk.referenceSeconds) << " s in all, in neither total; they set the view size (see "
-          "BenchConvergence.cpp, Plan).\n\n"
+          "BenchConvergence.cpp, Workload).\n\n"
        << "Totals: Meshlight " << benchNumber(walk.meshlightTotal()) << " s; path tracer at Meshlight's error "
        << benchNumber(walk.pathTotal()) << " s" << (reached ? "" : " or more") << " (ratio "
        << benchNumber(walk.pathTotal() / walk.meshlightTotal()) << (reached ? "" : " or more")
@@ -946,7 +947,7 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
 int runBenchConvergence(const BenchConvergenceOptions& options) {
     const Clock::time_point start = Clock::now();
     const std::string loadStart = loadAverage();
-    const Plan plan = planFor(options.quick);
+    const Workload work = workloadFor(options.quick);
     makeOutputDirectory(options.outDir);
     const fs::path dir(options.outDir);
     const Scene scene = makeCornellBox();
@@ -958,21 +959,21 @@ int runBenchConvergence(const BenchConvergenceOptions& options) {
     choice.seed = options.seed;
     choice.backend = options.backend;
 
-    const StillResult still = runStill(scene, plan, choice, compositor, options.seed);
-    const WalkthroughResult walk = runWalkthrough(scene, plan, choice, compositor, options.seed);
-    const std::vector<TargetRow> targets = targetRows(still, walk, plan);
+    const StillResult still = runStill(scene, work, choice, compositor, options.seed);
+    const WalkthroughResult walk = runWalkthrough(scene, work, choice, compositor, options.seed);
+    const std::vector<TargetRow> targets = targetRows(still, walk, work);
 
     const BenchTable stillT = stillTable(still), walkT = walkthroughTable(walk), targetT = targetsTable(targets),
                      memoryT = memoryTable(still.memory);
     std::printf("\nStill image %dx%d: relative RMSE against the exact image (%.1f s to compute).\n\n%s",
-                plan.stillSize, plan.stillSize, still.exactSeconds, stillT.aligned().c_str());
+                work.stillSize, work.stillSize, still.exactSeconds, stillT.aligned().c_str());
     std::printf("\nPath tracer floor %.3f%% (%.3f%% off the light, %zu pixels left out) at %d spp; %dx%d crop around "
                 "the light: exact 4x4 vs 8x8 %.3f%%, path tracer (%d spp) vs 4x4 %.3f%%, vs 8x8 %.3f%%.\n",
                 100 * still.path.back().error, 100 * still.path.back().errorOffLight, still.lightPixels,
-                still.path.back().spp, plan.cropSize, plan.cropSize, 100 * still.exactGap, still.cropSpp,
+                still.path.back().spp, work.cropSize, work.cropSize, 100 * still.exactGap, still.cropSpp,
                 100 * still.pathVsCoarse, 100 * still.pathVsFine);
-    std::printf("\nWalkthrough, %zu views %dx%d (exact references: %.1f s).\n\n%s", walk.views.size(), plan.viewSize,
-                plan.viewSize, walk.referenceSeconds, walkT.aligned().c_str());
+    std::printf("\nWalkthrough, %zu views %dx%d (exact references: %.1f s).\n\n%s", walk.views.size(), work.viewSize,
+                work.viewSize, walk.referenceSeconds, walkT.aligned().c_str());
     std::printf("\nMemory per cached vertex (%zu vertices at the end of the still run).\n\n%s",
                 still.memory.vertices, memoryT.aligned().c_str());
     std::printf("\nTargets (issue 4).\n\n%s", targetT.aligned().c_str());
@@ -981,10 +982,10 @@ int runBenchConvergence(const BenchConvergenceOptions& options) {
     writeTextFileAtomically((dir / "convergence_walkthrough.csv").string(), walkT.csv());
     writeTextFileAtomically((dir / "convergence_targets.csv").string(), targetT.csv());
     writeTextFileAtomically((dir / "convergence_memory.csv").string(), memoryT.csv());
-    runGnuplotScript(dir, "convergence_plots.gp", gnuplotScript(still, walk, plan), kPlots);
+    runGnuplotScript(dir, "convergence_plots.gp", gnuplotScript(still, walk, work), kPlots);
     const double wall = secondsSince(start);
     writeTextFileAtomically((dir / "convergence_summary.md").string(),
-                            summaryMarkdown(context->describe(), options, plan, still, walk, targets, wall,
+                            summaryMarkdown(context->describe(), options, work, still, walk, targets, wall,
                                             loadStart, loadAverage()));
     std::printf("\nWall time %.1f s; files in %s\n", wall, dir.string().c_str());
     return 0;

@@ -44,7 +44,7 @@ double secondsSince(Clock::time_point start) {
 
 // --- Sizes of a run ------------------------------------------------------------
 
-struct Plan {
+struct Workload {
     int pointsPerSide;            // bench receivers per side
     std::vector<int> imageSizes;  // pixels per side
     std::vector<int> bits;        // jittered tests per pixel
@@ -56,7 +56,7 @@ struct Plan {
     size_t raytracePoints;        // bench receivers it is measured at
 };
 
-Plan planFor(const BenchDirectOptions& options) {
+Workload workloadFor(const BenchDirectOptions& options) {
     if (options.quick) return {20, {32, 64}, {1, 4}, 40, 8, 300, 0, 4, 100};
     return {options.pointsPerSide, {32, 48, 64}, {1, 4, 8}, 200, 32, 2000, 2000, 8, 2000};
 }
@@ -91,13 +91,13 @@ struct Config {
 constexpr DirectEstimator kEstimators[] = {DirectEstimator::Plain, DirectEstimator::ControlVariate};
 
 // Fig. 7's schemes, grouped by method; bits vary for jittered sampling only.
-std::vector<Config> accuracyConfigs(const Plan& plan) {
+std::vector<Config> accuracyConfigs(const Workload& work) {
     std::vector<Config> configs;
-    for (int size : plan.imageSizes) configs.push_back({DirectMethod::OcclusionQuery, DirectEstimator::Plain, size, 1});
-    for (int size : plan.imageSizes)
+    for (int size : work.imageSizes) configs.push_back({DirectMethod::OcclusionQuery, DirectEstimator::Plain, size, 1});
+    for (int size : work.imageSizes)
         for (DirectEstimator e : kEstimators) configs.push_back({DirectMethod::Regular, e, size, 1});
-    for (int size : plan.imageSizes)
-        for (int bits : plan.bits)
+    for (int size : work.imageSizes)
+        for (int bits : work.bits)
             for (DirectEstimator e : kEstimators) configs.push_back({DirectMethod::Jittered, e, size, bits});
     return configs;
 }
@@ -270,9 +270,9 @@ struct AccuracyRow {
 };
 
 std::vector<AccuracyRow> runAccuracy(GlContext& context, const Scene& scene, const BenchPoints& bench,
-                                     const Plan& plan, uint32_t seed, Clock::time_point start) {
+                                     const Workload& work, uint32_t seed, Clock::time_point start) {
     std::vector<AccuracyRow> rows;
-    for (const Config& config : accuracyConfigs(plan)) {
+    for (const Config& config : accuracyConfigs(work)) {
         std::fprintf(stderr, "[%6.1f s] accuracy: %s\n", secondsSince(start), config.label().c_str());
         AccuracyRow row{config, {}, measure(context, scene, config, bench.points, seed)};
         for (size_t i = 0; i < bench.points.size(); ++i) row.errors.add(row.timing.estimates[i], bench.references[i]);
@@ -348,15 +348,15 @@ struct ConvergenceRow {
 };
 
 // The error of the mean of K passes at the receivers `ids` (indices into
-// bench.points), K = 1, 2, 4, … up to plan.maxPasses. Pass p of receiver i
+// bench.points), K = 1, 2, 4, … up to work.maxPasses. Pass p of receiver i
 // uses seedFor(seed, i, 0, p).
 std::vector<ConvergenceRow> runConvergence(GlContext& context, const Scene& scene, const BenchPoints& bench,
-                                           const std::vector<size_t>& ids, const Plan& plan, uint32_t seed,
+                                           const std::vector<size_t>& ids, const Workload& work, uint32_t seed,
                                            Clock::time_point start) {
     std::vector<Config> configs = jittered64x4Configs();
     configs.push_back({DirectMethod::Regular, DirectEstimator::Plain, 64, 1});
     std::vector<int> ks;
-    for (int k = 1; k <= plan.maxPasses; k *= 2) ks.push_back(k);
+    for (int k = 1; k <= work.maxPasses; k *= 2) ks.push_back(k);
 
     std::vector<ConvergenceRow> rows;
     for (const Config& config : configs) {
@@ -421,15 +421,15 @@ RaytraceTiming timeRaytrace(const EmbreeScene& rays, const DirectSamplerSettings
 }
 
 std::vector<RaytraceRow> runRaytrace(const Scene& scene, const BenchPoints& bench,
-                                     const std::vector<AccuracyRow>& accuracy, const Plan& plan, uint32_t seed,
+                                     const std::vector<AccuracyRow>& accuracy, const Workload& work, uint32_t seed,
                                      Clock::time_point start) {
     std::vector<size_t> all(bench.points.size());
     for (size_t i = 0; i < all.size(); ++i) all[i] = i;
-    const std::vector<size_t> ids = spread(all, plan.raytracePoints);
+    const std::vector<size_t> ids = spread(all, work.raytracePoints);
     const EmbreeScene rays(scene);
     std::vector<RaytraceRow> rows;
     for (const AccuracyRow& r : accuracy) {
-        if (r.config.method != DirectMethod::Jittered || r.config.imageSize != 64 || r.config.bits != plan.raytraceBits)
+        if (r.config.method != DirectMethod::Jittered || r.config.imageSize != 64 || r.config.bits != work.raytraceBits)
             continue;
         std::fprintf(stderr, "[%6.1f s] ray-traced peer: %s\n", secondsSince(start), r.config.label().c_str());
         RaytraceRow raster{r.config, "raster", r.config.imageSize, 0, {}, r.timing.total};
@@ -797,7 +797,7 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>&
 
 int runBenchDirect(const BenchDirectOptions& options) {
     const Clock::time_point start = Clock::now();
-    const Plan plan = planFor(options);
+    const Workload work = workloadFor(options);
     // Before minutes of work, so that a bad path fails at once.
     makeOutputDirectory(options.outDir);
     const fs::path dir(options.outDir);
@@ -805,22 +805,22 @@ int runBenchDirect(const BenchDirectOptions& options) {
     std::printf("OpenGL: %s\n", context->describe().c_str());
 
     const Scene bench = makeBenchScene();
-    const BenchPoints points = benchPoints(bench, plan.pointsPerSide);
+    const BenchPoints points = benchPoints(bench, work.pointsPerSide);
     std::printf("bench scene: %zu receivers", points.points.size());
     if (points.skipped) std::printf(", %zu skipped (unoccluded value 0: no relative error)", points.skipped);
     std::printf("\n");
 
-    const std::vector<AccuracyRow> accuracy = runAccuracy(*context, bench, points, plan, options.seed, start);
-    const std::vector<RaytraceRow> raytrace = runRaytrace(bench, points, accuracy, plan, options.seed, start);
+    const std::vector<AccuracyRow> accuracy = runAccuracy(*context, bench, points, work, options.seed, start);
+    const std::vector<RaytraceRow> raytrace = runRaytrace(bench, points, accuracy, work, options.seed, start);
 
     const Scene heavy = makeBenchScene(kHeavySubdivisions);
-    const int heavySide = int(std::ceil(std::sqrt(double(plan.heavyPoints))));
+    const int heavySide = int(std::ceil(std::sqrt(double(work.heavyPoints))));
     const std::vector<SceneTimingRow> heavyRows =
         timeScene(*context, heavy, concat("bench-", heavy.triangleCount(), "-triangles"),
-                  spread(makeBenchReceivers(heavySide), plan.heavyPoints), options.seed, start);
+                  spread(makeBenchReceivers(heavySide), work.heavyPoints), options.seed, start);
     std::vector<SceneTimingRow> scenes = heavyRows;
-    const std::string waterPath = plan.waterPoints ? findWaterScene() : std::string();
-    if (!plan.waterPoints) {
+    const std::string waterPath = work.waterPoints ? findWaterScene() : std::string();
+    if (!work.waterPoints) {
         std::printf("note: Water scene skipped in quick mode\n");
     } else if (waterPath.empty()) {
         std::printf("note: CornellBox-Water.obj not found under $MESHLIGHT_SCENES_DIR or ../shared/scenes "
@@ -828,7 +828,7 @@ int runBenchDirect(const BenchDirectOptions& options) {
     } else {
         const Scene water = loadObj(waterPath);
         for (SceneTimingRow& row : timeScene(*context, water, "CornellBox-Water",
-                                             sceneReceivers(water, plan.waterPoints, options.seed), options.seed,
+                                             sceneReceivers(water, work.waterPoints, options.seed), options.seed,
                                              start))
             scenes.push_back(std::move(row));
     }
@@ -838,12 +838,12 @@ int runBenchDirect(const BenchDirectOptions& options) {
         const Reference& r = points.references[i];
         if (r.exact > kPenumbraLow * r.unoccluded && r.exact < kPenumbraHigh * r.unoccluded) penumbra.push_back(i);
     }
-    const std::vector<size_t> convergenceIds = spread(penumbra, plan.convergencePoints);
-    if (convergenceIds.size() < plan.convergencePoints)
+    const std::vector<size_t> convergenceIds = spread(penumbra, work.convergencePoints);
+    if (convergenceIds.size() < work.convergencePoints)
         std::printf("note: only %zu penumbra receivers for convergence (%zu asked)\n", convergenceIds.size(),
-                    plan.convergencePoints);
+                    work.convergencePoints);
     const std::vector<ConvergenceRow> convergence =
-        runConvergence(*context, bench, points, convergenceIds, plan, options.seed, start);
+        runConvergence(*context, bench, points, convergenceIds, work, options.seed, start);
 
     const Table accuracyT = accuracyTable(accuracy), scenesT = scenesTable(scenes),
                 convergenceT = convergenceTable(convergence);

@@ -62,7 +62,7 @@ struct Config {
     }
 };
 
-struct Plan {
+struct Workload {
     size_t areaPoints;     // random by area; the fixed corner points come on top
     int referenceSamples;  // path tracer: cosine-weighted directions per point
     int sourceRaysSide;    // exact-geometry gather: side² stratified rays per point
@@ -75,8 +75,8 @@ struct Plan {
     std::map<std::string, int> mainResolution;
 };
 
-Plan planFor(const BenchIndirectOptions& options) {
-    Plan p;
+Workload workloadFor(const BenchIndirectOptions& options) {
+    Workload p;
     std::vector<Config>& c = p.configs;
     auto sizes = [&](const std::string& method, std::initializer_list<int> ns, int res, int near = 0) {
         for (int n : ns) c.push_back({method, n, res, near});
@@ -410,7 +410,7 @@ struct Row {
     std::map<PointGroup, Errors> byGroup;  // one gather against the path tracer, per group of points
 };
 
-Row measure(GlContext& context, const Scene& scene, const std::vector<IrradianceMeshView>& source, const Config& c,
+Row measure(GlContext& context, const Scene& scene, const std::vector<IrradianceMeshCopy>& source, const Config& c,
             const std::vector<BenchPoint>& points, const std::vector<PointReference>& refs, int passes, uint32_t seed) {
     Row row;
     row.config = c;
@@ -664,7 +664,7 @@ const std::vector<std::string> kMethods = {"slices",      "slice-quads", "raymar
 // One colour per method, in kMethods order (readable on white).
 const char* const kColours[] = {"#7b2cbf", "#2a9d8f", "#56b4e9", "#e69f00", "#d62728", "#0072b2"};
 
-std::string gnuplotScript(const std::vector<Row>& rows, const Plan& plan, double floorError, double pathNoise,
+std::string gnuplotScript(const std::vector<Row>& rows, const Workload& work, double floorError, double pathNoise,
                           size_t pointCount) {
     std::ostringstream gp;
     gp << "# Written by 'meshlight bench indirect'; run with gnuplot in this folder.\n"
@@ -681,9 +681,9 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Plan& plan, double
             std::ostringstream data;
             for (const Row& r : rows) {
                 if (r.config.method != kMethods[m]) continue;
-                const auto it = plan.mainResolution.find(r.config.method);
+                const auto it = work.mainResolution.find(r.config.method);
                 const bool isMain =
-                    it != plan.mainResolution.end() && it->second == r.config.resolution && r.config.nearVoxels == 0;
+                    it != work.mainResolution.end() && it->second == r.config.resolution && r.config.nearVoxels == 0;
                 if (isMain != main) continue;
                 data << benchNumber(r.totalMs) << "," << pct(r.single.relRms) << "," << pct(r.meanK.relRms) << ","
                      << pct(r.gatherSingle.relRms) << "," << pct(r.gatherMeanK.relRms) << ",\"" << r.config.shortLabel()
@@ -699,10 +699,10 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Plan& plan, double
         gp << "plot ";
         for (const auto& [m, name] : blocks) {
             const bool main = name.find("main") != std::string::npos;
-            const auto it = plan.mainResolution.find(kMethods[m]);
+            const auto it = work.mainResolution.find(kMethods[m]);
             if (main)
                 gp << name << " using 1:" << column << " with linespoints lw 2 pt 7 lc rgb '" << kColours[m]
-                   << "' title '" << kMethods[m] << " @" << (it == plan.mainResolution.end() ? 0 : it->second)
+                   << "' title '" << kMethods[m] << " @" << (it == work.mainResolution.end() ? 0 : it->second)
                    << "', \\\n     " << name << " using 1:" << meanColumn << " with linespoints dt 2 pt 6 lc rgb '"
                    << kColours[m] << "'"
                    << " notitle, \\\n     ";
@@ -724,7 +724,7 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Plan& plan, double
        << pointCount
        << " points: error against the path tracer\\n"
           "solid: one gather; dashed: mean of "
-       << plan.passes
+       << work.passes
        << "; squares: other resolutions or near boxes; "
           "labels: N @voxels\"\n"
           "set logscale xy\n"
@@ -735,7 +735,7 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Plan& plan, double
     gp << "set output out_gather\n"
           "set title \"The gathers alone: error against the exact-geometry gather of the same source\\n"
           "solid: one gather; dashed: mean of "
-       << plan.passes << "\"\n";
+       << work.passes << "\"\n";
     curves(4, 5, false);
 
     gp << "$phases << EOD\n";
@@ -858,7 +858,7 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<Row>& rows, c
 
 int runBenchIndirect(const BenchIndirectOptions& options) {
     const Clock::time_point start = Clock::now();
-    const Plan plan = planFor(options);
+    const Workload work = workloadFor(options);
     makeOutputDirectory(options.outDir);
     const fs::path dir(options.outDir);
     const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
@@ -870,19 +870,19 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     size_t refineRounds = 0;
     {
         const ExactDirect exact(scene);
-        sampleEveryVertex(
-            cache, [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); },
-            1, options.seed);
-        const DirectSampleFn sample = [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) {
+        auto irradiance =
+            samplerOf([&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); });
+        sampleEveryVertex(cache, irradiance, 1, options.seed);
+        auto sample = samplerOf([&](size_t light, const Vec3& x, const Vec3& n, uint32_t) {
             VertexSample v;
             v.irradiance = exact.irradiance(light, x, n);
             const double open = exact.unoccludedCosineSolidAngle(light, x, n);
             v.visibility = open > 0 ? std::clamp(exact.cosineSolidAngle(light, x, n) / open, 0.0, 1.0) : 1.0;
             v.partial = v.visibility > 1e-9 && v.visibility < 1 - 1e-9;
             return v;
-        };
-        for (size_t spent = 0; spent < plan.refineEstimates;) {
-            const RefineReport r = cache.refine(sample, plan.refineEstimates - spent, options.seed);
+        });
+        for (size_t spent = 0; spent < work.refineEstimates;) {
+            const RefineReport r = cache.refine(sample, work.refineEstimates - spent, options.seed);
             ++refineRounds;
             spent += r.estimates;
             if (r.converged() || r.estimates == 0) break;
@@ -890,12 +890,11 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     }
     std::fprintf(stderr, "[%6.1f s] source cache: %zu vertices after %zu refinement rounds\n", secondsSince(start),
                  cache.totalVertices(), refineRounds);
-    std::vector<IrradianceMeshView> source;
-    for (size_t l = 0; l < cache.lightCount(); ++l) source.push_back(cache.view(l));
+    std::vector<IrradianceMeshCopy> source = cache.copyMeshes();
 
     // Points and references.
     const EmbreeScene rays(scene);
-    std::vector<BenchPoint> points = areaPoints(scene, rays, plan.areaPoints, options.seed);
+    std::vector<BenchPoint> points = areaPoints(scene, rays, work.areaPoints, options.seed);
     const std::vector<BenchPoint> fixed = fixedPoints(scene);
     points.insert(points.end(), fixed.begin(), fixed.end());
     std::fprintf(stderr, "[%6.1f s] references at %zu points\n", secondsSince(start), points.size());
@@ -910,15 +909,15 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
         const PathTracer tracer(rays, pts);
         for (size_t i = 0; i < points.size(); ++i) {
             const IrradianceEstimate e =
-                tracer.irradiance(points[i].x, points[i].n, plan.referenceSamples, uint32_t(i));
+                tracer.irradiance(points[i].x, points[i].n, work.referenceSamples, uint32_t(i));
             refs[i].path = luminance(e.indirect);
             refs[i].pathSe = luminance(e.indirectError);
         }
         const double diagonal = scene.bounds.diagonal();
         std::vector<MeshIrradianceLookup> lookups;
-        for (const IrradianceMeshView& m : source) lookups.emplace_back(m, diagonal / 64, 1e-5 * diagonal);
+        for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, diagonal / 64, 1e-5 * diagonal);
         parallelFor(points.size(), threads, [&](size_t i) {
-            refs[i].source = sourceGather(scene, rays, lookups, points[i].x, points[i].n, plan.sourceRaysSide,
+            refs[i].source = sourceGather(scene, rays, lookups, points[i].x, points[i].n, work.sourceRaysSide,
                                           seedFor(options.seed, uint32_t(i), 7));
         });
     }
@@ -940,13 +939,13 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
                  secondsSince(start), info.referenceSeconds, 100 * info.pathNoise, 100 * info.floor.relRms);
 
     std::vector<Row> rows;
-    for (const Config& c : plan.configs) {
+    for (const Config& c : work.configs) {
         std::fprintf(stderr, "[%6.1f s] %s\n", secondsSince(start), c.label().c_str());
-        rows.push_back(measure(*context, scene, source, c, points, refs, plan.passes, options.seed));
+        rows.push_back(measure(*context, scene, source, c, points, refs, work.passes, options.seed));
     }
     const std::vector<Comparison> comparisons = compare(rows);
 
-    const BenchTable methodsT = methodsTable(rows, plan.passes), compareT = comparisonTable(comparisons);
+    const BenchTable methodsT = methodsTable(rows, work.passes), compareT = comparisonTable(comparisons);
     std::printf(
         "\nIndirect gathers on the Cornell box, %zu points (ms per gather; rel_rms: relative RMS error of one "
         "gather against the path tracer; gather_rel_rms: against the exact gather of the source).\n"
@@ -959,7 +958,7 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     writeTextFileAtomically((dir / "indirect_equal_error.csv").string(), compareT.csv());
     writeTextFileAtomically((dir / "indirect_points.csv").string(), pointsTable(points, refs).csv());
     runGnuplotScript(dir, "indirect_plots.gp",
-                     gnuplotScript(rows, plan, info.floor.relRms, info.pathNoise, points.size()), kPlots);
+                     gnuplotScript(rows, work, info.floor.relRms, info.pathNoise, points.size()), kPlots);
     info.context = context->describe();
     info.quick = options.quick;
     info.seed = options.seed;
@@ -967,9 +966,9 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     info.fixedPoints = fixed.size();
     info.cacheVertices = cache.totalVertices();
     info.refineRounds = refineRounds;
-    info.referenceSamples = plan.referenceSamples;
-    info.sourceRays = plan.sourceRaysSide * plan.sourceRaysSide;
-    info.passes = plan.passes;
+    info.referenceSamples = work.referenceSamples;
+    info.sourceRays = work.sourceRaysSide * work.sourceRaysSide;
+    info.passes = work.passes;
     info.wallSeconds = secondsSince(start);
     writeTextFileAtomically((dir / "indirect_summary.md").string(), summaryMarkdown(info, rows, comparisons));
     std::printf("\nWall time %.1f s; files in %s\n", info.wallSeconds, dir.string().c_str());

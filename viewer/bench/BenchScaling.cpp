@@ -13,7 +13,7 @@
 #include "core/scenes/ScalingScene.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/OccluderBvh.h"
-#include "viewer/Compositor.h"
+#include "viewer/compositor/Compositor.h"
 
 #include <algorithm>
 #include <chrono>
@@ -50,7 +50,7 @@ std::string ms(double seconds) { return benchNumber(1e3 * seconds); }
 
 // --- Sizes of a run ------------------------------------------------------------
 
-struct Plan {
+struct Workload {
     // Subdivision levels: the bench scene's 4 non-emissive triangles become
     // 4^(k+1) (k = 4: 1,026 triangles in all; k = 9: 1,048,578); the Cornell
     // box's 30 become 30·4^k (k = 3: 1,922; k = 7: 491,522).
@@ -61,7 +61,7 @@ struct Plan {
     int compositeSize;     // composited image, pixels per side (2×2 supersampled)
 };
 
-Plan planFor(const BenchScalingOptions& options) {
+Workload workloadFor(const BenchScalingOptions& options) {
     if (options.quick) return {{4, 5, 6, 7}, {3, 4, 5}, {1, 2, 4, 8}, 64, 96, 96};
     return {{4, 5, 6, 7, 8, 9}, {3, 4, 5, 6, 7}, {1, 2, 4, 8, 16, 32, 64}, 200, 400, 256};
 }
@@ -183,12 +183,11 @@ CacheCost measureCache(GlContext& context, const Scene& scene, DirectLightSample
     std::vector<Estimate> pass;
     // The recorded estimates get a neutral value: compositing costs the same
     // whatever irradiance the cache holds.
-    cache->sampleUnsampled(
-        [&](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
-            pass.push_back({l, x, n, s});
-            return VertexSample{};
-        },
-        seed);
+    auto record = samplerOf([&](size_t l, const Vec3& x, const Vec3& n, uint32_t s) {
+        pass.push_back({l, x, n, s});
+        return VertexSample{};
+    });
+    cache->sampleUnsampled(record, seed);
     c.estimates = pass.size();
     const std::vector<Estimate> timedEstimates = spread(pass, count);
     c.sampled = timedEstimates.size();
@@ -202,8 +201,7 @@ CacheCost measureCache(GlContext& context, const Scene& scene, DirectLightSample
     settings.supersample = 2;
     Compositor compositor(context, scene);
     c.composite = medianTimed([&] {
-        std::vector<IrradianceMeshView> views;
-        for (size_t l = 0; l < cache->lightCount(); ++l) views.push_back(cache->view(l));
+        std::vector<IrradianceMeshCopy> views = cache->copyMeshes();
         const ImageRgb image = compositor.render(scene.cameraOrDefault(1.0), views, settings);
         ML_ASSERT(image.width == imageSize, "composited width ", image.width);
     });
@@ -223,7 +221,7 @@ struct TriangleRow {
 };
 
 TriangleRow measureTriangles(GlContext& context, const Scene& scene, const std::string& family, int levels,
-                             const std::vector<ReceiverPoint>& receivers, const Plan& plan, uint32_t seed) {
+                             const std::vector<ReceiverPoint>& receivers, const Workload& work, uint32_t seed) {
     TriangleRow row;
     row.scene = family;
     row.levels = levels;
@@ -243,7 +241,7 @@ TriangleRow measureTriangles(GlContext& context, const Scene& scene, const std::
         sampler = std::make_unique<DirectLightSampler>(context, scene, DirectSamplerSettings{});
     });
     row.sample = measureReceivers(*sampler, receivers, seed);
-    row.cache = measureCache(context, scene, *sampler, plan.timedEstimates, plan.compositeSize, seed);
+    row.cache = measureCache(context, scene, *sampler, work.timedEstimates, work.compositeSize, seed);
     return row;
 }
 
@@ -256,7 +254,7 @@ struct LightRow {
     double perVertex() const { return cache.perEstimate * lights; }
 };
 
-LightRow measureLights(GlContext& context, int lights, const Plan& plan, uint32_t seed) {
+LightRow measureLights(GlContext& context, int lights, const Workload& work, uint32_t seed) {
     const Scene scene = makeCornellLightGrid(lights);
     LightRow row;
     row.lights = lights;
@@ -266,7 +264,7 @@ LightRow measureLights(GlContext& context, int lights, const Plan& plan, uint32_
         sampler.reset();
         sampler = std::make_unique<DirectLightSampler>(context, scene, DirectSamplerSettings{});
     });
-    row.cache = measureCache(context, scene, *sampler, plan.timedEstimates, plan.compositeSize, seed);
+    row.cache = measureCache(context, scene, *sampler, work.timedEstimates, work.compositeSize, seed);
     return row;
 }
 
@@ -450,7 +448,7 @@ std::string seriesWithFit(const std::string& block, int column, int colour, int 
 }
 
 std::string gnuplotScript(const std::vector<TriangleRow>& triangles, const std::vector<LightRow>& lights,
-                          const std::vector<FitRow>& fits, const Plan& plan) {
+                          const std::vector<FitRow>& fits, const Workload& work) {
     std::ostringstream gp;
     gp << "# Written by 'meshlight bench scaling'; run with gnuplot in this folder.\n"
        << gnuplotOutputDefaults(kPlots)
@@ -522,12 +520,12 @@ std::string gnuplotScript(const std::vector<TriangleRow>& triangles, const std::
        << triangleSeries({"per_sample_ms", "per_estimate_ms"});
 
     gp << "set output out_setup\n"
-          "set title 'One-off costs against scene size (compositing: " << plan.compositeSize << "^2 pixels, "
+          "set title 'One-off costs against scene size (compositing: " << work.compositeSize << "^2 pixels, "
           "2x2 supersampled)'\n"
        << triangleSeries({"bvh_build_ms", "setup_ms", "cache_build_ms", "composite_ms"});
 
     gp << "set output out_lights\n"
-          "set title 'Cornell box with N ceiling lights of constant total power (" << plan.timedEstimates
+          "set title 'Cornell box with N ceiling lights of constant total power (" << work.timedEstimates
        << " estimates timed per N)'\n"
           "set xlabel 'lights, N'\n"
           "set logscale x 2\n"
@@ -545,7 +543,7 @@ std::string gnuplotScript(const std::vector<TriangleRow>& triangles, const std::
 
 // --- Summary --------------------------------------------------------------------------
 
-std::string summaryMarkdown(const std::string& context, const BenchScalingOptions& options, const Plan& plan,
+std::string summaryMarkdown(const std::string& context, const BenchScalingOptions& options, const Workload& work,
                             const std::vector<TriangleRow>& triangles, const std::vector<LightRow>& lights,
                             const std::vector<FitRow>& fits, double wallSeconds) {
     std::ostringstream md;
@@ -553,9 +551,9 @@ std::string summaryMarkdown(const std::string& context, const BenchScalingOption
        << "- OpenGL: " << context << "\n"
        << "- mode: " << (options.quick ? "quick" : "full") << ", seed " << options.seed
        << ", sampler: default settings (jittered 64×64, 8 bits, cv)\n"
-       << "- fixed receivers per scene: " << plan.receivers
-       << "; estimates of the cache's first pass timed: " << plan.timedEstimates
-       << "; composited image " << plan.compositeSize << "×" << plan.compositeSize << ", 2×2 supersampled\n"
+       << "- fixed receivers per scene: " << work.receivers
+       << "; estimates of the cache's first pass timed: " << work.timedEstimates
+       << "; composited image " << work.compositeSize << "×" << work.compositeSize << ", 2×2 supersampled\n"
        << "- wall time: " << benchNumber(wallSeconds) << " s\n";
     if (context.find("llvmpipe") != std::string::npos || context.find("softpipe") != std::string::npos)
         md << "- timings come from Mesa's software rasteriser on the CPU, not from a GPU\n";
@@ -596,7 +594,7 @@ std::string summaryMarkdown(const std::string& context, const BenchScalingOption
 
 int runBenchScaling(const BenchScalingOptions& options) {
     const Clock::time_point start = Clock::now();
-    const Plan plan = planFor(options);
+    const Workload work = workloadFor(options);
     makeOutputDirectory(options.outDir);
     const fs::path dir(options.outDir);
     const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
@@ -604,10 +602,10 @@ int runBenchScaling(const BenchScalingOptions& options) {
 
     // The receivers are placed on the base scenes: subdivision does not move
     // a surface, so they are the same points at every size.
-    const int side = int(std::ceil(std::sqrt(double(plan.receivers))));
-    const std::vector<ReceiverPoint> benchReceivers = spread(makeBenchReceivers(side), plan.receivers);
+    const int side = int(std::ceil(std::sqrt(double(work.receivers))));
+    const std::vector<ReceiverPoint> benchReceivers = spread(makeBenchReceivers(side), work.receivers);
     const Scene cornell = makeCornellBox();
-    const std::vector<ReceiverPoint> cornellReceivers = surfaceReceivers(cornell, plan.receivers, options.seed);
+    const std::vector<ReceiverPoint> cornellReceivers = surfaceReceivers(cornell, work.receivers, options.seed);
 
     // Warm-up, untimed: the first shader compilations and allocations of a
     // process are slower than any later one and would bend the smallest size.
@@ -624,16 +622,16 @@ int runBenchScaling(const BenchScalingOptions& options) {
             const Scene scene = subdivideScene(base, k);
             std::fprintf(stderr, "[%6.1f s] triangles: %s, %zu triangles\n", secondsSince(start), family.c_str(),
                          scene.triangleCount());
-            triangles.push_back(measureTriangles(*context, scene, family, k, receivers, plan, options.seed));
+            triangles.push_back(measureTriangles(*context, scene, family, k, receivers, work, options.seed));
         }
     };
-    sweep(makeBenchScene(), "bench", plan.benchLevels, benchReceivers);
-    sweep(cornell, "cornell", plan.cornellLevels, cornellReceivers);
+    sweep(makeBenchScene(), "bench", work.benchLevels, benchReceivers);
+    sweep(cornell, "cornell", work.cornellLevels, cornellReceivers);
 
     std::vector<LightRow> lights;
-    for (int n : plan.lightCounts) {
+    for (int n : work.lightCounts) {
         std::fprintf(stderr, "[%6.1f s] lights: %d\n", secondsSince(start), n);
-        lights.push_back(measureLights(*context, n, plan, options.seed));
+        lights.push_back(measureLights(*context, n, work, options.seed));
     }
 
     const std::vector<FitRow> fits = fitAll(triangles, lights);
@@ -649,10 +647,10 @@ int runBenchScaling(const BenchScalingOptions& options) {
     writeTextFileAtomically((dir / "scaling_triangles.csv").string(), triT.csv());
     writeTextFileAtomically((dir / "scaling_lights.csv").string(), lightT.csv());
     writeTextFileAtomically((dir / "scaling_fits.csv").string(), fitT.csv());
-    runGnuplotScript(dir, "scaling_plots.gp", gnuplotScript(triangles, lights, fits, plan), kPlots);
+    runGnuplotScript(dir, "scaling_plots.gp", gnuplotScript(triangles, lights, fits, work), kPlots);
     const double wall = secondsSince(start);
     writeTextFileAtomically((dir / "scaling_summary.md").string(),
-                            summaryMarkdown(context->describe(), options, plan, triangles, lights, fits, wall));
+                            summaryMarkdown(context->describe(), options, work, triangles, lights, fits, wall));
     std::printf("\nper-sample exponent: bench %s, cornell %s; per-vertex exponent against lights: %s\n"
                 "Wall time %.1f s; files in %s\n",
                 exponentText(findFit(fits, "triangles", "bench", "per_sample_ms")).c_str(),

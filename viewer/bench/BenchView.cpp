@@ -6,8 +6,8 @@
 #include "core/Error.h"
 #include "core/io/AtomicFile.h"
 #include "core/scenes/CornellBox.h"
-#include "viewer/view/ViewScript.h"
-#include "viewer/view/ViewSession.h"
+#include "viewer/window/ViewScript.h"
+#include "viewer/window/ViewSession.h"
 
 #include <sys/wait.h>
 

@@ -71,7 +71,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "where irradiance is not linear or visibility is partial; %s\n",
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
-    const BouncePlan& b = indirect.plan;
+    const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
                 "largest channel\n",
                 b.albedo.r, b.albedo.g, b.albedo.b, b.meanAlbedo);

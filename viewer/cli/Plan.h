@@ -2,8 +2,7 @@
 // (`meshlight plan SCENE` prints it alone).
 #pragma once
 
-#include "DirectSetup.h"
-#include "IndirectSetup.h"
+#include "SamplerOptions.h"
 #include "cache/IrradianceCache.h"
 #include "core/Scene.h"
 

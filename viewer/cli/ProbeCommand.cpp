@@ -1,11 +1,11 @@
 // meshlight probe: irradiance at sensor points (RADIANCE's `rtrace -I`),
 // what lighting designers check: direct light per light, and indirect light.
 #include "Commands.h"
-#include "DirectSetup.h"
-#include "IndirectSetup.h"
 #include "Plan.h"
-#include "cache/CacheWorker.h"
 #include "Progress.h"
+#include "SamplerOptions.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "cache/ProgressiveSession.h"
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/io/AtomicFile.h"
@@ -223,41 +223,35 @@ std::vector<Rgb> probeIndirect(const Scene& scene, const DirectChoice& choice, c
                                std::optional<double> seconds) {
     std::vector<Rgb> sum(points.size(), Rgb(0.0));
     if (indirect.solver.bounces == 0) return sum;
-    IrradianceCache cache(scene, cacheSettings);
-    IndirectSolver solver(scene, indirect.solver);
-    auto phases = std::make_shared<DirectPhaseTimes>();
-    const WorkerFactories factories = workerFactories(scene, choice, indirect, phases);
-    WorkerSettings ws;
-    ws.seed = choice.seed;
+    SessionSettings settings;
+    settings.cache = cacheSettings;
+    settings.worker.seed = choice.seed;
+    settings.indirect = indirect.solver;
+    ProgressiveSession session(scene, settings, samplerFactory(scene, choice, indirect));
+    session.start();
     {
-        CacheWorker worker(cache, factories.direct, ws, &solver, factories.indirect);
-        CacheWorker::Reader reader = worker.reader();
-        const auto start = std::chrono::steady_clock::now();
-        worker.start();
-        for (;;) {
-            worker.rethrowIfFailed();
-            const CacheSnapshot* s = reader.acquire();
-            if (worker.finished() || (s && s->converged)) break;
-            if (seconds && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= *seconds)
-                break;
-            if (s)
-                std::fprintf(stderr, "\rprobe: refining the caches: %zu vertices, bounces %d/%d   ", s->vertices,
-                             s->bouncesFinished, s->bounces);
-            worker.waitForVersion((s ? s->version : 0) + 1, 0.25);
-        }
-        worker.stop();
-        worker.rethrowIfFailed();
+        CacheWorker::Reader reader = session.reader();
+        StopRule stop;
+        stop.seconds = seconds;
+        session.refineUntil(reader, stop, 0, 0.25, [](const CacheSnapshot& s) {
+            std::fprintf(stderr, "\rprobe: refining the caches: %zu vertices, bounces %d/%d   ", s.vertices,
+                         s.bouncesFinished, s.bounces);
+        });
+        session.stop();
+        session.rethrowIfFailed();
         std::fprintf(stderr, "\n");
     }
+    const IrradianceCache& cache = session.cache();
+    const IndirectSolver& solver = *session.indirect();
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::unique_ptr<IndirectEstimator> estimator = makeIndirectEstimator(*context, scene, indirect);
     Progress progress("probe: gathering", points.size() * size_t(solver.started()));
     for (int b = 1; b <= solver.started(); ++b) {
-        std::vector<IrradianceMeshView> source;
+        std::vector<IrradianceMeshCopy> source;
         if (b == 1)
-            for (size_t l = 0; l < cache.lightCount(); ++l) source.push_back(cache.view(l));
+            source = cache.copyMeshes();
         else
-            source.push_back(solver.view(b - 1));
+            source.push_back(solver.copyMesh(b - 1));
         estimator->setSource(0, source);
         for (size_t i = 0; i < points.size(); ++i) {
             Rgb e(0.0);
@@ -318,12 +312,11 @@ int runProbe(const std::vector<std::string>& args) {
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     indirect.decide(scene);
-    if (indirect.enabled) std::printf("indirect light: %s\n", indirect.plan.reason.c_str());
+    if (indirect.enabled) std::printf("indirect light: %s\n", indirect.bounceCount.reason.c_str());
     const std::vector<Rgb> indirectAt = indirect.enabled ? probeIndirect(scene, choice, cacheSettings, indirect, points, timeLimit)
                                                          : std::vector<Rgb>{};
 
-    DirectEstimators estimators(scene, choice, false);
-    const DirectEstimateFn estimate = estimators.estimate();
+    ConfiguredDirectSampler sampler(scene, choice);
 
     std::ostringstream csv;
     csv.precision(9);
@@ -343,7 +336,9 @@ int runProbe(const std::vector<std::string>& args) {
         std::vector<Rgb> perLight(scene.lights.size(), Rgb(0.0));
         for (size_t l = 0; l < scene.lights.size(); ++l) {
             for (int k = 0; k < choice.passes; ++k)
-                perLight[l] += estimate(l, p.position, p.normal, seedFor(choice.seed, uint32_t(i), uint32_t(l), uint32_t(k)));
+                perLight[l] +=
+                    sampler.sample(l, p.position, p.normal, seedFor(choice.seed, uint32_t(i), uint32_t(l), uint32_t(k)))
+                        .irradiance;
             perLight[l] /= double(choice.passes);
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

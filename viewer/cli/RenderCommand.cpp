@@ -4,19 +4,17 @@
 // walkthrough of many, with snapshots, a log and a resumable cache file.
 #include "CameraOptions.h"
 #include "Commands.h"
-#include "DirectSetup.h"
-#include "IndirectSetup.h"
 #include "Plan.h"
-#include "Progress.h"
-#include "cache/CacheWorker.h"
-#include "cache/IrradianceCache.h"
+#include "SamplerOptions.h"
+#include "cache/ProgressiveSession.h"
+#include "gpu_sampling/gl/GlContext.h"
 #include "core/CameraPath.h"
 #include "core/Error.h"
 #include "core/image/Image.h"
 #include "core/image/ImageMetrics.h"
 #include "core/io/AtomicFile.h"
-#include "viewer/Compositor.h"
-#include "viewer/ToneMap.h"
+#include "viewer/compositor/Compositor.h"
+#include "core/image/ToneMap.h"
 
 #include <unistd.h>
 
@@ -24,7 +22,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
-#include <thread>
 
 namespace ml {
 
@@ -34,22 +31,6 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-
-// When to stop refining for one image.
-struct StopRule {
-    std::optional<double> seconds;     // --time
-    std::optional<double> error;       // --until-error
-    uint64_t samples = 0;              // --samples (0: none); ends the worker itself
-    std::string describe() const {
-        std::string s;
-        auto add = [&](const std::string& part) { s += (s.empty() ? "" : ", or ") + part; };
-        if (seconds) add(concat(*seconds, " s"));
-        if (error) add(concat("an estimated error of ", *error));
-        if (samples) add(concat(samples, " samples"));
-        add("convergence");
-        return s;
-    }
-};
 
 // "frames/view_####.png" → "frames/view_0007.png".
 std::string framePath(const std::string& pattern, size_t frame) {
@@ -90,7 +71,7 @@ public:
              << s.estimatedError << "," << s.directError << "," << s.indirectError << "," << s.bouncesFinished << ","
              << s.indirectVertices << "," << s.indirectSamples;
         if (reference_) out_ << "," << rmse(*image, *ref) << "," << relativeRmse(*image, *ref);
-        for (const IrradianceMeshView& m : s.direct) {
+        for (const IrradianceMeshCopy& m : s.direct) {
             uint64_t samples = 0;
             for (uint32_t c : m.samples) samples += c;
             out_ << "," << m.positions.size() << "," << samples;
@@ -108,11 +89,8 @@ private:
 // call (the caller calls it at snapshot times).
 void printStatus(const CacheSnapshot& s, double seconds, const std::string& what, bool done) {
     static const bool terminal = ::isatty(STDERR_FILENO) != 0;
-    const std::string bounces =
-        s.bounces ? concat(", bounces ", s.bouncesFinished, "/", s.bounces, " (", s.indirectSamples, " gathers)") : "";
-    std::fprintf(stderr, "%s%s %.1f s: %zu vertices, %llu samples%s, estimated error %.3g%%%s", terminal ? "\r" : "",
-                 what.c_str(), seconds, s.vertices, static_cast<unsigned long long>(s.samples), bounces.c_str(),
-                 100 * s.estimatedError, terminal && !done ? "   " : "\n");
+    std::fprintf(stderr, "%s%s %.1f s: %s%s", terminal ? "\r" : "", what.c_str(), seconds,
+                 describeProgress(s).c_str(), terminal && !done ? "   " : "\n");
     std::fflush(stderr);
 }
 
@@ -188,10 +166,11 @@ int runRender(const std::vector<std::string>& args) {
     }
     const std::string cachePath = o.has("cache") ? o.str("cache") : "";
     if (!cachePath.empty()) checkOutputDirectory(cachePath);
-    WorkerSettings workerSettings;
-    workerSettings.seed = choice.seed;
-    workerSettings.maxSamples = stop.samples;
-    workerSettings.publishSeconds = o.number("publish", 0, 3600);
+    SessionSettings sessionSettings;
+    sessionSettings.cache = cacheSettings;
+    sessionSettings.worker.seed = choice.seed;
+    sessionSettings.worker.publishSeconds = o.number("publish", 0, 3600);
+    sessionSettings.cachePath = cachePath;
 
     const auto t0 = Clock::now();
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
@@ -205,9 +184,10 @@ int runRender(const std::vector<std::string>& args) {
     printPlan(scene, choice, cacheSettings, indirect);
     std::printf("  stop refining each image at %s\n", stop.describe().c_str());
 
-    IrradianceCache cache(scene, cacheSettings);
-    if (!cachePath.empty() && std::filesystem::exists(cachePath)) {
-        cache.load(cachePath);  // refuses a truncated, corrupt or mismatched file
+    if (indirect.active()) sessionSettings.indirect = indirect.solver;
+    ProgressiveSession session(scene, sessionSettings, samplerFactory(scene, choice, indirect), stop);
+    const IrradianceCache& cache = session.cache();
+    if (session.resumed()) {
         std::printf("cache: resumed from %s: %zu vertices, %llu samples, %llu rounds\n", cachePath.c_str(),
                     cache.totalVertices(), static_cast<unsigned long long>(cache.totalSamples()),
                     static_cast<unsigned long long>(cache.rounds()));
@@ -222,23 +202,15 @@ int runRender(const std::vector<std::string>& args) {
     const ImageWriter writer(tone);
     ConvergenceLog log(scene.lights.size(), o.has("reference"));
 
-    auto phases = std::make_shared<DirectPhaseTimes>();
-    const WorkerFactories factories = workerFactories(scene, choice, indirect, phases);
-    std::unique_ptr<IndirectSolver> solver;
-    if (factories.indirect) solver = std::make_unique<IndirectSolver>(scene, indirect.solver);
-    CacheWorker worker(cache, factories.direct, workerSettings, solver.get(), factories.indirect);
-    const uint64_t firstSerial = worker.setView(RefinementView{cameras.front(), comp.width, comp.height});
-    CacheWorker::Reader reader = worker.reader();
-    const auto start = Clock::now();
-    worker.start();
+    const uint64_t firstSerial = session.start(RefinementCamera{cameras.front(), comp.width, comp.height});
+    CacheWorker::Reader reader = session.reader();
 
     size_t snapshotIndex = 0;
-    double nextTick = every;
     auto render = [&](const CacheSnapshot& s, const Camera& camera) {
         return compositor.render(camera, s.direct, s.indirect, comp);
     };
     auto tick = [&](const CacheSnapshot& s, size_t frame) {
-        const double seconds = secondsSince(start);
+        const double seconds = session.seconds();
         ImageRgb image;
         if (!snapshotsDir.empty() || o.has("reference")) image = render(s, cameras[frame]);
         if (!snapshotsDir.empty()) {
@@ -256,25 +228,9 @@ int runRender(const std::vector<std::string>& args) {
     for (size_t frame = 0; frame < cameras.size(); ++frame) {
         // Only snapshots made for this frame's view count for it.
         const uint64_t serial =
-            frame == 0 ? firstSerial : worker.setView(RefinementView{cameras[frame], comp.width, comp.height});
+            frame == 0 ? firstSerial : session.setCamera(RefinementCamera{cameras[frame], comp.width, comp.height});
         const auto frameStart = Clock::now();
-        for (;;) {
-            worker.rethrowIfFailed();
-            const CacheSnapshot* s = reader.acquire();
-            const bool fresh = s && s->viewSerial >= serial;
-            if (worker.finished()) break;
-            if (fresh && s->converged) break;
-            if (fresh && stop.error && s->estimatedError <= *stop.error) break;
-            if (stop.seconds && secondsSince(frameStart) >= *stop.seconds) break;
-            if (s && secondsSince(start) >= nextTick) {
-                tick(*s, frame);
-                nextTick = secondsSince(start) + every;
-            }
-            // Poll at 20 Hz, or sooner when a deadline is near.
-            double wait = std::max(0.0, std::min(0.05, nextTick - secondsSince(start)));
-            if (stop.seconds) wait = std::min(wait, std::max(0.0, *stop.seconds - secondsSince(frameStart)));
-            worker.waitForVersion((s ? s->version : 0) + 1, wait);
-        }
+        session.refineUntil(reader, stop, serial, every, [&](const CacheSnapshot& s) { tick(s, frame); });
         if (frame + 1 < cameras.size()) {
             const CacheSnapshot* s = reader.acquire();
             writer.write(framePath(out, frame), render(*s, cameras[frame]));
@@ -283,11 +239,11 @@ int runRender(const std::vector<std::string>& args) {
         }
     }
     // The last image is made from everything the worker did, so it stops first.
-    worker.stop();
-    worker.rethrowIfFailed();
+    session.stop();
+    session.rethrowIfFailed();
     const CacheSnapshot* final = reader.acquire();
     ML_ASSERT(final, "the worker published no snapshot");
-    const double refineSeconds = secondsSince(start);
+    const double refineSeconds = session.seconds();
     const size_t lastFrame = cameras.size() - 1;
     const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
     const ImageRgb image = render(*final, cameras[lastFrame]);
@@ -295,9 +251,9 @@ int runRender(const std::vector<std::string>& args) {
     printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);
     writer.write(lastPath, image);
     if (!logPath.empty()) writeTextFileAtomically(logPath, log.text());
-    if (!cachePath.empty()) cache.save(cachePath);
+    if (!cachePath.empty()) session.save(cachePath);
 
-    const DirectPhaseTimes& p = *phases;
+    const DirectPhaseTimes& p = final->directPhases;
     std::printf("refinement: %.2f s, %llu rounds, %zu vertices, %llu samples (%.1f us each; GPU phases: setup %.2f s, "
                 "draw %.2f s, readback %.2f s, weighting %.2f s), estimated error %.3g%%%s\n",
                 refineSeconds, static_cast<unsigned long long>(final->rounds), final->vertices,
@@ -306,7 +262,7 @@ int runRender(const std::vector<std::string>& args) {
                 p.weighting, 100 * final->estimatedError, final->converged ? " (converged)" : "");
     std::printf("cache: %.1f MB (%zu bytes per vertex)%s\n", cache.memoryBytes() / 1e6, IrradianceCache::bytesPerVertex(),
                 cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());
-    if (solver) {
+    if (session.indirect()) {
         const IndirectStats& st = final->indirectStats;
         std::printf("indirect: %d of %d bounces converged, %zu vertices, %llu gathers (%.2f ms each), sources built in "
                     "%.2f s, %.1f MB held; last source: %s\n",

@@ -61,13 +61,13 @@ public:
     size_t triangleCount() const;  // over every mesh
 
     // Copies `direct` then `indirect` whole (tests, `render`, one-off images).
-    void upload(const std::vector<IrradianceMeshView>& direct, const std::vector<IrradianceMeshView>& indirect);
+    void upload(const std::vector<IrradianceMeshCopy>& direct, const std::vector<IrradianceMeshCopy>& indirect);
 
 private:
     friend class CacheMeshUploader;
     // Sizes the set for these meshes: buffers grow (by a quarter more than
     // asked, so a growing cache does not reallocate every snapshot), never shrink.
-    void reserve(const std::vector<const IrradianceMeshView*>& views, size_t directCount);
+    void reserve(const std::vector<const IrradianceMeshCopy*>& views, size_t directCount);
 
     const GlApi* gl_;
     Vec3 origin_;
@@ -82,7 +82,7 @@ public:
     // Starts copying these meshes into the back set. They must stay valid
     // and unchanged until step() returns true (the viewer keeps its
     // snapshot pinned); a copy in progress is abandoned.
-    void start(const std::vector<IrradianceMeshView>& direct, const std::vector<IrradianceMeshView>& indirect);
+    void start(const std::vector<IrradianceMeshCopy>& direct, const std::vector<IrradianceMeshCopy>& indirect);
     bool busy() const { return !pending_.empty(); }
     // Copies slices for about `seconds` (at least one slice, so a copy
     // always ends; empty meshes take none); returns true when this call
@@ -103,7 +103,7 @@ private:
 
     GpuCacheMeshes sets_[2];
     int front_ = 0;
-    std::vector<const IrradianceMeshView*> pending_;  // meshes of the copy in progress
+    std::vector<const IrradianceMeshCopy*> pending_;  // meshes of the copy in progress
     size_t mesh_ = 0;         // mesh being copied
     size_t offset_ = 0;       // next vertex or triangle of the phase
     Phase phase_ = Phase::Vertices;

@@ -16,7 +16,7 @@
 
 namespace ml {
 
-struct BouncePlanSettings {
+struct BounceCountSettings {
     // Stop once the radiance still missing is below this fraction of the total.
     double missingFraction = 0.01;
     int maxBounces = 24;               // the cap
@@ -27,7 +27,7 @@ struct BouncePlanSettings {
     void validate() const;
 };
 
-struct BouncePlan {
+struct BounceCount {
     Rgb albedo{0.0};        // per channel, area- and direct-irradiance-weighted
     double meanAlbedo = 0;  // ā: the largest channel (it decays slowest)
     int bounces = 0;
@@ -38,6 +38,6 @@ struct BouncePlan {
 
 // Direct irradiance at the points comes from shadow rays to points on the
 // lights (Embree), so light blocked by walls does not count.
-BouncePlan planBounces(const Scene& scene, const BouncePlanSettings& settings = {});
+BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings = {});
 
 }  // namespace ml

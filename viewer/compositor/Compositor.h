@@ -13,7 +13,7 @@
 #pragma once
 
 #include "GpuCacheMeshes.h"
-#include "ToneMap.h"
+#include "core/image/ToneMap.h"
 #include "cache/IrradianceCache.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
@@ -83,10 +83,10 @@ public:
     // Linear radiance, W·sr⁻¹·m⁻², row 0 at the top. `direct` holds one
     // cache mesh per light (IrradianceCache::view), in the scene's light
     // order; `indirect` one per bounce (none: direct light only).
-    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
+    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
                     const CompositorSettings& settings);
-    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
-                    const std::vector<IrradianceMeshView>& indirect, const CompositorSettings& settings);
+    ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
+                    const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings);
 
     // --- Interactive frames -------------------------------------------------
     // Composites `settings.quantity` into the compositor's own targets

@@ -1,13 +1,12 @@
 // meshlight view: the progressive walkthrough viewer (ViewSession.h), and
 // its scripted twin (--script, ViewScript.h). Everything the user can get
 // wrong, the script included, is checked before the window opens.
-#include "ViewScript.h"
-#include "ViewSession.h"
-#include "viewer/cli/CameraOptions.h"
-#include "viewer/cli/Commands.h"
-#include "viewer/cli/DirectSetup.h"
-#include "viewer/cli/IndirectSetup.h"
-#include "viewer/cli/Plan.h"
+#include "viewer/window/ViewScript.h"
+#include "viewer/window/ViewSession.h"
+#include "CameraOptions.h"
+#include "Commands.h"
+#include "SamplerOptions.h"
+#include "Plan.h"
 
 #include "core/Error.h"
 #include "core/io/AtomicFile.h"

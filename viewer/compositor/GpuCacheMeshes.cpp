@@ -17,16 +17,16 @@ constexpr size_t kSlice = 16384;
 
 static_assert(sizeof(glm::uvec3) == 3 * sizeof(uint32_t), "triangles are copied to the GPU as they are");
 
-std::vector<const IrradianceMeshView*> pointers(const std::vector<IrradianceMeshView>& direct,
-                                                const std::vector<IrradianceMeshView>& indirect) {
-    std::vector<const IrradianceMeshView*> all;
-    for (const IrradianceMeshView& m : direct) all.push_back(&m);
-    for (const IrradianceMeshView& m : indirect) all.push_back(&m);
+std::vector<const IrradianceMeshCopy*> pointers(const std::vector<IrradianceMeshCopy>& direct,
+                                                const std::vector<IrradianceMeshCopy>& indirect) {
+    std::vector<const IrradianceMeshCopy*> all;
+    for (const IrradianceMeshCopy& m : direct) all.push_back(&m);
+    for (const IrradianceMeshCopy& m : indirect) all.push_back(&m);
     return all;
 }
 
 // Converts vertices [begin, end) of `view` to floats and copies them into the buffer.
-void copyVertices(const GlApi& gl, const Vec3& origin, const IrradianceMeshView& view, GLuint buffer, size_t begin,
+void copyVertices(const GlApi& gl, const Vec3& origin, const IrradianceMeshCopy& view, GLuint buffer, size_t begin,
                   size_t end, std::vector<float>& staging) {
     staging.resize((end - begin) * kFloatsPerVertex);
     float* out = staging.data();
@@ -40,7 +40,7 @@ void copyVertices(const GlApi& gl, const Vec3& origin, const IrradianceMeshView&
                           GLsizeiptr(staging.size() * sizeof(float)), staging.data());
 }
 
-void copyTriangles(const GlApi& gl, const IrradianceMeshView& view, GLuint buffer, size_t begin, size_t end) {
+void copyTriangles(const GlApi& gl, const IrradianceMeshCopy& view, GLuint buffer, size_t begin, size_t end) {
     gl.NamedBufferSubData(buffer, GLintptr(begin * sizeof(glm::uvec3)), GLsizeiptr((end - begin) * sizeof(glm::uvec3)),
                           &view.triangles[begin]);
 }
@@ -55,12 +55,12 @@ size_t GpuCacheMeshes::triangleCount() const {
     return n;
 }
 
-void GpuCacheMeshes::reserve(const std::vector<const IrradianceMeshView*>& views, size_t directCount) {
+void GpuCacheMeshes::reserve(const std::vector<const IrradianceMeshCopy*>& views, size_t directCount) {
     const GlApi& gl = *gl_;
     meshes_.resize(views.size());
     direct_ = directCount;
     for (size_t i = 0; i < views.size(); ++i) {
-        const IrradianceMeshView& v = *views[i];
+        const IrradianceMeshCopy& v = *views[i];
         ML_ASSERT(v.irradiance.size() == v.positions.size(), v.irradiance.size(), " irradiance values for ",
                   v.positions.size(), " vertices");
         Mesh& m = meshes_[i];
@@ -92,9 +92,9 @@ void GpuCacheMeshes::reserve(const std::vector<const IrradianceMeshView*>& views
     }
 }
 
-void GpuCacheMeshes::upload(const std::vector<IrradianceMeshView>& direct,
-                            const std::vector<IrradianceMeshView>& indirect) {
-    const std::vector<const IrradianceMeshView*> views = pointers(direct, indirect);
+void GpuCacheMeshes::upload(const std::vector<IrradianceMeshCopy>& direct,
+                            const std::vector<IrradianceMeshCopy>& indirect) {
+    const std::vector<const IrradianceMeshCopy*> views = pointers(direct, indirect);
     reserve(views, direct.size());
     std::vector<float> staging;
     for (size_t i = 0; i < views.size(); ++i) {
@@ -135,8 +135,8 @@ void CacheMeshUploader::beginMesh() {
     hi_ = glm::vec3(-std::numeric_limits<float>::max());
 }
 
-void CacheMeshUploader::start(const std::vector<IrradianceMeshView>& direct,
-                              const std::vector<IrradianceMeshView>& indirect) {
+void CacheMeshUploader::start(const std::vector<IrradianceMeshCopy>& direct,
+                              const std::vector<IrradianceMeshCopy>& indirect) {
     pending_ = pointers(direct, indirect);
     GpuCacheMeshes& back = sets_[1 - front_];
     back.reserve(pending_, direct.size());
@@ -144,7 +144,7 @@ void CacheMeshUploader::start(const std::vector<IrradianceMeshView>& direct,
     beginMesh();
     doneElements_ = 0;
     totalElements_ = 0;
-    for (const IrradianceMeshView* v : pending_)
+    for (const IrradianceMeshCopy* v : pending_)
         totalElements_ += v->positions.size() +
                           v->triangles.size() * (v->triangles.size() >= GpuCacheMeshes::kCellMinTriangles ? 3 : 1);
     if (pending_.empty()) pending_.push_back(nullptr);  // a snapshot without meshes still swaps in
@@ -168,7 +168,7 @@ bool CacheMeshUploader::step(double seconds) {
             front_ = 1 - front_;
             return true;
         }
-        const IrradianceMeshView& view = *pending_[mesh_];
+        const IrradianceMeshCopy& view = *pending_[mesh_];
         GpuCacheMeshes::Mesh& target = back.meshes_[mesh_];
         const bool sorted = sorts();
         const size_t count = phase_ == Phase::Vertices ? view.positions.size() : view.triangles.size();

@@ -12,8 +12,8 @@
 // for a light change: the worker caches the scene's own lights).
 #pragma once
 
-#include "viewer/Compositor.h"
-#include "viewer/ToneMap.h"
+#include "viewer/compositor/Compositor.h"
+#include "core/image/ToneMap.h"
 
 #include <string>
 #include <vector>

@@ -3,10 +3,11 @@
 #include "Ui.h"
 #include "core/Error.h"
 #include "core/image/Image.h"
-#include "gpu_sampling/gl/GlContext.h"
-#include "viewer/Compositor.h"
-#include "viewer/GpuCacheMeshes.h"
-#include "viewer/ToneMap.h"
+#include "GlfwWindow.h"
+#include "cache/ProgressiveSession.h"
+#include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/GpuCacheMeshes.h"
+#include "core/image/ToneMap.h"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -117,14 +118,14 @@ const std::optional<std::string> kUserLlvmpipeThreads = [] {
 // tile): a window opened after a worker (the bench opens several) would
 // render on one thread. So the window gets llvmpipe's default, one thread
 // per core, unless the user chose, and the variable is put back after.
-std::unique_ptr<GlContext> openWindow(const WindowOptions& options) {
+std::unique_ptr<GlfwWindow> openWindow(const WindowOptions& options) {
     const char* before = std::getenv("LP_NUM_THREADS");
     const std::optional<std::string> saved = before ? std::optional<std::string>(before) : std::nullopt;
     if (!kUserLlvmpipeThreads)
         ::setenv("LP_NUM_THREADS", std::to_string(std::max(1u, std::thread::hardware_concurrency())).c_str(), 1);
-    std::unique_ptr<GlContext> window;
+    std::unique_ptr<GlfwWindow> window;
     try {
-        window = createWindowContext(options);
+        window = std::make_unique<GlfwWindow>(options);
     } catch (...) {
         saved ? ::setenv("LP_NUM_THREADS", saved->c_str(), 1) : ::unsetenv("LP_NUM_THREADS");
         throw;
@@ -142,7 +143,7 @@ struct ViewSession::Impl : ScriptHost {
         uint64_t generation = 0, version = 0;
         double seconds = 0;
         size_t vertices = 0, triangles = 0, indirectMeshes = 0;
-        uint64_t samples = 0, rounds = 0, viewSerial = 0;
+        uint64_t samples = 0, rounds = 0, cameraSerial = 0;
         double estimatedError = 1;
         bool converged = false;
     };
@@ -166,9 +167,11 @@ struct ViewSession::Impl : ScriptHost {
     std::vector<UiLightInfo> lightInfo;
     DisplayState state;
 
-    IrradianceCache cache;
-    std::shared_ptr<DirectPhaseTimes> phases = std::make_shared<DirectPhaseTimes>();
-    std::unique_ptr<GlContext> window;
+    // The cache, its indirect solver and the worker refining them; a
+    // worker made again after a save continues the same cache and solver.
+    std::unique_ptr<ProgressiveSession> session;
+    bool workerStarted = false;
+    std::unique_ptr<GlfwWindow> window;
     std::unique_ptr<Compositor> compositor;
     std::unique_ptr<CacheMeshUploader> uploader;
     std::unique_ptr<Ui> ui;
@@ -177,9 +180,7 @@ struct ViewSession::Impl : ScriptHost {
     std::optional<Clock::time_point> scriptStart;
     uint64_t frameIndex = 0;
 
-    std::vector<IrradianceMeshView> emptyMeshes;
-    std::unique_ptr<IndirectSolver> solver;  // outlives every worker
-    std::unique_ptr<CacheWorker> worker;
+    std::vector<IrradianceMeshCopy> emptyMeshes;
     mutable CacheWorker::Reader reader;
     const CacheSnapshot* uploading = nullptr;  // pinned by `reader` while it is copied
     uint64_t generation = 0;                   // workers started so far
@@ -225,7 +226,7 @@ struct ViewSession::Impl : ScriptHost {
     std::vector<double> lightLatencies;
 
     Impl(const Scene& s, const ViewSettings& vs)
-        : scene(s), settings(vs), state(vs.display), cache(s, vs.cache),
+        : scene(s), settings(vs), state(vs.display),
           walk(vs.camera, std::max(s.bounds.diagonal(), 1e-30) / 8.0) {
         const double mpu = metresPerUnit(settings.unit);
         for (const AreaLight& l : scene.lights) {
@@ -235,11 +236,25 @@ struct ViewSession::Impl : ScriptHost {
             lightPowers.push_back(power);
             lightInfo.push_back({l.name, l.radiance, area, power, illuminanceLux(power, settings.efficacy)});
         }
-        if (!settings.cachePath.empty() && std::filesystem::exists(settings.cachePath)) {
-            cache.load(settings.cachePath);  // refuses a truncated, corrupt or mismatched file
+        SessionSettings ss;
+        ss.cache = settings.cache;
+        ss.worker = settings.worker;
+        if (settings.indirect.active()) ss.indirect = settings.indirect.solver;
+        ss.cachePath = settings.cachePath;
+        StopRule budget;
+        budget.samples = settings.worker.maxSamples;
+        session = std::make_unique<ProgressiveSession>(
+            scene, ss, samplerFactory(scene, settings.direct, settings.indirect), budget);
+        // The worker's thread lowers its own priority before its samplers
+        // (and their GL threads) exist. Frames then take the processor when
+        // they need it and refinement the rest: the frame rate does not
+        // depend on refinement even where the two share too few cores
+        // (llvmpipe renders both on the CPU).
+        session->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
+        if (session->resumed())
             std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
-                        cache.totalVertices(), static_cast<unsigned long long>(cache.totalSamples()));
-        }
+                        session->cache().totalVertices(),
+                        static_cast<unsigned long long>(session->cache().totalSamples()));
         if (settings.script) player.emplace(*settings.script);
 
         WindowOptions wo;
@@ -247,7 +262,7 @@ struct ViewSession::Impl : ScriptHost {
         wo.height = settings.height;
         wo.title = "Meshlight - " + scene.name;
         window = openWindow(wo);
-        GLFWwindow* w = window->window();
+        GLFWwindow* w = window->handle();
         glfwSwapInterval(0);  // frames are paced by maxFps, not by the display
         glfwSetWindowUserPointer(w, this);
         // Installed before ImGui's, which chain to them.
@@ -288,60 +303,40 @@ struct ViewSession::Impl : ScriptHost {
         // The worker may still be saving (its helper stops it): finish that first.
         if (save && save->thread.joinable()) save->thread.join();
         destroyWorker();
-        glfwSetWindowUserPointer(window->window(), nullptr);
+        glfwSetWindowUserPointer(window->handle(), nullptr);
     }
 
     double now() const { return secondsBetween(t0, Clock::now()); }
 
     // --- The worker ---------------------------------------------------------------
 
-    // The one place a worker is made: its samplers (made on its thread),
-    // settings and indirect solver, as `render` makes them. A worker made
-    // again after a save continues the same cache and solver.
-    std::unique_ptr<CacheWorker> createWorker() {
-        const WorkerFactories factories = workerFactories(scene, settings.direct, settings.indirect, phases);
-        if (factories.indirect && !solver) solver = std::make_unique<IndirectSolver>(scene, settings.indirect.solver);
-        // The factory runs first on the worker thread: it lowers that
-        // thread's priority before the sampler (and its GL threads) exist.
-        // Frames then take the processor when they need it and refinement
-        // the rest: the frame rate does not depend on refinement even where
-        // the two share too few cores (llvmpipe renders both on the CPU).
-        CacheWorker::SamplerFactory direct = [f = factories.direct] {
-            ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice);
-            return f();
-        };
-        return std::make_unique<CacheWorker>(cache, direct, settings.worker, solver.get(), factories.indirect);
-    }
-
     void startWorker(const Camera& camera, int width, int height) {
-        worker = createWorker();
-        reader = worker->reader();
         ++generation;
-        sendView(camera, width, height);
-        if (paused) worker->pause();
-        worker->start();
+        sentSerial = session->start(RefinementCamera{camera, width, height}, paused);
+        noteSentView(camera, width, height);
+        reader = session->reader();
+        workerStarted = true;
     }
 
-    // Ends the worker (joining it) and frees it on a thread of its own: its
-    // sampler factory may keep the worker's headless GL context alive until
-    // the worker object goes, and destroying an OSMesa context unbinds it
-    // from the calling thread's GL state, shared by every Mesa context in the
-    // process: on this thread, the window's context would stop answering.
+    // Ends the worker (joining it); the next start frees it.
     void destroyWorker() {
         reader = CacheWorker::Reader();
         uploading = nullptr;
-        if (!worker) return;
-        std::unique_ptr<CacheWorker> w = std::move(worker);
-        std::thread([&w] { w.reset(); }).join();
+        session->stop();
+        workerStarted = false;
     }
 
-    void sendView(const Camera& camera, int width, int height) {
-        sentSerial = worker->setView(RefinementView{camera, width, height});
+    void noteSentView(const Camera& camera, int width, int height) {
         sentCamera = camera;
         sentWidth = width;
         sentHeight = height;
         sentAt = now();
         viewDirty = false;
+    }
+
+    void sendView(const Camera& camera, int width, int height) {
+        sentSerial = session->setCamera(RefinementCamera{camera, width, height});
+        noteSentView(camera, width, height);
     }
 
     // The camera the user sees is the one refined first.
@@ -352,9 +347,9 @@ struct ViewSession::Impl : ScriptHost {
     }
 
     void checkWorker() {
-        if (!worker || !workerError.empty()) return;
+        if (!workerStarted || !workerError.empty()) return;
         try {
-            worker->rethrowIfFailed();
+            session->rethrowIfFailed();
         } catch (const std::exception& e) {
             workerError = e.what();
             std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", e.what());
@@ -370,7 +365,7 @@ struct ViewSession::Impl : ScriptHost {
         if (!save || !save->done.load() || uploader->busy()) return;
         save->thread.join();
         if (save->error.empty()) {
-            showMessage(concat("saved the cache to ", save->path, " (", cache.totalVertices(), " vertices)"));
+            showMessage(concat("saved the cache to ", save->path, " (", session->cache().totalVertices(), " vertices)"));
             std::printf("saved the cache to %s\n", save->path.c_str());
         } else {
             showMessage("could not save the cache: " + save->error);
@@ -386,7 +381,7 @@ struct ViewSession::Impl : ScriptHost {
     // Takes the latest snapshot and copies it to the GPU, a slice per frame.
     // Returns true when a newer snapshot became the one shown.
     bool pumpSnapshots(double& uploadMs) {
-        if (!worker) return false;
+        if (!workerStarted) return false;
         const auto start = Clock::now();
         if (!uploader->busy()) {
             const CacheSnapshot* s = reader.acquire();
@@ -410,7 +405,7 @@ struct ViewSession::Impl : ScriptHost {
                 shown.indirectMeshes = s.indirect.size();
                 shown.samples = s.samples;
                 shown.rounds = s.rounds;
-                shown.viewSerial = s.viewSerial;
+                shown.cameraSerial = s.cameraSerial;
                 shown.estimatedError = s.estimatedError;
                 shown.converged = s.converged;
                 uploading = nullptr;
@@ -434,33 +429,32 @@ struct ViewSession::Impl : ScriptHost {
     void meterLuxRange() override { meterLuxPending = true; }
     void setPaused(bool p) override {
         paused = p;
-        if (worker) p ? worker->pause() : worker->resume();
+        if (workerStarted) p ? session->pause() : session->resume();
     }
     uint64_t shownSamples() const override { return shown.any ? shown.samples : 0; }
     double shownError() const override { return shown.any ? shown.estimatedError : 1.0; }
     bool refinementDone() const override {
-        if (!worker || save || !shown.any || shown.generation != generation || uploader->busy()) return false;
+        if (!workerStarted || save || !shown.any || shown.generation != generation || uploader->busy()) return false;
         if (!workerError.empty() || paused) return true;
         // Nothing newer published since the snapshot shown (safe to acquire:
         // no copy is in progress).
         const CacheSnapshot* latest = reader.acquire();
         const bool newest = latest && latest->version == shown.version;
-        if (worker->finished()) return newest;
-        return newest && shown.converged && shown.viewSerial >= sentSerial && !viewDirty;
+        if (session->finished()) return newest;
+        return newest && shown.converged && shown.cameraSerial >= sentSerial && !viewDirty;
     }
     void screenshot(const std::string& path) override { screenshots.push_back(path); }
     void saveCache(const std::string& path) override {
-        if (save || !worker) return;
+        if (save || !workerStarted) return;
         save = std::make_unique<SaveJob>();
         save->path = path;
         SaveJob* job = save.get();
-        CacheWorker* w = worker.get();
-        IrradianceCache* c = &cache;
+        ProgressiveSession* refining = session.get();
         showMessage("saving the cache to " + path + "...");
-        job->thread = std::thread([job, w, c] {
+        job->thread = std::thread([job, refining] {
             try {
-                w->stop();  // the round in progress ends first; the cache is ours after the join
-                c->save(job->path);
+                refining->stop();  // the round in progress ends first; the cache is ours after the join
+                refining->save(job->path);
             } catch (const std::exception& e) {
                 job->error = e.what();
             }
@@ -479,7 +473,7 @@ struct ViewSession::Impl : ScriptHost {
 
     // Keys and the mouse, unless the controls have them.
     void handleInput(double dt, int fbWidth, int fbHeight) {
-        GLFWwindow* w = window->window();
+        GLFWwindow* w = window->handle();
         const bool keyboard = !ui->wantsKeyboard();
         const bool mouse = !ui->wantsMouse();
         for (int key : keysPressed) {
@@ -535,7 +529,7 @@ struct ViewSession::Impl : ScriptHost {
     // Does this iteration need a frame? Idle frames are skipped, so the
     // worker has the processor while nothing on screen would change.
     bool wantsFrame(bool newSnapshot) {
-        GLFWwindow* w = window->window();
+        GLFWwindow* w = window->handle();
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
         bool active = newSnapshot || events != eventsDrawn || dragging ||
                       (player && !player->finished()) || !screenshots.empty() || meterExposurePending ||
@@ -567,7 +561,7 @@ struct ViewSession::Impl : ScriptHost {
         s.rounds = shown.rounds;
         s.estimatedError = shown.estimatedError;
         s.converged = shown.converged;
-        s.finished = worker && worker->finished() && !save;
+        s.finished = workerStarted && session->finished() && !save;
         s.paused = paused;
         s.saving = save != nullptr;
         s.uploadProgress = uploader->busy() ? uploader->progress() : 1.0;
@@ -695,7 +689,7 @@ struct ViewSession::Impl : ScriptHost {
     void iterate() {
         checkWorker();
         int fbWidth = 0, fbHeight = 0;
-        glfwGetFramebufferSize(window->window(), &fbWidth, &fbHeight);
+        glfwGetFramebufferSize(window->handle(), &fbWidth, &fbHeight);
         if (fbWidth <= 0 || fbHeight <= 0) return;  // minimised
         finishSave(fbWidth, fbHeight);
         double uploadMs = 0;
@@ -725,7 +719,7 @@ struct ViewSession::Impl : ScriptHost {
         shownMode = state.mode;
         // The worker starts once the first frame's camera is known (a
         // script's first keyframe), so its first view is the one shown.
-        if (!worker && !save)
+        if (!workerStarted && !save)
             startWorker(walk.camera(), fbWidth, fbHeight);
         else
             followView(fbWidth, fbHeight);
@@ -760,7 +754,7 @@ struct ViewSession::Impl : ScriptHost {
         const double composeMs = 1e3 * secondsBetween(composeStart, Clock::now());
         ui->render();
         writeScreenshots(fbWidth, fbHeight);
-        glfwSwapBuffers(window->window());
+        glfwSwapBuffers(window->handle());
         if (lightChangedAt) {
             window->gl().Finish();  // the frame showing the change is on screen
             lightLatencies.push_back(secondsBetween(*lightChangedAt, Clock::now()));
@@ -795,7 +789,7 @@ struct ViewSession::Impl : ScriptHost {
                 interrupted = true;
                 break;
             }
-            if (glfwWindowShouldClose(window->window()) || quitRequested) break;
+            if (glfwWindowShouldClose(window->handle()) || quitRequested) break;
             try {
                 iterate();
             } catch (const InputError& e) {
@@ -824,13 +818,14 @@ struct ViewSession::Impl : ScriptHost {
         save.reset();
         reader = CacheWorker::Reader();
         uploading = nullptr;
-        if (worker) {
-            worker->stop();
+        if (workerStarted) {
+            session->stop();
             checkWorker();
         }
-        if (!settings.cachePath.empty() && worker && workerError.empty()) {
-            cache.save(settings.cachePath);
-            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(), cache.totalVertices());
+        if (!settings.cachePath.empty() && workerStarted && workerError.empty()) {
+            session->save(settings.cachePath);
+            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(),
+                        session->cache().totalVertices());
         }
         if (player && !player->finished() && exitCode == 0 && !interrupted)
             std::printf("script: the window was closed at %s\n", player->where().c_str());

@@ -10,7 +10,7 @@
 #pragma once
 
 #include "DisplayState.h"
-#include "viewer/Illuminance.h"
+#include "core/image/Illuminance.h"
 
 #include <optional>
 #include <string>

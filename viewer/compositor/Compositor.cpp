@@ -1,10 +1,10 @@
 #include "Compositor.h"
 
-#include "Illuminance.h"
+#include "core/image/Illuminance.h"
 #include "core/Error.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/gl/GlObjects.h"
-#include "meshlight_viewer_lib_shaders.h"
+#include "meshlight_compositor_shaders.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -611,13 +611,13 @@ Compositor::Compositor(GlContext& context, const Scene& scene)
     : impl_(std::make_unique<Impl>(context, scene)) {}
 Compositor::~Compositor() = default;
 
-ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
+ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
                             const CompositorSettings& settings) {
     return render(camera, direct, {}, settings);
 }
 
-ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshView>& direct,
-                            const std::vector<IrradianceMeshView>& indirect, const CompositorSettings& settings) {
+ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
+                            const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings) {
     ML_ASSERT(direct.size() == impl_->scene.lights.size(), direct.size(), " meshes for ",
               impl_->scene.lights.size(), " lights");
     GpuCacheMeshes meshes(impl_->gl, impl_->origin);

@@ -1,4 +1,4 @@
-#include "BouncePlan.h"
+#include "BounceCount.h"
 
 #include "EmbreeScene.h"
 #include "core/Error.h"
@@ -12,7 +12,7 @@
 
 namespace ml {
 
-void BouncePlanSettings::validate() const {
+void BounceCountSettings::validate() const {
     if (!(missingFraction > 0 && missingFraction < 1))
         throw InputError(concat("indirect tolerance ", missingFraction, " is not in (0, 1)"));
     if (maxBounces < 1 || maxBounces > 256)
@@ -39,9 +39,9 @@ Vec3 pointOnTriangle(const Triangle3& t, double u, double v) {
 
 }  // namespace
 
-BouncePlan planBounces(const Scene& scene, const BouncePlanSettings& settings) {
+BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings) {
     settings.validate();
-    BouncePlan plan;
+    BounceCount plan;
     // Triangles by cumulative area, for area-uniform points.
     struct Tri {
         uint32_t mesh, tri;

@@ -24,9 +24,8 @@
 #include "WalkCamera.h"
 #include "cache/CacheWorker.h"
 #include "cache/IrradianceCache.h"
-#include "viewer/Illuminance.h"
-#include "viewer/cli/DirectSetup.h"
-#include "viewer/cli/IndirectSetup.h"
+#include "core/image/Illuminance.h"
+#include "gpu_sampling/SamplerFactory.h"
 
 #include <memory>
 #include <optional>

@@ -1,0 +1,56 @@
+// What a cache mesh needs from whatever fills it: one irradiance estimate at
+// a vertex. Direct light (DirectSampler) and the indirect solver's gathers
+// both fill cache meshes through this interface.
+#pragma once
+
+#include "core/Math.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+#include <utility>
+
+namespace ml {
+
+// One irradiance estimate at a vertex, with what the sampler saw of the light.
+struct VertexSample {
+    Rgb irradiance{0.0};  // W·m⁻²
+    // Visible fraction of the light's cosine-weighted solid angle, in [0, 1]
+    // (1 where nothing occludes the light).
+    double visibility = 1;
+    // Some but not all of the light's samples were visible: a penumbra.
+    bool partial = false;
+};
+
+class VertexSampler {
+public:
+    virtual ~VertexSampler() = default;
+    // An estimate of mesh `mesh`'s irradiance at x (unit normal n), drawing
+    // its randomness from `seed`: the mean over seeds is the sampler's answer.
+    // Throws on failure; the cache adds where it happened.
+    virtual VertexSample sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) = 0;
+};
+
+// A VertexSampler from a callable, for closed forms in tests and benches:
+// `f(mesh, x, n, seed)` returns a VertexSample, or an Rgb irradiance (then
+// visibility 1, never partial).
+template <class F>
+class FunctionSampler final : public VertexSampler {
+public:
+    explicit FunctionSampler(F f) : f_(std::move(f)) {}
+    VertexSample sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) override {
+        if constexpr (std::is_same_v<decltype(f_(mesh, x, n, seed)), VertexSample>)
+            return f_(mesh, x, n, seed);
+        else
+            return VertexSample{f_(mesh, x, n, seed), 1.0, false};
+    }
+
+private:
+    F f_;
+};
+template <class F>
+FunctionSampler<F> samplerOf(F f) {
+    return FunctionSampler<F>(std::move(f));
+}
+
+}  // namespace ml

@@ -1,0 +1,125 @@
+#include "SamplerFactory.h"
+
+#include "core/Error.h"
+#include "core/reference/ExactIrradiance.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/indirect/SliceGather.h"
+#include "gpu_sampling/indirect/TriangleGather.h"
+#include "gpu_sampling/indirect/VoxelMarchGather.h"
+
+#include <algorithm>
+
+namespace ml {
+
+// --- Choices -----------------------------------------------------------------
+
+std::string DirectChoice::describe() const {
+    if (exact) return "exact (visible light polygon from CGAL, Lambert's closed form)";
+    const bool jittered = sampler.method == DirectMethod::Jittered;
+    return concat(directMethodName(sampler.method), " ", sampler.imageSize, "x", sampler.imageSize,
+                  jittered ? concat(", ", sampler.bits, " bits/pixel") : std::string(),
+                  sampler.method == DirectMethod::OcclusionQuery ? std::string()
+                                                                 : concat(", ", directEstimatorName(sampler.estimator), " estimator"),
+                  ", ", passes, passes == 1 ? " pass" : " passes");
+}
+
+std::vector<std::string> indirectMethodNames() {
+    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube"};
+}
+
+void IndirectChoice::decide(const Scene& scene) {
+    bounceCount = countBounces(scene, bounces);
+    solver.bounces = enabled ? bounceCount.bounces : 0;
+    solver.albedo = bounceCount.meanAlbedo;
+    solver.validate();
+}
+
+std::string IndirectChoice::describe() const {
+    if (method == "slices" || method == "slice-quads" || method == "raymarch")
+        return concat(method, ": ", gather.imageSize, "x", gather.imageSize, " fish-eye gathers over ", gather.resolution,
+                      " voxels along the longest side (slices ", gather.sliceSupersample,
+                      "x supersampled), and the proxy's triangles near the point (",
+                      gather.nearVoxels == 0 ? std::string("its own voxel")
+                                             : concat("its voxel and ", gather.nearVoxels, " more each way"),
+                      ")");
+    return concat(method, ": the radiance proxy's triangles (", gather.resolution,
+                  " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
+}
+
+// --- The direct sampler ----------------------------------------------------------
+
+struct ConfiguredDirectSampler::Impl {
+    const Scene& scene;
+    DirectChoice choice;
+    std::unique_ptr<GlContext> context;
+    std::unique_ptr<DirectLightSampler> sampler;
+    std::unique_ptr<ExactDirect> exact;
+    DirectPhaseTimes totals;
+    Impl(const Scene& s, const DirectChoice& c) : scene(s), choice(c) {}
+};
+
+ConfiguredDirectSampler::ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice, bool needContext)
+    : impl_(std::make_unique<Impl>(scene, choice)) {
+    if (choice.exact) impl_->exact = std::make_unique<ExactDirect>(scene);
+    if (needContext || !choice.exact) impl_->context = createHeadlessContext(choice.backend);
+    if (!choice.exact) impl_->sampler = std::make_unique<DirectLightSampler>(*impl_->context, scene, choice.sampler);
+}
+
+ConfiguredDirectSampler::~ConfiguredDirectSampler() = default;
+
+std::string ConfiguredDirectSampler::name() const { return impl_->choice.describe(); }
+DirectPhaseTimes ConfiguredDirectSampler::phaseTimes() const { return impl_->totals; }
+GlContext* ConfiguredDirectSampler::context() const { return impl_->context.get(); }
+
+VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
+    auto fraction = [](double visible, double unoccluded) {
+        return unoccluded > 0 ? std::clamp(visible / unoccluded, 0.0, 1.0) : 1.0;
+    };
+    if (impl_->exact) {
+        const double unoccluded = impl_->exact->unoccludedCosineSolidAngle(light, x, n);
+        const double visible = impl_->exact->cosineSolidAngle(light, x, n);
+        const double v = fraction(visible, unoccluded);
+        return {visible * impl_->scene.lights[light].radiance, v, v > 1e-9 && v < 1 - 1e-9};
+    }
+    const DirectSample s = impl_->sampler->sample(light, x, n, seed);
+    impl_->totals += impl_->sampler->lastTimes();
+    return {s.irradiance, fraction(s.cosineSolidAngle, s.unoccluded), s.partiallyVisible()};
+}
+
+// --- The indirect gather -----------------------------------------------------------
+
+std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, const Scene& scene,
+                                                         const IndirectChoice& choice) {
+    if (choice.method == "slices") return std::make_unique<SliceGather>(context, scene, choice.gather);
+    // The comparisons of `bench indirect`: the same proxy, gathered otherwise.
+    if (choice.method == "slice-quads") {
+        GatherSettings g = choice.gather;
+        g.quadPerFace = true;
+        return std::make_unique<SliceGather>(context, scene, g);
+    }
+    if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
+    for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
+        if (choice.method == triangleProjectionName(p)) {
+            TriangleGatherSettings t;
+            t.projection = p;
+            t.imageSize = choice.gather.imageSize;
+            t.resolution = choice.gather.resolution;
+            return std::make_unique<TriangleGather>(context, scene, t);
+        }
+    throw InputError(concat("indirect method '", choice.method, "' is unknown"));
+}
+
+// --- For the worker ------------------------------------------------------------------
+
+SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, const IndirectChoice& indirect) {
+    return [&scene, direct, indirect]() {
+        const bool gather = indirect.active();
+        WorkerSamplers samplers;
+        auto sampler = std::make_unique<ConfiguredDirectSampler>(scene, direct, gather);
+        if (gather) samplers.indirect = makeIndirectEstimator(*sampler->context(), scene, indirect);
+        samplers.direct = std::move(sampler);
+        return samplers;
+    };
+}
+
+}  // namespace ml

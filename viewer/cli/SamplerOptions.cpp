@@ -1,0 +1,77 @@
+#include "SamplerOptions.h"
+
+#include "core/Error.h"
+#include "gpu_sampling/gl/GlContext.h"
+
+#include <algorithm>
+
+namespace ml {
+
+void declareDirectOptions(Options& o) {
+    o.value("method", "NAME", "direct light: jittered, regular, query or exact", std::string("jittered"));
+    o.value("estimator", "NAME", "cv (exact unoccluded minus sampled occlusion) or plain", std::string("cv"));
+    o.value("image-size", "N", "sampling image side, pixels", std::string("64"));
+    o.value("bits", "N", "jittered tests per pixel: 1, 4, 8, 16 or 32", std::string("8"));
+    o.value("passes", "K", "estimates averaged per point", std::string("1"));
+    o.value("seed", "N", "random seed; the same seed repeats bit for bit", std::string("1"));
+    o.value("gl", "BACKEND", "OpenGL back end: auto, osmesa or egl", std::string("auto"));
+}
+
+DirectChoice readDirectOptions(const Options& o) {
+    DirectChoice c;
+    const std::string method = o.str("method");
+    c.exact = method == "exact";
+    if (!c.exact) c.sampler.method = parseDirectMethod(method);
+    c.sampler.estimator = parseDirectEstimator(o.str("estimator"));
+    c.sampler.imageSize = o.integer("image-size", 4, 1024);
+    c.sampler.bits = o.integer("bits", 1, 32);
+    c.sampler.validate();
+    c.passes = o.integer("passes", 1, 1 << 20);
+    c.seed = o.seed("seed");
+    c.backend = parseGlBackend(o.str("gl"));
+    if (c.backend == GlBackend::Glfw) throw InputError("--gl glfw opens a window: use osmesa, egl or auto");
+    return c;
+}
+
+void declareIndirectOptions(Options& o) {
+    const GatherSettings g;
+    const BounceCountSettings b;
+    o.value("bounces", "N", "indirect bounces (default: from the albedo light meets, see --indirect-tolerance)");
+    o.value("indirect-tolerance", "F", "enough bounces to leave less than F of the radiance missing",
+            concat(b.missingFraction));
+    o.value("max-bounces", "N", "at most N bounces whatever the albedo", concat(b.maxBounces));
+    o.value("indirect-method", "NAME",
+            "the hemispherical gather: slices (the paper's voxel slices), slice-quads (one quad per slice face), "
+            "raymarch (the voxels as a 3D texture), fisheye-triangles, perspective (one 160-degree image) or "
+            "hemicube (the proxy's triangles at --voxels, image --gather-size)",
+            std::string("slices"));
+    o.value("voxels", "N", "voxel slices: N voxels along the scene's longest side (32..128 typical)",
+            concat(g.resolution));
+    o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
+    o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
+    o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
+}
+
+IndirectChoice readIndirectOptions(const Options& o) {
+    IndirectChoice c;
+    c.enabled = !o.isSet("direct-only");
+    c.method = o.str("indirect-method");
+    const std::vector<std::string> names = indirectMethodNames();
+    if (std::find(names.begin(), names.end(), c.method) == names.end()) {
+        std::string list;
+        for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+        throw InputError(concat("--indirect-method '", c.method, "': unknown (", list, ")"));
+    }
+    c.gather.resolution = o.integer("voxels", 4, 512);
+    c.gather.imageSize = o.integer("gather-size", 4, 1024);
+    c.gather.nearVoxels = o.integer("near-voxels", 0, 8);
+    c.gather.sliceSupersample = o.integer("slice-supersample", 1, 8);
+    c.gather.validate();
+    c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
+    c.bounces.maxBounces = o.integer("max-bounces", 1, 256);
+    if (o.has("bounces")) c.bounces.forced = o.integer("bounces", 0, 256);
+    c.bounces.validate();
+    return c;
+}
+
+}  // namespace ml
