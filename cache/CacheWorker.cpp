@@ -1,5 +1,7 @@
 #include "CacheWorker.h"
 
+#include "SamplerPool.h"
+
 #include "core/Error.h"
 
 #include <algorithm>
@@ -77,7 +79,7 @@ bool CacheWorker::waitForVersion(uint64_t version, double timeoutSeconds) {
 }
 
 void CacheWorker::publish(double seconds, bool converged, const std::optional<RefinementCamera>& view,
-                          uint64_t cameraSerial, const WorkerSamplers& samplers) {
+                          uint64_t cameraSerial, SamplerPool& samplers) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
     for (size_t l = 0; l < cache_.lightCount(); ++l) {
@@ -97,9 +99,9 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->vertices += snap->indirectVertices;
         snap->samples += snap->indirectSamples;
         snap->indirectError = indirect_->estimatedError(view);
-        if (samplers.indirect) snap->indirectStats = samplers.indirect->stats();
+        if (samplers.indirect()) snap->indirectStats = samplers.indirect()->stats();
     }
-    if (samplers.direct) snap->directPhases = samplers.direct->phaseTimes();
+    snap->directPhases = samplers.direct().phaseTimes();
     snap->estimatedError = std::max(snap->directError, snap->indirectError);
     snap->converged = converged;
     snap->cameraSerial = cameraSerial;
@@ -116,10 +118,12 @@ void CacheWorker::run() {
     const auto start = Clock::now();
     auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     try {
-        const WorkerSamplers samplers = factory_();
-        ML_ASSERT(samplers.direct, "the sampler factory made no direct sampler");
-        ML_ASSERT(!indirect_ || samplers.indirect, "indirect light needs an estimator from the sampler factory");
-        DirectSampler& sample = *samplers.direct;
+        const int threads =
+            settings_.threads > 0 ? settings_.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+        SamplerPool pool(factory_, threads);
+        DirectSampler& sample = pool.direct();
+        IndirectEstimator* estimator = pool.indirect();
+        ML_ASSERT(!indirect_ || estimator, "indirect light needs an estimator from the sampler factory");
         const auto directMeshes = [&] { return cache_.copyMeshes(); };
         double lastPublish = -1e30;
         bool converged = false, directConverged = false, indirectStarted = false;
@@ -174,18 +178,18 @@ void CacheWorker::run() {
                                                                      : cache_.totalVertices() / std::max<size_t>(cache_.lightCount(), 1);
                         budget = std::clamp<size_t>(vertices / 8, 16, 512);
                     }
-                    const RefineReport r = indirect_->step(*samplers.indirect, directMeshes, capped(budget), settings_.seed, view);
+                    const RefineReport r = indirect_->step(*estimator, directMeshes, capped(budget), settings_.seed, view);
                     indirectConverged = r.converged();
                     if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
             }
             converged = directConverged && indirectConverged;
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
-                publish(seconds(), converged, view, serial, samplers);
+                publish(seconds(), converged, view, serial, pool);
                 lastPublish = seconds();
             }
         }
-        publish(seconds(), converged, lastView, serial, samplers);
+        publish(seconds(), converged, lastView, serial, pool);
     } catch (...) {
         std::lock_guard<std::mutex> lock(mutex_);
         failure_ = std::current_exception();

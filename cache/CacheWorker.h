@@ -26,6 +26,8 @@
 
 namespace ml {
 
+class SamplerPool;
+
 struct CacheSnapshot {
     uint64_t version = 0;             // 1, 2, ... in publication order
     double seconds = 0;               // worker time since start()
@@ -68,6 +70,9 @@ struct WorkerSettings {
     // eighth of its vertices, 16 to 512). A gather costs some 30 direct
     // estimates, so rounds of both kinds take comparable time.
     size_t indirectBudget = 0;
+    // Sampling threads, each with samplers of its own (SamplerPool); 0: one
+    // per core. The cache a sample budget makes does not depend on it.
+    int threads = 0;
 
     void validate() const;
 };
@@ -120,7 +125,7 @@ public:
 private:
     void run();
     void publish(double seconds, bool converged, const std::optional<RefinementCamera>& view, uint64_t cameraSerial,
-                 const WorkerSamplers& samplers);
+                 SamplerPool& samplers);
     uint64_t totalSamples() const;
 
     IrradianceCache& cache_;

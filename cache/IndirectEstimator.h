@@ -12,6 +12,7 @@
 #pragma once
 
 #include "IrradianceCache.h"
+#include "VertexSampler.h"
 
 #include <string>
 #include <vector>
@@ -49,6 +50,10 @@ public:
     // source `slot`, drawing its randomness (jitter) from `seed`: one
     // estimate whose mean over seeds is the method's answer.
     virtual Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) = 0;
+    // Every request's estimate from source `slot` (requests[i].mesh is not
+    // used), each exactly what estimate() returns for it; a failure throws
+    // SampleBatchError naming the first failing request.
+    virtual void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests, std::vector<Rgb>& results);
     virtual IndirectStats stats() const = 0;
 };
 

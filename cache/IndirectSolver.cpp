@@ -108,6 +108,12 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
             sample.irradiance = estimator.estimate(slot, x, n, seed);
             return sample;  // visibility 1, never partial: indirect light has no light to see
         }
+        void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) override {
+            std::vector<Rgb> e;
+            estimator.estimateBatch(slot, requests, e);
+            results.assign(requests.size(), VertexSample{});
+            for (size_t i = 0; i < e.size(); ++i) results[i].irradiance = e[i];
+        }
     } gather(estimator, slot);
     // Each bounce draws its own jitter. While vertices have no sample, a
     // round only samples them (IrradianceCache::refine).

@@ -410,19 +410,55 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     return x + 1e-3 * shortest * glm::normalize(inward);
 }
 
-VertexSample sampleVertex(VertexSampler& sampler, const CacheState& s, size_t light, size_t v, uint32_t seed) {
-    const LightMesh& lm = s.meshes[light];
-    const auto vh = CacheTriMesh::VertexHandle(int(v));
-    const Vec3 x = samplePoint(s, lm.mesh, vh), n = toVec3(lm.mesh.normal(vh));
-    const uint32_t count = lm.stats[v].count;
+SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed) {
+    SampleRequest r;
+    r.mesh = p.mesh;
+    if (!p.grid) {
+        const LightMesh& lm = s.meshes[p.mesh];
+        const auto vh = CacheTriMesh::VertexHandle(int(p.index));
+        r.x = samplePoint(s, lm.mesh, vh);
+        r.n = toVec3(lm.mesh.normal(vh));
+        r.seed = seedFor(seed, p.index, p.mesh, lm.stats[p.index].count);
+    } else {
+        const GridObject& o = gridOf(s, p.index);
+        const size_t k = p.index - o.firstSample;
+        r.x = o.grid->samplePosition(k);
+        r.n = o.grid->sampleNormal(k);
+        r.seed = seedFor(seed, kGridSeedBase + p.index, p.mesh, s.meshes[p.mesh].gridStats[p.index].count);
+    }
+    return r;
+}
+
+// Where a sample failed, for the message: "vertex 1834 of light 2's cache
+// mesh, sample 7 (point x,y,z; normal x,y,z)".
+std::string whereSampled(const CacheState& s, const PendingSample& p, const SampleRequest& r) {
+    if (!p.grid)
+        return concat("vertex ", p.index, " of light ", p.mesh, "'s cache mesh, sample ",
+                      s.meshes[p.mesh].stats[p.index].count, " (point ", r.x.x, ",", r.x.y, ",", r.x.z, "; normal ",
+                      r.n.x, ",", r.n.y, ",", r.n.z, ")");
+    const GridObject& o = gridOf(s, p.index);
+    return concat("grid sample ", p.index - o.firstSample, " of object ", o.mesh, " for light ", p.mesh, ", sample ",
+                  s.meshes[p.mesh].gridStats[p.index].count, " (point ", r.x.x, ",", r.x.y, ",", r.x.z, ")");
+}
+
+void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending) {
+    if (pending.empty()) return;
+    std::vector<SampleRequest> requests;
+    requests.reserve(pending.size());
+    for (const PendingSample& p : pending) requests.push_back(requestFor(s, p, seed));
+    std::vector<VertexSample> results;
     try {
-        return sampler.sample(light, x, n, seedFor(seed, uint32_t(v), uint32_t(light), count));
-    } catch (const InputError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw std::runtime_error(concat("sampling failed at vertex ", v, " of light ", light, "'s cache mesh, sample ",
-                                        count, " (point ", x.x, ",", x.y, ",", x.z, "; normal ", n.x, ",", n.y, ",",
-                                        n.z, "): ", e.what()));
+        sampler.sampleBatch(requests, results);
+    } catch (const SampleBatchError& e) {
+        const size_t i = e.index() < pending.size() ? e.index() : 0;
+        throw std::runtime_error(
+            concat("sampling failed at ", whereSampled(s, pending[i], requests[i]), ": ", e.what()));
+    }
+    ML_ASSERT(results.size() == pending.size(), "the sampler returned ", results.size(), " of ", pending.size(),
+              " samples");
+    for (size_t i = 0; i < pending.size(); ++i) {
+        const PendingSample& p = pending[i];
+        p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
     }
 }
 
@@ -431,10 +467,11 @@ VertexSample sampleVertex(VertexSampler& sampler, const CacheState& s, size_t li
 size_t IrradianceCache::sampleUnsampled(VertexSampler& sampler, uint32_t seed,
                                         const std::function<void(size_t, size_t)>& progress) {
     const size_t todo = detail::unsampledCount(impl_->state);
-    size_t done = 0;
-    detail::sampleUnsampled(impl_->state, sampler, seed, todo, [&] {
-        if (progress && (++done % 256 == 0 || done == todo)) progress(done, todo);
-    });
+    // In batches, so that progress is told now and then.
+    for (size_t done = 0; done < todo;) {
+        done += detail::sampleUnsampled(impl_->state, sampler, seed, 4096);
+        if (progress) progress(done, todo);
+    }
     return todo;
 }
 
@@ -449,25 +486,23 @@ size_t unsampledCount(const CacheState& s) {
     return n;
 }
 
-size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
-                       const std::function<void()>& each) {
-    size_t done = 0;
-    for (size_t l = 0; l < s.meshes.size() && done < budget; ++l) {
-        LightMesh& lm = s.meshes[l];
-        for (size_t v = 0; v < lm.stats.size() && done < budget; ++v) {
-            if (lm.stats[v].count) continue;
-            addVertexSample(s, l, v, sampleVertex(sampler, s, l, v, seed));
-            ++done;
-            if (each) each();
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget) {
+    // Every mesh's first vertices before any mesh's later ones: base
+    // vertices (numbered first) of every light before the vertices that
+    // refinement added, so that all the light is in the image early; grid
+    // samples after the mesh vertices of the same rank.
+    std::vector<PendingSample> pending;
+    size_t longest = 0;
+    for (const LightMesh& lm : s.meshes) longest = std::max(longest, std::max(lm.stats.size(), lm.gridStats.size()));
+    for (size_t i = 0; i < longest && pending.size() < budget; ++i)
+        for (size_t l = 0; l < s.meshes.size() && pending.size() < budget; ++l) {
+            const LightMesh& lm = s.meshes[l];
+            if (i < lm.stats.size() && lm.stats[i].count == 0) pending.push_back({uint32_t(l), uint32_t(i), false});
+            if (pending.size() < budget && i < lm.gridStats.size() && lm.gridStats[i].count == 0)
+                pending.push_back({uint32_t(l), uint32_t(i), true});
         }
-        for (size_t g = 0; g < lm.gridStats.size() && done < budget; ++g) {
-            if (lm.gridStats[g].count) continue;
-            addGridSample(s, l, g, sampleGrid(sampler, s, l, g, seed));
-            ++done;
-            if (each) each();
-        }
-    }
-    return done;
+    takeSamples(s, sampler, seed, pending);
+    return pending.size();
 }
 
 void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& sample) {
@@ -491,22 +526,6 @@ const GridObject& gridOf(const CacheState& s, size_t g) {
         if (g >= o.firstSample && g < o.firstSample + o.grid->sampleCount()) return o;
     ML_ASSERT(false, "grid sample ", g, " of ", s.gridSamples);
     return s.grids.front();
-}
-
-VertexSample sampleGrid(VertexSampler& sampler, const CacheState& s, size_t light, size_t g, uint32_t seed) {
-    const GridObject& o = gridOf(s, g);
-    const size_t k = g - o.firstSample;
-    const Vec3 x = o.grid->samplePosition(k), n = o.grid->sampleNormal(k);
-    const uint32_t count = s.meshes[light].gridStats[g].count;
-    try {
-        return sampler.sample(light, x, n, seedFor(seed, kGridSeedBase + uint32_t(g), uint32_t(light), count));
-    } catch (const InputError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw std::runtime_error(concat("sampling failed at grid sample ", k, " of object ", o.mesh, " for light ",
-                                        light, ", sample ", count, " (point ", x.x, ",", x.y, ",", x.z, "): ",
-                                        e.what()));
-    }
 }
 
 }  // namespace detail

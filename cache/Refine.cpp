@@ -426,18 +426,15 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
     }
 
     report.estimates += detail::sampleUnsampled(s, sampler, seed, ~size_t(0));
+    // Resamples in one batch: (mesh, vertex) order, vertices before grid samples.
     std::sort(resample.begin(), resample.end());
-    for (const auto& [l, v] : resample) {
-        detail::addVertexSample(s, l, v, detail::sampleVertex(sampler, s, l, v, seed));
-        ++report.estimates;
-        ++report.resamples;
-    }
     std::sort(resampleGrid.begin(), resampleGrid.end());
-    for (const auto& [l, g] : resampleGrid) {
-        detail::addGridSample(s, l, g, detail::sampleGrid(sampler, s, l, g, seed));
-        ++report.estimates;
-        ++report.resamples;
-    }
+    std::vector<detail::PendingSample> pending;
+    for (const auto& [l, v] : resample) pending.push_back({l, v, false});
+    for (const auto& [l, g] : resampleGrid) pending.push_back({l, g, true});
+    detail::takeSamples(s, sampler, seed, pending);
+    report.estimates += pending.size();
+    report.resamples += pending.size();
     ++s.rounds;
     return report;
 }

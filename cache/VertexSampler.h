@@ -7,8 +7,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace ml {
 
@@ -22,6 +25,23 @@ struct VertexSample {
     bool partial = false;
 };
 
+// One estimate to take: what sample() takes, for a batch.
+struct SampleRequest {
+    size_t mesh = 0;
+    Vec3 x{0.0}, n{0.0, 0.0, 1.0};
+    uint32_t seed = 0;
+};
+
+// Thrown by sampleBatch: which request failed, and why.
+class SampleBatchError : public std::runtime_error {
+public:
+    SampleBatchError(size_t index, const std::string& what) : std::runtime_error(what), index_(index) {}
+    size_t index() const { return index_; }
+
+private:
+    size_t index_;
+};
+
 class VertexSampler {
 public:
     virtual ~VertexSampler() = default;
@@ -29,7 +49,17 @@ public:
     // its randomness from `seed`: the mean over seeds is the sampler's answer.
     // Throws on failure; the cache adds where it happened.
     virtual VertexSample sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) = 0;
+    // Every request's estimate, results[i] for requests[i], each exactly
+    // what sample() returns for it (so a batch may be spread over threads
+    // without changing any result). A failure throws SampleBatchError naming
+    // the first failing request; InputError passes through as it is.
+    virtual void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results);
 };
+
+// The one-at-a-time loop behind sampleBatch, for implementations that
+// spread a batch: samples requests [begin, end) with `sampler.sample`.
+void sampleEach(VertexSampler& sampler, const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
+                size_t begin, size_t end);
 
 // A VertexSampler from a callable, for closed forms in tests and benches:
 // `f(mesh, x, n, seed)` returns a VertexSample, or an Rgb irradiance (then

@@ -58,14 +58,16 @@ struct ConfiguredDirectSampler::Impl {
     Impl(const Scene& s, const DirectChoice& c) : scene(s), choice(c) {}
 };
 
-ConfiguredDirectSampler::ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice, bool needContext)
+ConfiguredDirectSampler::ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice)
     : impl_(std::make_unique<Impl>(scene, choice)) {
     if (choice.exact) impl_->exact = std::make_unique<ExactDirect>(scene);
-    if (needContext || !choice.exact) impl_->context = createHeadlessContext(choice.backend);
+    else impl_->context = createHeadlessContext(choice.backend);
     if (!choice.exact) impl_->sampler = std::make_unique<DirectLightSampler>(*impl_->context, scene, choice.sampler);
 }
 
-ConfiguredDirectSampler::~ConfiguredDirectSampler() = default;
+ConfiguredDirectSampler::~ConfiguredDirectSampler() {
+    if (impl_->context) impl_->context->use();  // the sampler's GL objects go while their context is current
+}
 
 std::string ConfiguredDirectSampler::name() const { return impl_->choice.describe(); }
 DirectPhaseTimes ConfiguredDirectSampler::phaseTimes() const { return impl_->totals; }
@@ -81,6 +83,7 @@ VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const 
         const double v = fraction(visible, unoccluded);
         return {visible * impl_->scene.lights[light].radiance, v, v > 1e-9 && v < 1 - 1e-9};
     }
+    impl_->context->use();
     const DirectSample s = impl_->sampler->sample(light, x, n, seed);
     impl_->totals += impl_->sampler->lastTimes();
     return {s.irradiance, fraction(s.cosineSolidAngle, s.unoccluded), s.partiallyVisible()};
@@ -111,13 +114,47 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
 
 // --- For the worker ------------------------------------------------------------------
 
+namespace {
+
+// A gather with a GL context of its own, made current before each call. Not
+// the direct sampler's: GL state one pass leaves could otherwise reach the
+// other, and a thread's results would depend on which samples it took
+// before, so a batch spread over threads would not repeat bit for bit.
+class OwnContextGather final : public IndirectEstimator {
+public:
+    OwnContextGather(const Scene& scene, const IndirectChoice& choice, GlBackend backend)
+        : context_(createHeadlessContext(backend)), inner_(makeIndirectEstimator(*context_, scene, choice)) {}
+    ~OwnContextGather() override {
+        context_->use();
+        inner_.reset();  // its GL objects go while their context is current
+    }
+    std::string name() const override { return inner_->name(); }
+    void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance) override {
+        context_->use();
+        inner_->setSource(slot, irradiance, importance);
+    }
+    void releaseSource(size_t slot) override {
+        context_->use();
+        inner_->releaseSource(slot);
+    }
+    Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override {
+        context_->use();
+        return inner_->estimate(slot, x, n, seed);
+    }
+    IndirectStats stats() const override { return inner_->stats(); }
+
+private:
+    std::unique_ptr<GlContext> context_;
+    std::unique_ptr<IndirectEstimator> inner_;
+};
+
+}  // namespace
+
 SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, const IndirectChoice& indirect) {
     return [&scene, direct, indirect]() {
-        const bool gather = indirect.active();
         WorkerSamplers samplers;
-        auto sampler = std::make_unique<ConfiguredDirectSampler>(scene, direct, gather);
-        if (gather) samplers.indirect = makeIndirectEstimator(*sampler->context(), scene, indirect);
-        samplers.direct = std::move(sampler);
+        samplers.direct = std::make_unique<ConfiguredDirectSampler>(scene, direct);
+        if (indirect.active()) samplers.indirect = std::make_unique<OwnContextGather>(scene, indirect, direct.backend);
         return samplers;
     };
 }

@@ -5,10 +5,13 @@
 //
 // GL contexts. A headless context belongs to the thread that made it
 // (Filament's driver-thread rule; destroying an OSMesa context elsewhere
-// unbinds the calling thread's current context). So the cache worker calls
-// samplerFactory() on its own thread: the direct sampler makes and owns the
-// context, the indirect gather draws with that same context, and both are
-// destroyed on that thread, the gather first (WorkerSamplers).
+// unbinds the calling thread's current context). So each sampling thread
+// calls the factory itself (CacheWorker, SamplerPool): the direct sampler
+// and the indirect gather each make and own a context on that thread,
+// switched with GlContext::use() as they alternate, and die there. Two
+// contexts, not one shared: no GL state one pass leaves can reach the
+// other, so a sample's result never depends on what the thread did before
+// (a batch spread over any number of threads repeats bit for bit).
 #pragma once
 
 #include "cache/CacheWorker.h"
@@ -60,12 +63,11 @@ struct IndirectChoice {
 std::vector<std::string> indirectMethodNames();
 
 // The direct sampler a DirectChoice names: the GPU light sampler on a
-// headless GL context of its own, made current on the calling thread, or the
-// exact closed form (with a context too when `needContext`, for a gather to
-// share). Use and destroy it on the thread that made it.
+// headless GL context of its own, or the exact closed form. Use and destroy
+// it on the thread that made it.
 class ConfiguredDirectSampler final : public DirectSampler {
 public:
-    ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice, bool needContext = false);
+    ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice);
     ~ConfiguredDirectSampler() override;
 
     std::string name() const override;
@@ -74,7 +76,7 @@ public:
     // boundary passes there).
     VertexSample sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) override;
     DirectPhaseTimes phaseTimes() const override;
-    // The context it draws with; null for the exact method without one.
+    // The context it draws with; null for the exact method.
     GlContext* context() const;
 
 private:
@@ -87,9 +89,10 @@ private:
 std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, const Scene& scene,
                                                          const IndirectChoice& choice);
 
-// For the cache worker: on its thread, a ConfiguredDirectSampler and, if
-// indirect light is active, the chosen gather on the same context. `scene`
-// must outlive every worker the factory serves.
+// For the cache worker and each thread of its SamplerPool: on the calling
+// thread, a ConfiguredDirectSampler and, if indirect light is active, the
+// chosen gather on a context of its own. `scene` must outlive every worker
+// the factory serves.
 SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, const IndirectChoice& indirect);
 
 }  // namespace ml

@@ -21,20 +21,27 @@ CacheTriMesh::VertexHandle splitAtMidpoint(CacheTriMesh& mesh, CacheTriMesh::Edg
 // that an emitter's plane passes through, a hair inside its own faces (see
 // IrradianceCache.cpp).
 Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh);
-// One estimate at vertex v of light `light`'s mesh, seeded from (seed, v,
-// light, samples so far); errors carry the light, vertex and point.
-VertexSample sampleVertex(VertexSampler& sampler, const CacheState& s, size_t light, size_t v, uint32_t seed);
-// The same at grid sample g (over all grid objects).
-VertexSample sampleGrid(VertexSampler& sampler, const CacheState& s, size_t light, size_t g, uint32_t seed);
+// A sample to take: vertex `index` of mesh `mesh`, or grid sample `index`
+// (over all grid objects) of that mesh.
+struct PendingSample {
+    uint32_t mesh = 0;
+    uint32_t index = 0;
+    bool grid = false;
+};
+// Takes them in one batch (VertexSampler::sampleBatch, which may spread it
+// over threads), each seeded from (seed, vertex, mesh, samples so far), and
+// adds them in order: the same cache whatever the threads. Errors carry the
+// mesh, vertex and point.
+void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending);
 const GridObject& gridOf(const CacheState& s, size_t g);  // the object grid sample g belongs to
 void addVertexSample(CacheState& s, size_t light, size_t v, const VertexSample& sample);
 void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sample);
 // Vertices and grid samples without a sample yet, over all lights.
 size_t unsampledCount(const CacheState& s);
-// Samples up to `budget` of them, in (light, vertex, then grid sample)
-// order; `each`, if given, after each. Returns how many.
-size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
-                       const std::function<void()>& each = {});
+// Samples up to `budget` of them, vertex rank first, then mesh (every
+// mesh's base before any refinement), grid samples after the vertices of
+// the same rank. Returns how many.
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget);
 
 }  // namespace detail
 }  // namespace ml

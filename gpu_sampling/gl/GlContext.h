@@ -26,12 +26,16 @@ const char* glBackendName(GlBackend);
 
 class GlContext {
 public:
-    virtual ~GlContext() = default;
+    virtual ~GlContext();
     GlContext(const GlContext&) = delete;
     GlContext& operator=(const GlContext&) = delete;
 
     // Makes this context current on the calling thread.
     virtual void makeCurrent() = 0;
+    // The same, unless this thread's last context made current through
+    // use() or createHeadlessContext() is this one: for samplers that share
+    // a thread but not a context, switching only when they alternate.
+    void use();
     virtual GlBackend backend() const = 0;
 
     const GlApi& gl() const { return gl_; }

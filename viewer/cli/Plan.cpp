@@ -105,7 +105,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
 
 int runPlan(const std::vector<std::string>& args) {
     Options o("plan");
-    o.positional("scene", "cornell, bench or an OBJ file");
+    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);

@@ -98,7 +98,7 @@ void printStatus(const CacheSnapshot& s, double seconds, const std::string& what
 
 int runRender(const std::vector<std::string>& args) {
     Options o("render");
-    o.positional("scene", "cornell, bench or an OBJ file");
+    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
     o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped); with --camera-path a "
                            "pattern whose #### becomes the frame number",
             std::string("meshlight.png"));
@@ -116,6 +116,9 @@ int runRender(const std::vector<std::string>& args) {
     o.value("reference", "REF.exr", "with --log: add RMSE and relative RMSE against this image");
     o.value("cache", "FILE", "resume from this cache file if it exists, save the cache to it at the end");
     o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
+    o.value("sampling-threads", "T", "sampling threads, each with its own GL context; 0 = one per core (the cache a "
+                                     "--samples budget makes is the same for any T)",
+            std::string("0"));
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);
@@ -170,6 +173,7 @@ int runRender(const std::vector<std::string>& args) {
     sessionSettings.cache = cacheSettings;
     sessionSettings.worker.seed = choice.seed;
     sessionSettings.worker.publishSeconds = o.number("publish", 0, 3600);
+    sessionSettings.worker.threads = o.integer("sampling-threads", 0, 256);
     sessionSettings.cachePath = cachePath;
 
     const auto t0 = Clock::now();

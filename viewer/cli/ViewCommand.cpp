@@ -29,7 +29,7 @@ LengthUnit defaultUnit(const std::string& sceneArg) {
 
 int runView(const std::vector<std::string>& args) {
     Options o("view");
-    o.positional("scene", "cornell, bench or an OBJ file");
+    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
     o.value("width", "W", "window width, pixels", std::string("1280"));
     o.value("height", "H", "window height, pixels", std::string("720"));
     declareCameraOptions(o);
@@ -40,6 +40,9 @@ int runView(const std::vector<std::string>& args) {
     o.value("samples", "N", "the worker stops after N irradiance samples in all: with the same seed and view, "
                             "the same cache as 'render --samples N'");
     o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
+    o.value("sampling-threads", "T", "sampling threads, each with its own GL context; 0 = one per core (the cache a "
+                                     "--samples budget makes is the same for any T)",
+            std::string("0"));
     o.value("cache", "FILE", "resume from this cache file if it exists; 'save cache' and the end of the session "
                              "save to it");
     o.value("units", "mm|cm|m", "the scene's length unit, for walking speed, positions and light power (lux does "
@@ -69,6 +72,7 @@ int runView(const std::vector<std::string>& args) {
     s.indirect = readIndirectOptions(o);
     s.worker.seed = s.direct.seed;
     s.worker.publishSeconds = o.number("publish", 0, 3600);
+    s.worker.threads = o.integer("sampling-threads", 0, 256);
     if (o.has("samples")) s.worker.maxSamples = uint64_t(o.number("samples", 1, 1e15));
     s.cachePath = o.has("cache") ? o.str("cache") : "";
     if (!s.cachePath.empty()) checkOutputDirectory(s.cachePath);

@@ -1,0 +1,28 @@
+#include "VertexSampler.h"
+
+#include "core/Error.h"
+
+namespace ml {
+
+void sampleEach(VertexSampler& sampler, const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
+                size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+        const SampleRequest& r = requests[i];
+        try {
+            results[i] = sampler.sample(r.mesh, r.x, r.n, r.seed);
+        } catch (const InputError&) {
+            throw;
+        } catch (const SampleBatchError&) {
+            throw;
+        } catch (const std::exception& e) {
+            throw SampleBatchError(i, e.what());
+        }
+    }
+}
+
+void VertexSampler::sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) {
+    results.resize(requests.size());
+    sampleEach(*this, requests, results, 0, requests.size());
+}
+
+}  // namespace ml
