@@ -82,7 +82,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
                           uint64_t cameraSerial, SamplerPool& samplers) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
-    for (size_t l = 0; l < cache_.lightCount(); ++l) {
+    for (size_t l = 0; l < cache_.meshCount(); ++l) {
         snap->direct.push_back(cache_.copyMesh(l));
         snap->verticesPerMesh.push_back(cache_.vertexCount(l));
     }
@@ -169,7 +169,7 @@ void CacheWorker::run() {
                 // Indirect light starts once direct light is nearly right,
                 // then alternates with it round by round.
                 indirectStarted = indirectStarted || directConverged ||
-                                  directError <= indirect_->settings().startError;
+                                  (cache_.unsampledCount() == 0 && directError <= indirect_->settings().startError);
                 indirectConverged = false;
                 if (indirectStarted && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
                     size_t budget = settings_.indirectBudget;

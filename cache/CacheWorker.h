@@ -31,7 +31,9 @@ class SamplerPool;
 struct CacheSnapshot {
     uint64_t version = 0;             // 1, 2, ... in publication order
     double seconds = 0;               // worker time since start()
-    std::vector<IrradianceMeshCopy> direct;  // one per light, in the scene's order
+    // One per light, in the scene's order, then the mesh the lights share
+    // if the cache has one (IrradianceCache::hasSharedMesh).
+    std::vector<IrradianceMeshCopy> direct;
     // Indirect irradiance, one mesh per bounce (bounce 1 first); empty with
     // direct light only or before the indirect pass has started. The
     // irradiance a surface receives is Σ direct + Σ indirect.

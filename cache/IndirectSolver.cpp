@@ -97,6 +97,13 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     const bool first = !firstPassDone();
     const int bounce = first ? int(caches_.size()) : allFinished() ? 1 : finished_ + 1;
     const size_t slot = size_t(bounce - 1);
+    // Pass 2 refines bounce 1 from direct light as it is now, not as it was
+    // when the first pass began.
+    if (!first && bounce == 1 && !directRefreshed_) {
+        sourceBuilt_.resize(std::max<size_t>(sourceBuilt_.size(), 1), false);
+        sourceBuilt_[0] = false;
+        directRefreshed_ = true;
+    }
     prepareSource(estimator, bounce, direct);
     // The bounce's one mesh is filled by gathers from its source slot.
     struct Gather : VertexSampler {

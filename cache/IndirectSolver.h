@@ -19,10 +19,10 @@
 // indirect light's detail: contact shadows, colour bleeding); the sources of
 // later bounces are released.
 //
-// The direct meshes bounce 1 reflects are taken when it starts; the worker
-// starts it once direct light's estimated error is low (IndirectSettings::
-// startError), so the few percent it may still change by moves indirect light,
-// a fraction of the image, by less.
+// The direct meshes bounce 1 reflects are taken when it starts, as soon as
+// every direct vertex has a sample (IndirectSettings::startError), so that a
+// coarse first bounce is in the first complete image; they are taken again,
+// refined, when bounce 1's own refinement starts (pass 2).
 #pragma once
 
 #include "IndirectEstimator.h"
@@ -42,8 +42,9 @@ struct IndirectSettings {
     // indirect light has no sharp shadows of its own and each sample is a
     // whole hemispherical gather.
     CacheSettings cache = defaultCache();
-    // Direct light's estimated error below which indirect light starts.
-    double startError = 0.05;
+    // Indirect light starts once every direct vertex has a sample and direct
+    // light's estimated error is at most this; 1: at once then.
+    double startError = 1.0;
     static CacheSettings defaultCache();
     void validate() const;
 };
@@ -102,6 +103,7 @@ private:
     std::vector<std::unique_ptr<IrradianceCache>> caches_;
     int finished_ = 0;
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
+    bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
 };
 
 }  // namespace ml

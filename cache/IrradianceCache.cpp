@@ -1,14 +1,18 @@
 #include "IrradianceCache.h"
 
+#include "LightCoverage.h"
+
 #include "core/Error.h"
 #include "core/MeshUtil.h"
 #include "core/Random.h"
 #include "detail/CacheImpl.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <map>
 #include <queue>
+#include <tuple>
 
 namespace ml {
 
@@ -79,7 +83,7 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.maxEdgeFraction), f.f64(s.minEdgeFraction), f.f64(s.minEdgePixels);
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
-    f.f64(s.sampleNoise);
+    f.f64(s.sampleNoise), f.f64(s.lightShare);
     return f.h;
 }
 
@@ -257,10 +261,23 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     CacheTriMesh base;
     s.detachedFaces = buildBaseMesh(scene, gridded, layout.backFaces, base, s.backFaces);
     bisectLongEdges(base, maxEdge);
-    s.meshes.resize(layout.meshes ? layout.meshes : scene.lights.size());
-    for (detail::LightMesh& lm : s.meshes) {
+    const bool share = layout.coverage && layout.coverage->sharing() && layout.meshes == 0;
+    s.sharedMesh = share;
+    s.meshes.resize(share ? scene.lights.size() + 1 : layout.meshes ? layout.meshes : scene.lights.size());
+    for (size_t l = 0; l < s.meshes.size(); ++l) {
+        detail::LightMesh& lm = s.meshes[l];
         lm.mesh = base;
-        lm.stats.assign(base.n_vertices(), {});
+        // A light's own mesh keeps the faces where it has weight.
+        if (share && l < scene.lights.size()) {
+            for (const auto fh : lm.mesh.faces()) {
+                Triangle3 t;
+                int k = 0;
+                for (const auto vh : lm.mesh.fv_range(fh)) t[size_t(k++)] = toVec3(lm.mesh.point(vh));
+                if (!layout.coverage->covers(l, t)) lm.mesh.delete_face(fh, true);
+            }
+            lm.mesh.garbage_collection();
+        }
+        lm.stats.assign(lm.mesh.n_vertices(), {});
         lm.gridStats.assign(s.gridSamples, {});
     }
 }
@@ -268,7 +285,9 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
 IrradianceCache::~IrradianceCache() = default;
 
 const CacheSettings& IrradianceCache::settings() const { return impl_->state.settings; }
-size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size(); }
+size_t IrradianceCache::meshCount() const { return impl_->state.meshes.size(); }
+size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size() - (impl_->state.sharedMesh ? 1 : 0); }
+bool IrradianceCache::hasSharedMesh() const { return impl_->state.sharedMesh; }
 size_t IrradianceCache::unsampledCount() const { return detail::unsampledCount(impl_->state); }
 size_t IrradianceCache::vertexCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_vertices(); }
 size_t IrradianceCache::triangleCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_faces(); }
@@ -298,7 +317,7 @@ void IrradianceCache::addSample(size_t l, size_t v, const VertexSample& sample) 
 
 std::vector<IrradianceMeshCopy> IrradianceCache::copyMeshes() const {
     std::vector<IrradianceMeshCopy> meshes;
-    for (size_t l = 0; l < lightCount(); ++l) meshes.push_back(copyMesh(l));
+    for (size_t l = 0; l < meshCount(); ++l) meshes.push_back(copyMesh(l));
     return meshes;
 }
 
@@ -316,6 +335,29 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
         const detail::VertexStats& st = lm.stats[size_t(v.idx())];
         out.irradiance.push_back(st.mean());
         out.samples.push_back(st.count);
+    }
+    // While the first pass runs, vertices without a sample take their
+    // sampled neighbours' mean, ring after ring: a copy is a complete image,
+    // never a checkerboard of black holes. (The first pass samples vertices
+    // in a scattered order, so a few rings reach every hole.) They keep a
+    // sample count of 0.
+    std::vector<char> known(n);
+    size_t unknown = 0;
+    for (size_t v = 0; v < n; ++v) unknown += !(known[v] = out.samples[v] > 0);
+    std::vector<std::pair<size_t, Rgb>> filled;
+    for (int ring = 0; ring < 64 && unknown > 0 && unknown < n; ++ring) {
+        filled.clear();
+        for (auto v : lm.mesh.vertices()) {
+            if (known[size_t(v.idx())]) continue;
+            Rgb sum(0.0);
+            int count = 0;
+            for (auto u : lm.mesh.vv_range(v))
+                if (known[size_t(u.idx())]) sum += out.irradiance[size_t(u.idx())], ++count;
+            if (count) filled.emplace_back(size_t(v.idx()), sum / double(count));
+        }
+        if (filled.empty()) break;
+        for (const auto& [v, e] : filled) out.irradiance[v] = e, known[v] = 1;
+        unknown -= filled.size();
     }
     out.triangles.reserve(lm.mesh.n_faces());
     for (auto f : lm.mesh.faces()) {
@@ -491,16 +533,30 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
     // vertices (numbered first) of every light before the vertices that
     // refinement added, so that all the light is in the image early; grid
     // samples after the mesh vertices of the same rank.
+    // Within a rank, vertices in a scattered (hashed) order, so that a
+    // partial first pass covers every object evenly (IrradianceCache::
+    // copyMesh fills the rest from sampled neighbours).
+    std::vector<std::pair<uint64_t, PendingSample>> ranked;
+    for (size_t l = 0; l < s.meshes.size(); ++l) {
+        const LightMesh& lm = s.meshes[l];
+        for (size_t i = 0; i < lm.stats.size(); ++i)
+            if (lm.stats[i].count == 0)
+                ranked.push_back({(uint64_t(hash32(uint32_t(i))) << 32) | (uint64_t(l) << 1), {uint32_t(l), uint32_t(i), false}});
+        for (size_t g = 0; g < lm.gridStats.size(); ++g)
+            if (lm.gridStats[g].count == 0)
+                ranked.push_back({(uint64_t(hash32(kGridSeedBase + uint32_t(g))) << 32) | (uint64_t(l) << 1) | 1u,
+                                  {uint32_t(l), uint32_t(g), true}});
+    }
+    const size_t take = std::min(budget, ranked.size());
+    std::partial_sort(ranked.begin(), ranked.begin() + std::ptrdiff_t(take), ranked.end(),
+                      [](const auto& a, const auto& b) {
+                          return a.first != b.first ? a.first < b.first
+                                                    : std::tie(a.second.mesh, a.second.index) <
+                                                          std::tie(b.second.mesh, b.second.index);
+                      });
     std::vector<PendingSample> pending;
-    size_t longest = 0;
-    for (const LightMesh& lm : s.meshes) longest = std::max(longest, std::max(lm.stats.size(), lm.gridStats.size()));
-    for (size_t i = 0; i < longest && pending.size() < budget; ++i)
-        for (size_t l = 0; l < s.meshes.size() && pending.size() < budget; ++l) {
-            const LightMesh& lm = s.meshes[l];
-            if (i < lm.stats.size() && lm.stats[i].count == 0) pending.push_back({uint32_t(l), uint32_t(i), false});
-            if (pending.size() < budget && i < lm.gridStats.size() && lm.gridStats[i].count == 0)
-                pending.push_back({uint32_t(l), uint32_t(i), true});
-        }
+    pending.reserve(take);
+    for (size_t i = 0; i < take; ++i) pending.push_back(ranked[i].second);
     takeSamples(s, sampler, seed, pending);
     return pending.size();
 }

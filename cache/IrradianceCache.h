@@ -26,6 +26,8 @@
 
 namespace ml {
 
+class LightCoverage;
+
 struct CacheSettings {
     // Base mesh: triangles are bisected until no edge is longer than this
     // fraction of the scene's bounding diagonal, typical 1/16..1/128. The
@@ -56,6 +58,12 @@ struct CacheSettings {
     // vertex with a single sample count as that noisy. 0 for direct light.
     double sampleNoise = 0;
     // Budgets over all meshes: refinement stops splitting at either.
+    // Lights share: a light keeps a mesh of its own only where it gives at
+    // least this share of the direct light (by a bound from its power,
+    // distance and orientation; LightCoverage.h), typical 0.05; the rest of
+    // its light goes to one shared mesh. 0: every light's mesh everywhere.
+    // Used when the layout asks for it (CacheLayout::coverage).
+    double lightShare = 0.05;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
 
@@ -106,6 +114,11 @@ struct CacheLayout {
     // for gathers, to which a floor's edge under a wall would otherwise see
     // both rooms.
     bool insetBorders = false;
+    // Direct light with lights sharing (LightCoverage.h): when it shares,
+    // mesh l < L keeps only the faces where light l has weight, and one more
+    // mesh, the shared one, covers the whole scene. Null: a mesh per light
+    // (or `meshes`) over the whole scene.
+    std::shared_ptr<const LightCoverage> coverage;
 };
 
 class IrradianceCache {
@@ -116,7 +129,12 @@ public:
     IrradianceCache& operator=(const IrradianceCache&) = delete;
 
     const CacheSettings& settings() const;
+    // Meshes in all: lightCount(), then the shared mesh if there is one.
+    size_t meshCount() const;
+    // Meshes of their own: one per light (or per CacheLayout::meshes).
     size_t lightCount() const;
+    // The last mesh holds the light the lights share (CacheLayout::coverage).
+    bool hasSharedMesh() const;
     size_t vertexCount(size_t light) const;
     size_t triangleCount(size_t light) const;
     size_t totalVertices() const;

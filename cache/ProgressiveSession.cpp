@@ -1,5 +1,6 @@
 #include "ProgressiveSession.h"
 
+#include "SharedLightSampler.h"
 #include "core/Error.h"
 
 #include <algorithm>
@@ -13,6 +14,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+CacheLayout layoutFor(const std::shared_ptr<const LightCoverage>& coverage) {
+    CacheLayout layout;
+    layout.coverage = coverage;
+    return layout;
+}
 
 }  // namespace
 
@@ -36,7 +43,20 @@ std::string describeProgress(const CacheSnapshot& s) {
 
 ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings& settings, SamplerFactory factory,
                                        const StopRule& stop)
-    : scene_(scene), settings_(settings), factory_(std::move(factory)), cache_(scene, settings.cache) {
+    : scene_(scene),
+      settings_(settings),
+      coverage_(std::make_shared<LightCoverage>(scene, settings.cache.lightShare)),
+      factory_(std::move(factory)),
+      cache_(scene, settings.cache, layoutFor(coverage_)) {
+    // Lights that share a mesh: each sampling thread's direct sampler is
+    // wrapped to fill the lights' own meshes by weight and the shared one by
+    // drawing lights (SharedLightSampler).
+    if (cache_.hasSharedMesh())
+        factory_ = [&scene, coverage = coverage_, inner = factory_] {
+            WorkerSamplers s = inner();
+            s.direct = std::make_unique<SharedLightSampler>(scene, coverage, std::move(s.direct));
+            return s;
+        };
     settings_.worker.maxSamples = stop.samples;
     settings_.worker.validate();
     if (!settings_.cachePath.empty() && std::filesystem::exists(settings_.cachePath)) {

@@ -18,6 +18,7 @@
 #include "CacheWorker.h"
 #include "IndirectSolver.h"
 #include "IrradianceCache.h"
+#include "LightCoverage.h"
 
 #include <chrono>
 #include <functional>
@@ -60,6 +61,8 @@ public:
     const IrradianceCache& cache() const { return cache_; }
     // Null with direct light only.
     const IndirectSolver* indirect() const { return solver_.get(); }
+    // Where each light keeps a mesh of its own, the rest shared.
+    const LightCoverage& coverage() const { return *coverage_; }
 
     // Starts a worker serving `view` first; returns that view's serial (see
     // setView). Once stopped, a session may start again: the readers of the
@@ -108,6 +111,7 @@ private:
 
     const Scene& scene_;
     SessionSettings settings_;
+    std::shared_ptr<const LightCoverage> coverage_;  // where lights keep meshes of their own
     SamplerFactory factory_;
     std::function<void()> threadSetup_;
     IrradianceCache cache_;

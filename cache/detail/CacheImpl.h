@@ -38,9 +38,9 @@ void addVertexSample(CacheState& s, size_t light, size_t v, const VertexSample& 
 void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sample);
 // Vertices and grid samples without a sample yet, over all lights.
 size_t unsampledCount(const CacheState& s);
-// Samples up to `budget` of them, vertex rank first, then mesh (every
-// mesh's base before any refinement), grid samples after the vertices of
-// the same rank. Returns how many.
+// Samples up to `budget` of them, in an order that scatters them over the
+// scene and takes every mesh's sample at a vertex together (a partial first
+// pass then covers every object and every light evenly). Returns how many.
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget);
 
 }  // namespace detail

@@ -62,7 +62,8 @@ struct CacheState {
     std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
     uint64_t sceneFingerprint = 0;
-    std::vector<LightMesh> meshes;  // one per light, in the scene's order
+    std::vector<LightMesh> meshes;  // one per light, in the scene's order (then the shared mesh)
+    bool sharedMesh = false;        // the last mesh holds the light the lights share
     std::vector<GridObject> grids;  // the same for every light
     size_t gridSamples = 0;         // over all grid objects
     uint64_t rounds = 0;

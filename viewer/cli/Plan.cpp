@@ -1,5 +1,7 @@
 #include "Plan.h"
 
+#include "cache/LightCoverage.h"
+
 #include "Commands.h"
 #include "cache/GridCache.h"
 #include "gpu_sampling/indirect/VoxelGrid.h"
@@ -29,6 +31,10 @@ void declareCacheOptions(Options& o) {
     o.value("min-edge-pixels", "P", "...and at edges P pixels long on screen", concat(d.minEdgePixels));
     o.value("split-tolerance", "T", "split edges while the predicted relative error exceeds T",
             concat(d.splitTolerance));
+    o.value("light-share", "F", "a light keeps a cache mesh of its own where it gives at least F of the direct "
+                                "light (by a bound from power, distance, orientation); elsewhere one mesh shared by "
+                                "the lights carries it; 0: a mesh per light everywhere",
+            concat(d.lightShare));
     o.value("noise-tolerance", "T", "resample vertices while their relative standard error exceeds T",
             concat(d.noiseTolerance));
     o.value("max-vertices", "N", "vertex budget over all cache meshes", concat(d.maxVertices));
@@ -40,6 +46,7 @@ CacheSettings readCacheSettings(const Options& o) {
     c.minEdgeFraction = o.number("min-edge", 1e-7, 1.0);
     c.minEdgePixels = o.number("min-edge-pixels", 0, 1e4);
     c.splitTolerance = o.number("split-tolerance", 1e-6, 0.999);
+    c.lightShare = o.number("light-share", 0, 1);
     c.noiseTolerance = o.number("noise-tolerance", 1e-6, 0.999);
     c.maxVertices = size_t(o.number("max-vertices", 3, 1e9));
     c.validate();
@@ -49,7 +56,14 @@ CacheSettings readCacheSettings(const Options& o) {
 void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
                const IndirectChoice& indirect) {
     std::printf("plan:\n");
-    for (const AreaLight& l : scene.lights) {
+    // Many lights: the first few, then a count (their sampling is the same).
+    constexpr size_t kListed = 8;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const AreaLight& l = scene.lights[i];
+        if (i == kListed && scene.lights.size() > kListed + 1) {
+            std::printf("  ... and %zu more lights sampled the same way\n", scene.lights.size() - kListed);
+            break;
+        }
         const bool point = actsAsPoint(l, scene, choice);
         std::printf("  light '%s': %zu triangles, area %.6g, %s; %s; direct light by %s\n", l.name.c_str(),
                     l.triangles.size(), l.area, l.planar ? "planar" : "not planar",
@@ -71,6 +85,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "where irradiance is not linear or visibility is partial; %s\n",
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
+    if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare).describe().c_str());
     const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
                 "largest channel\n",
@@ -92,9 +107,12 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         const CacheSettings& ic = indirect.solver.cache;
         std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene, split tolerance "
                     "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
-                    "starts once direct light's estimated error is below %.3g\n",
+                    "starts %s\n",
                     1 / ic.maxEdgeFraction, ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
-                    indirect.solver.startError);
+                    indirect.solver.startError >= 1
+                        ? "as soon as every direct vertex has a sample (a coarse first bounce is in the first "
+                          "complete image) and shares the worker with direct light by their errors"
+                        : concat("once direct light's estimated error is below ", indirect.solver.startError).c_str());
     }
     if (scene.hasGlossy())
         std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"

@@ -59,11 +59,12 @@ private:
 // The --log rows, kept in memory and written whole at the end.
 class ConvergenceLog {
 public:
-    ConvergenceLog(size_t lights, bool reference) : reference_(reference) {
+    ConvergenceLog(size_t lights, bool shared, bool reference) : reference_(reference) {
         out_ << "seconds,frame,rounds,vertices,samples,estimated_error,direct_error,indirect_error,bounces_done,"
                 "indirect_vertices,indirect_samples";
         if (reference) out_ << ",rmse,relative_rmse";
         for (size_t l = 0; l < lights; ++l) out_ << ",light" << l << "_vertices,light" << l << "_samples";
+        if (shared) out_ << ",shared_vertices,shared_samples";
         out_ << "\n";
     }
     void add(double seconds, size_t frame, const CacheSnapshot& s, const ImageRgb* image, const ImageRgb* ref) {
@@ -196,15 +197,16 @@ int runRender(const std::vector<std::string>& args) {
                     cache.totalVertices(), static_cast<unsigned long long>(cache.totalSamples()),
                     static_cast<unsigned long long>(cache.rounds()));
     } else {
-        std::printf("cache: %zu vertices over %zu light meshes to start with, %.1f MB\n", cache.totalVertices(),
-                    cache.lightCount(), cache.memoryBytes() / 1e6);
+        std::printf("cache: %zu vertices over %zu light meshes%s to start with, %.1f MB\n", cache.totalVertices(),
+                    cache.lightCount(), cache.hasSharedMesh() ? " and the mesh they share" : "",
+                    cache.memoryBytes() / 1e6);
     }
 
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::printf("OpenGL: %s\n", context->describe().c_str());
     Compositor compositor(*context, scene);
     const ImageWriter writer(tone);
-    ConvergenceLog log(scene.lights.size(), o.has("reference"));
+    ConvergenceLog log(scene.lights.size(), cache.hasSharedMesh(), o.has("reference"));
 
     const uint64_t firstSerial = session.start(RefinementCamera{cameras.front(), comp.width, comp.height});
     CacheWorker::Reader reader = session.reader();

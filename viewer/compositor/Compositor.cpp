@@ -366,8 +366,8 @@ struct Compositor::Impl {
                  const CompositorSettings& s) {
         s.validate();
         camera.validate();
-        ML_ASSERT(meshes.directCount() == scene.lights.size(), meshes.directCount(), " meshes for ",
-                  scene.lights.size(), " lights");
+        ML_ASSERT(meshes.directCount() == scene.lights.size() || meshes.directCount() == scene.lights.size() + 1,
+                  meshes.directCount(), " meshes for ", scene.lights.size(), " lights");
         ML_ASSERT(weights.light.size() == scene.lights.size(), weights.light.size(), " weights for ",
                   scene.lights.size(), " lights");
         ensureTargets(s.width, s.height, s.supersample);
@@ -388,7 +388,9 @@ struct Compositor::Impl {
         gl.ClearBufferfv(GL_COLOR, 0, zero);
         drawnTriangles = 0;
         bool first = true;
-        for (size_t l = 0; l < meshes.directCount(); ++l) drawIrradianceMesh(meshes.direct(l), weights.light[l], first);
+        // Each light's own mesh, then the mesh the lights share, if any.
+        for (size_t l = 0; l < meshes.directCount(); ++l)
+            drawIrradianceMesh(meshes.direct(l), l < weights.light.size() ? weights.light[l] : weights.shared, first);
         for (size_t b = 0; b < meshes.indirectCount(); ++b)
             drawIrradianceMesh(meshes.indirect(b), weights.indirect, first);
         checkGl(gl, "compositing the irradiance");
@@ -618,11 +620,11 @@ ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMe
 
 ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
                             const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings) {
-    ML_ASSERT(direct.size() == impl_->scene.lights.size(), direct.size(), " meshes for ",
-              impl_->scene.lights.size(), " lights");
+    ML_ASSERT(direct.size() == impl_->scene.lights.size() || direct.size() == impl_->scene.lights.size() + 1,
+              direct.size(), " meshes for ", impl_->scene.lights.size(), " lights");
     GpuCacheMeshes meshes(impl_->gl, impl_->origin);
     meshes.upload(direct, indirect);
-    impl_->compose(camera, meshes, LightWeights::unit(direct.size()), settings);
+    impl_->compose(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
     return impl_->readImage();
 }
 

@@ -57,6 +57,9 @@ struct CompositorSettings {
 struct LightWeights {
     std::vector<Rgb> light;  // one per scene light, in the scene's order; 1 = as the scene says
     Rgb indirect{1.0};
+    // The mesh many lights share (IrradianceCache::hasSharedMesh): like
+    // indirect light, it takes their power-weighted mean weight.
+    Rgb shared{1.0};
     static LightWeights unit(size_t lights);
 };
 
@@ -81,8 +84,9 @@ public:
     ~Compositor();
 
     // Linear radiance, W·sr⁻¹·m⁻², row 0 at the top. `direct` holds one
-    // cache mesh per light (IrradianceCache::view), in the scene's light
-    // order; `indirect` one per bounce (none: direct light only).
+    // cache mesh per light (IrradianceCache::copyMeshes), in the scene's
+    // light order, and then the shared mesh if the cache has one; `indirect`
+    // one per bounce (none: direct light only).
     ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
                     const CompositorSettings& settings);
     ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,

@@ -34,6 +34,9 @@ LightWeights compositeWeights(const DisplayState& d, const std::vector<LightCont
     LightWeights w;
     for (const LightControl& l : lights) w.light.push_back(l.weight());
     w.indirect = indirectWeight(lights, powers);
+    // The mesh lights share holds many lights' direct light: it takes their
+    // mean weight like indirect light (exact when all change alike).
+    w.shared = w.indirect;
     switch (d.mode) {
         case DisplayMode::Final:
         case DisplayMode::Reflectance:
@@ -41,11 +44,14 @@ LightWeights compositeWeights(const DisplayState& d, const std::vector<LightCont
         case DisplayMode::Direct: w.indirect = Rgb(0.0); break;
         case DisplayMode::Indirect:
             for (Rgb& l : w.light) l = Rgb(0.0);
+            w.shared = Rgb(0.0);
             break;
         case DisplayMode::Light:
             for (size_t l = 0; l < w.light.size(); ++l)
                 if (l != d.light) w.light[l] = Rgb(0.0);
+            // What the light gave the shared mesh is not told apart there.
             w.indirect = Rgb(0.0);
+            w.shared = Rgb(0.0);
             break;
     }
     return w;

@@ -1,0 +1,90 @@
+#include "SharedLightSampler.h"
+
+#include "core/Error.h"
+#include "core/Random.h"
+#include "core/reference/Lambert.h"
+
+#include <algorithm>
+
+namespace ml {
+
+Rgb unoccludedIrradiance(const AreaLight& light, const Vec3& x, const Vec3& n) {
+    double csa = 0;
+    for (const Triangle3& t : light.geometry)
+        if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0) csa += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
+    return light.radiance * csa;
+}
+
+SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const LightCoverage> coverage,
+                                       std::unique_ptr<DirectSampler> perLight, int lights)
+    : scene_(scene), coverage_(std::move(coverage)), perLight_(std::move(perLight)), draws_(lights) {
+    ML_ASSERT(coverage_ && perLight_ && draws_ >= 1, "a shared-light sampler needs its coverage and sampler");
+}
+
+std::string SharedLightSampler::name() const {
+    return concat(perLight_->name(), "; lights share a mesh where they give under ", 100 * coverage_->share(),
+                  "% of the light, ", draws_, " lights drawn per shared estimate");
+}
+
+VertexSample SharedLightSampler::sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) {
+    const size_t lights = scene_.lights.size();
+    if (mesh >= lights) return sampleShared(x, n, seed);
+    const double w = coverage_->weight(mesh, x);
+    if (w <= 0) return {};  // the shared mesh carries all of this light here
+    VertexSample s = perLight_->sample(mesh, x, n, seed);
+    s.irradiance *= w;
+    return s;
+}
+
+VertexSample SharedLightSampler::sampleShared(const Vec3& x, const Vec3& n, uint32_t seed) {
+    const size_t lights = scene_.lights.size();
+    coverage_->weights(x, weights_);
+    // (1 − w_l) U_l for every light, the total exactly, the draws' CDF by luminance.
+    cdf_.clear();
+    unoccluded_.clear();
+    candidates_.clear();
+    shared_.clear();
+    Rgb total(0.0);
+    double sum = 0;
+    size_t next = 0;
+    for (size_t l = 0; l < lights; ++l) {
+        double w = 0;
+        if (next < weights_.size() && weights_[next].first == l) w = weights_[next++].second;
+        if (w >= 1) continue;
+        const Rgb full = unoccludedIrradiance(scene_.lights[l], x, n);
+        const double y = (1 - w) * luminance(full);
+        if (!(y > 0)) continue;
+        total += (1 - w) * full;
+        sum += y;
+        candidates_.push_back(uint32_t(l));
+        unoccluded_.push_back(full);
+        shared_.push_back(1 - w);
+        cdf_.push_back(sum);
+    }
+    VertexSample out;
+    if (!(sum > 0)) return out;  // nothing shared reaches this point
+    Rgb occluded(0.0);
+    double visibleSum = 0;
+    bool partial = false;
+    for (int k = 0; k < draws_; ++k) {
+        // Stratified over [0, 1): draw k in [k/K, (k+1)/K).
+        const double u = (double(k) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(k))) >> 8) / 16777216.0) /
+                         double(draws_) * sum;
+        const size_t c = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin());
+        const size_t i = std::min(c, candidates_.size() - 1);
+        const uint32_t l = candidates_[i];
+        const double p = (cdf_[i] - (i ? cdf_[i - 1] : 0.0)) / sum;
+        const VertexSample e = perLight_->sample(l, x, n, seedFor(seed, uint32_t(k), l));
+        // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative.
+        const Rgb o = glm::max(unoccluded_[i] - e.irradiance, Rgb(0.0)) * shared_[i];
+        occluded += o / (p * double(draws_));
+        visibleSum += e.visibility;
+        partial = partial || e.partial;
+    }
+    out.irradiance = glm::max(total - occluded, Rgb(0.0));
+    out.visibility = std::clamp(visibleSum / double(draws_), 0.0, 1.0);
+    out.partial = partial;
+    return out;
+}
+
+}  // namespace ml
