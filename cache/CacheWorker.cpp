@@ -126,7 +126,7 @@ void CacheWorker::run() {
         ML_ASSERT(!indirect_ || estimator, "indirect light needs an estimator from the sampler factory");
         const auto directMeshes = [&] { return cache_.copyMeshes(); };
         double lastPublish = -1e30;
-        bool converged = false, directConverged = false, indirectStarted = false;
+        bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double lastDirectError = 1, lastIndirectError = 1;
         uint64_t rounds = 0;
         std::optional<RefinementCamera> lastView;
@@ -168,8 +168,18 @@ void CacheWorker::run() {
             if (indirect_) {
                 // Indirect light starts once direct light is nearly right,
                 // then alternates with it round by round.
-                indirectStarted = indirectStarted || directConverged ||
-                                  (cache_.unsampledCount() == 0 && directError <= indirect_->settings().startError);
+                const size_t unsampled = cache_.unsampledCount();
+                const double firstPass = 1 - double(unsampled) / double(std::max<size_t>(cache_.totalVertices(), 1));
+                if (!indirectStarted && (directConverged || firstPass >= indirect_->settings().startFraction)) {
+                    indirectStarted = true;
+                    sourceIncomplete = unsampled > 0;
+                }
+                // Bounce 1 reflected an incomplete first pass: gather every
+                // bounce again now that direct light is complete.
+                if (indirectStarted && sourceIncomplete && unsampled == 0) {
+                    indirect_->restart(*estimator);
+                    sourceIncomplete = false;
+                }
                 indirectConverged = false;
                 if (indirectStarted && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
                     size_t budget = settings_.indirectBudget;

@@ -34,8 +34,8 @@ CacheSettings IndirectSettings::defaultCache() {
 void IndirectSettings::validate() const {
     if (bounces < 0 || bounces > 256) throw InputError(concat("bounce count ", bounces, " is not in 0..256"));
     if (!(albedo >= 0 && albedo <= 1)) throw InputError(concat("albedo ", albedo, " is not in [0, 1]"));
-    if (!(startError > 0 && startError <= 1))
-        throw InputError(concat("indirect start error ", startError, " is not in (0, 1]"));
+    if (!(startFraction >= 0 && startFraction <= 1))
+        throw InputError(concat("indirect start fraction ", startFraction, " is not in [0, 1]"));
     cache.validate();
 }
 
@@ -76,7 +76,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
                                   uint32_t seed, const std::optional<RefinementCamera>& view) {
     if (settings_.bounces == 0) return {};
     // Pass 1: the next bounce's base mesh, gathered once.
-    if (!firstPassDone() && (caches_.empty() || caches_.back()->unsampledCount() == 0)) {
+    if (!firstPassDone() && firstPassBounce() == 0) {
         const int bounce = int(caches_.size()) + 1;
         CacheLayout layout;
         layout.meshes = 1;
@@ -95,8 +95,15 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
     }
     const bool first = !firstPassDone();
-    const int bounce = first ? int(caches_.size()) : allFinished() ? 1 : finished_ + 1;
+    const int bounce = first ? firstPassBounce() : allFinished() ? 1 : finished_ + 1;
     const size_t slot = size_t(bounce - 1);
+    // A first pass gathered again (restart): only the source it gathers from is kept.
+    if (first)
+        for (size_t s = 0; s < sourceBuilt_.size(); ++s)
+            if (s != slot && sourceBuilt_[s]) {
+                estimator.releaseSource(s);
+                sourceBuilt_[s] = false;
+            }
     // Pass 2 refines bounce 1 from direct light as it is now, not as it was
     // when the first pass began.
     if (!first && bounce == 1 && !directRefreshed_) {
@@ -144,6 +151,23 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         report.candidates = allFinished() ? 0 : 1;  // not converged while bounces remain
     }
     return report;
+}
+
+int IndirectSolver::firstPassBounce() const {
+    for (size_t b = 0; b < caches_.size(); ++b)
+        if (caches_[b]->unsampledCount() > 0) return int(b) + 1;
+    return 0;
+}
+
+void IndirectSolver::restart(IndirectEstimator& estimator) {
+    for (auto& c : caches_) c->resetSamples();
+    finished_ = 0;
+    directRefreshed_ = false;
+    for (size_t s = 0; s < sourceBuilt_.size(); ++s)
+        if (sourceBuilt_[s]) {
+            estimator.releaseSource(s);
+            sourceBuilt_[s] = false;
+        }
 }
 
 void fillHiddenVertices(IrradianceMeshCopy& mesh) {

@@ -19,10 +19,12 @@
 // indirect light's detail: contact shadows, colour bleeding); the sources of
 // later bounces are released.
 //
-// The direct meshes bounce 1 reflects are taken when it starts, as soon as
-// every direct vertex has a sample (IndirectSettings::startError), so that a
-// coarse first bounce is in the first complete image; they are taken again,
-// refined, when bounce 1's own refinement starts (pass 2).
+// The direct meshes bounce 1 reflects are taken when it starts, early in
+// direct light's first pass (IndirectSettings::startFraction), so that a
+// coarse first bounce is in the first complete image; every bounce is
+// gathered again once direct light's first pass is complete (restart), and
+// bounce 1's source is taken again, refined, when its own refinement starts
+// (pass 2).
 #pragma once
 
 #include "IndirectEstimator.h"
@@ -42,9 +44,12 @@ struct IndirectSettings {
     // indirect light has no sharp shadows of its own and each sample is a
     // whole hemispherical gather.
     CacheSettings cache = defaultCache();
-    // Indirect light starts once every direct vertex has a sample and direct
-    // light's estimated error is at most this; 1: at once then.
-    double startError = 1.0;
+    // Indirect light starts once this fraction of direct light's first pass
+    // is done (its copies fill the rest from sampled neighbours), so that a
+    // coarse first bounce is in the first complete image; when direct
+    // light's first pass then completes, every bounce is gathered again
+    // from it (restart). 1: once the first pass is complete.
+    double startFraction = 0.25;
     static CacheSettings defaultCache();
     void validate() const;
 };
@@ -69,7 +74,7 @@ public:
     // of those, refined until converged in the second.
     int started() const { return int(caches_.size()); }
     int finished() const { return finished_; }
-    bool firstPassDone() const { return int(caches_.size()) == settings_.bounces && caches_.back()->unsampledCount() == 0; }
+    bool firstPassDone() const { return int(caches_.size()) == settings_.bounces && firstPassBounce() == 0; }
     bool allFinished() const { return finished_ >= settings_.bounces; }
 
     // One round of up to `budget` gathers: the first pass's next vertices
@@ -79,6 +84,12 @@ public:
     // view. Converged when there is nothing left to do.
     RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshCopy>()>& direct,
                       size_t budget, uint32_t seed, const std::optional<RefinementCamera>& view);
+
+    // Gathers every bounce again, first pass and all, from sources rebuilt
+    // then: for when the direct light bounce 1 reflects has changed (it
+    // started from an incomplete first pass of direct light). Until a vertex
+    // is gathered again, copies show its old value.
+    void restart(IndirectEstimator& estimator);
 
     // One mesh per started bounce, bounce 1 first, hidden vertices filled
     // (fillHiddenVertices): what is shown and what the next bounce reflects.
@@ -94,6 +105,8 @@ public:
 
 private:
     CacheSettings settingsFor(int bounce) const;
+    // The first bounce whose cache has vertices without a sample (0: none).
+    int firstPassBounce() const;
     // Makes sure source `bounce − 1` holds what bounce `bounce` gathers from.
     void prepareSource(IndirectEstimator& estimator, int bounce,
                        const std::function<std::vector<IrradianceMeshCopy>()>& direct);

@@ -315,6 +315,18 @@ void IrradianceCache::addSample(size_t l, size_t v, const VertexSample& sample) 
     detail::addVertexSample(impl_->state, l, v, sample);
 }
 
+void IrradianceCache::resetSamples() {
+    for (detail::LightMesh& lm : impl_->state.meshes) {
+        // A negative red marks a vertex that had no mean to keep.
+        lm.provisional.assign(lm.stats.size(), Rgb(-1.0));
+        for (size_t v = 0; v < lm.stats.size(); ++v) {
+            if (lm.stats[v].count) lm.provisional[v] = lm.stats[v].mean();
+            lm.stats[v] = {};
+        }
+        for (detail::VertexStats& st : lm.gridStats) st = {};
+    }
+}
+
 std::vector<IrradianceMeshCopy> IrradianceCache::copyMeshes() const {
     std::vector<IrradianceMeshCopy> meshes;
     for (size_t l = 0; l < meshCount(); ++l) meshes.push_back(copyMesh(l));
@@ -343,7 +355,11 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     // sample count of 0.
     std::vector<char> known(n);
     size_t unknown = 0;
-    for (size_t v = 0; v < n; ++v) unknown += !(known[v] = out.samples[v] > 0);
+    for (size_t v = 0; v < n; ++v) {
+        const bool kept = out.samples[v] == 0 && v < lm.provisional.size() && lm.provisional[v].r >= 0;
+        if (kept) out.irradiance[v] = lm.provisional[v];
+        unknown += !(known[v] = out.samples[v] > 0 || kept);
+    }
     std::vector<std::pair<size_t, Rgb>> filled;
     for (int ring = 0; ring < 64 && unknown > 0 && unknown < n; ++ring) {
         filled.clear();

@@ -155,6 +155,10 @@ public:
 
     // Adds one irradiance estimate at a vertex (running mean).
     void addSample(size_t light, size_t vertex, const VertexSample& sample);
+    // Forgets every sample, to sample the cache again from a better source
+    // (the indirect solver, once direct light is complete): every vertex is
+    // unsampled again, but copies show its last mean until it has a new one.
+    void resetSamples();
     // A copy of mesh `mesh` (a light's, or the one mesh of an indirect
     // bounce), and of every mesh in order.
     IrradianceMeshCopy copyMesh(size_t mesh) const;

@@ -38,6 +38,10 @@ struct VertexStats {
 struct LightMesh {
     CacheTriMesh mesh;
     std::vector<VertexStats> stats;      // by vertex index
+    // What a copy shows at a vertex without a sample yet, after
+    // resetSamples(): its mean before (red < 0 or past the end: none,
+    // its sampled neighbours fill in).
+    std::vector<Rgb> provisional;
     std::vector<VertexStats> gridStats;  // by grid sample, every grid object's in turn
 };
 
