@@ -16,6 +16,7 @@
 #include "core/reference/ExactIrradiance.h"
 #include "core/reference/Lambert.h"
 #include "core/scenes/BenchScene.h"
+#include "core/scenes/CornellBox.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/Jitter.h"
 #include "gpu_sampling/direct/LightFrustum.h"
@@ -27,7 +28,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -298,7 +301,9 @@ TEST(DirectSampler, ControlVariateIsLambertWhereNothingOccludes) {
             const DirectSample d = s.sample(0, r.position, r.normal, jitter::seedFor(1, uint32_t(i)));
             const double lambert = cosineSolidAngle(r.position, r.normal, benchLightPolygon());
             EXPECT_EQ(d.visibleSamples, d.lightSamples);
-            EXPECT_GT(d.lightSamples, 0u);
+            // Answered in closed form (most of them), no sample is tested;
+            // rasterised, the light holds samples.
+            EXPECT_EQ(d.lightSamples > 0, d.path == DirectPath::Rasterised);
             EXPECT_EQ(d.frusta, 1u);
             EXPECT_NEAR(d.cosineSolidAngle, lambert, 1e-9 * lambert)
                 << directMethodName(method) << " " << size << "² × " << bits << " at (" << r.position.x << ", "
@@ -624,6 +629,307 @@ TEST(DirectSampler, SettingsAreValidated) {
     EXPECT_THROW(parseDirectEstimator("mis"), InputError);
     for (auto m : {kQuery, kRegular, kJittered}) EXPECT_EQ(parseDirectMethod(directMethodName(m)), m);
     for (auto e : {kPlain, kCv}) EXPECT_EQ(parseDirectEstimator(directEstimatorName(e)), e);
+}
+
+// === cheap pairs: nothing between, no GL ==================================
+
+// Counts the calls that reach the stubs below.
+int stubbedGlCalls = 0;
+
+template <class F>
+struct CountingStub;
+template <class R, class... A>
+struct CountingStub<R (*)(A...)> {
+    static R call(A...) {
+        ++stubbedGlCalls;
+        return R();
+    }
+};
+
+// A context sharing the test context's GL, whose entry points can be
+// swapped for stubs that only count calls: a sampler made while they are
+// real can then be asked for a sample while they are stubs, and any GL call
+// it makes shows.
+class CountingGlContext : public GlContext {
+public:
+    explicit CountingGlContext(GlContext& real) : real_(real) { gl_ = real.gl(); }
+    void makeCurrent() override { real_.makeCurrent(); }
+    GlBackend backend() const override { return real_.backend(); }
+
+    // Runs `f` with every GL call counted and dropped; returns the count.
+    template <class F>
+    int countCalls(F&& f) {
+#define ML_GL_STUB(type, name) gl_.name = &CountingStub<type>::call;
+        ML_GL_FUNCTIONS(ML_GL_STUB)
+#undef ML_GL_STUB
+        stubbedGlCalls = 0;
+        struct Restore {
+            CountingGlContext& c;
+            ~Restore() { c.gl_ = c.real_.gl(); }
+        } restore{*this};
+        f();
+        return stubbedGlCalls;
+    }
+
+private:
+    GlContext& real_;
+};
+
+DirectSamplerSettings cvSettings(DirectMethod method, int bits) {
+    DirectSamplerSettings s;
+    s.method = method;
+    s.bits = bits;
+    return s;
+}
+
+void expectSameSample(const DirectSample& a, const DirectSample& b, const std::string& where) {
+    EXPECT_EQ(std::memcmp(&a.cosineSolidAngle, &b.cosineSolidAngle, sizeof(double)), 0) << where;
+    EXPECT_EQ(a.irradiance, b.irradiance) << where;
+    EXPECT_EQ(a.unoccluded, b.unoccluded) << where;
+    EXPECT_EQ(a.lightSamples, b.lightSamples) << where;
+    EXPECT_EQ(a.visibleSamples, b.visibleSamples) << where;
+    EXPECT_EQ(a.frusta, b.frusta) << where;
+}
+
+std::string at(const Vec3& x) { return concat("at (", x.x, ", ", x.y, ", ", x.z, ")"); }
+
+TEST(DirectSampler, PairsWithNothingBetweenAreAnsweredOnTheCpuAsTheGpuWould) {
+    // The control variate subtracts the occluded samples from Lambert's
+    // closed form; where culling leaves no occluder in any frustum, nothing
+    // is subtracted and the sampler answers on the CPU with no GL call. The
+    // GPU, made to rasterise the same pair (cpuUnoccludedPairs off: the
+    // culled leaves drawn; cullOccluders off: every triangle drawn), must
+    // find no occluded sample and return the same value. Points in the
+    // occluder's shadow must be rasterised. Regular sampling with the
+    // control variate weighs the light the same way (at pixel centres), so
+    // it takes the CPU path as well.
+    const Scene& bench = GlEnvironment::bench();
+    std::vector<ReceiverPoint> receivers = makeBenchReceivers(20);
+    receivers.push_back({Vec3(0.1, 1.0 - 1e-3, 0.05), kUp});  // under the light: split among cube faces
+    for (auto [method, bits] : {std::pair{kJittered, 8}, std::pair{kJittered, 4}, std::pair{kRegular, 1}}) {
+        const DirectSamplerSettings settings = cvSettings(method, bits);
+        DirectSamplerSettings culledLeaves = settings, everything = settings;
+        culledLeaves.cpuUnoccludedPairs = false;
+        everything.cullOccluders = false;
+        CountingGlContext counting(test::glContext());
+        DirectLightSampler cheap(counting, bench, settings);
+        DirectLightSampler gpu(test::glContext(), bench, culledLeaves), all(test::glContext(), bench, everything);
+        int onCpu = 0, shadowed = 0, split = 0;
+        for (size_t i = 0; i < receivers.size(); ++i) {
+            const ReceiverPoint& r = receivers[i];
+            const std::string where = concat(directMethodName(method), " × ", bits, " ", at(r.position));
+            const uint32_t seed = jitter::seedFor(12, uint32_t(i));
+            DirectSample a;
+            const int glCalls = counting.countCalls([&] { a = cheap.sample(0, r.position, r.normal, seed); });
+            const DirectPhaseTimes times = cheap.lastTimes();
+            const DirectSample b = gpu.sample(0, r.position, r.normal, seed);
+            const DirectSample c = all.sample(0, r.position, r.normal, seed);
+            EXPECT_EQ(b.path, DirectPath::Rasterised) << where;
+            EXPECT_EQ(c.path, DirectPath::Rasterised) << where;
+            // In the shadow: 14 points of the grid lie on its outline (x =
+            // −0.9 or z = 0.9), where the shadow has no area and the exact
+            // values differ by rounding (2e-16) only.
+            if (exactAt(r.position, r.normal) < (1 - 1e-9) * lambertAt(r.position, r.normal)) {
+                ++shadowed;
+                EXPECT_EQ(a.path, DirectPath::Rasterised) << where << " is in the occluder's shadow";
+            }
+            if (a.path == DirectPath::Unoccluded) {
+                ++onCpu;
+                split += a.frusta > 1;
+                EXPECT_EQ(glCalls, 0) << where;
+                EXPECT_EQ(a.trianglesDrawn, 0u) << where;
+                EXPECT_GT(times.setup, 0.0) << where;
+                EXPECT_EQ(times.draw + times.readback + times.weighting, 0.0) << where;
+                // No sample tested (DirectSample::lightSamples).
+                EXPECT_EQ(a.lightSamples, 0u) << where;
+                EXPECT_EQ(a.visibleSamples, 0u) << where;
+                EXPECT_FALSE(a.partiallyVisible()) << where;
+                for (const DirectSample& g : {b, c}) {
+                    EXPECT_GT(g.lightSamples, 0u) << where;
+                    EXPECT_EQ(g.visibleSamples, g.lightSamples) << where << ": GL found an occluded sample";
+                    EXPECT_NEAR(a.irradiance.g, g.irradiance.g, 1e-12 * g.irradiance.g) << where;  // Ke = 1
+                    EXPECT_NEAR(a.cosineSolidAngle, g.cosineSolidAngle, 1e-12 * g.cosineSolidAngle) << where;
+                    EXPECT_EQ(a.unoccluded, g.unoccluded) << where;
+                    EXPECT_EQ(a.frusta, g.frusta) << where;
+                }
+            } else {
+                ASSERT_EQ(a.path, DirectPath::Rasterised) << where;
+                EXPECT_GT(glCalls, 0) << where;
+                // With real GL, the pair is the one rasterised before.
+                expectSameSample(cheap.sample(0, r.position, r.normal, seed), b, where);
+            }
+        }
+        // 241 points: the penumbra (x ∈ [−0.9, 1.1], z ∈ [−1.1, 0.9]) holds
+        // about 2/3 of the 20×20 grid; of the rest, those whose frustum's
+        // window still reaches the occluder are rasterised.
+        std::printf("[ cheap    ] bench, %s × %d: %d of %zu pairs on the CPU, %d in the shadow\n",
+                    directMethodName(method), bits, onCpu, receivers.size(), shadowed);
+        EXPECT_GT(shadowed, 100);
+        EXPECT_GT(onCpu, 60);
+        EXPECT_EQ(split, 1);
+    }
+}
+
+TEST(DirectSampler, ALightBelowTheHorizonOrSeenFromBehindGivesZeroWithNoGlCall) {
+    const Scene& bench = GlEnvironment::bench();
+    const std::vector<ReceiverPoint> receivers = {
+        {Vec3(0.2, 0.0, 0.1), -kUp},                                  // on the floor, facing down
+        {Vec3(0.0, 2.0, 0.0), kUp},                                   // above the light, facing up
+        {Vec3(0.1, 2.0, 0.0), -kUp},                                  // above, facing the light's back
+        {Vec3(3.0, 0.5, 0.0), Vec3(1, 0, 0)},                         // beside it, facing away
+        {Vec3(0.0, 0.5, 0.0), glm::normalize(Vec3(0.0, -1.0, 1e-3))}  // under it, facing down
+    };
+    for (auto method : {kQuery, kRegular, kJittered})
+        for (auto estimator : {kPlain, kCv}) {
+            DirectSamplerSettings settings;
+            settings.method = method;
+            settings.estimator = estimator;
+            settings.bits = method == kJittered ? 8 : 1;
+            CountingGlContext counting(test::glContext());
+            DirectLightSampler sampler(counting, bench, settings);
+            for (const ReceiverPoint& r : receivers) {
+                const std::string where =
+                    concat(directMethodName(method), " ", directEstimatorName(estimator), " ", at(r.position));
+                DirectSample d;
+                EXPECT_EQ(counting.countCalls([&] { d = sampler.sample(0, r.position, r.normal, 5); }), 0) << where;
+                EXPECT_EQ(d.path, DirectPath::Unlit) << where;
+                EXPECT_EQ(d.irradiance, Rgb(0.0)) << where;
+                EXPECT_EQ(d.cosineSolidAngle, 0.0) << where;
+                EXPECT_EQ(d.unoccluded, 0.0) << where;
+                EXPECT_EQ(d.lightSamples, 0u) << where;
+                EXPECT_EQ(d.frusta, 0u) << where;
+                EXPECT_EQ(d.trianglesDrawn, 0u) << where;
+                const DirectPhaseTimes& t = sampler.lastTimes();
+                EXPECT_EQ(t.draw + t.readback + t.weighting, 0.0) << where;
+                EXPECT_EQ(GlEnvironment::exact().unoccludedCosineSolidAngle(0, r.position, r.normal), 0.0) << where;
+            }
+        }
+    EXPECT_STREQ(directPathName(DirectPath::Unlit), "unlit");
+    EXPECT_STREQ(directPathName(DirectPath::Unoccluded), "unoccluded");
+    EXPECT_STREQ(directPathName(DirectPath::Rasterised), "rasterised");
+}
+
+// The two triangles corner, corner + u, corner + u + v and corner, corner +
+// u + v, corner + v, facing u × v.
+Mesh quad(const std::string& name, uint32_t material, const Vec3& corner, const Vec3& u, const Vec3& v) {
+    Mesh m;
+    m.name = name;
+    m.positions = {corner, corner + u, corner + u + v, corner + v};
+    m.normals.assign(4, glm::normalize(glm::cross(u, v)));
+    m.triangles = {{0, 1, 2}, {0, 2, 3}};
+    m.materials = {material, material};
+    m.sourceLines = {0, 0};
+    return m;
+}
+
+TEST(DirectSampler, ASplitLightRasterisesOnlyTheFacesWithAnOccluder) {
+    // 0.1 below the bench's light the receiver sees it split among five
+    // cube faces; a small square at y = 0.95, x ∈ [0.2, 0.3] (elevation 9°
+    // to 14° towards +x, in front of the light's part beyond x = 0.4) lies
+    // in the +x face only. That face is rasterised, the four others weighed
+    // on the CPU: the same estimate as rasterising all five, bit for bit.
+    Scene scene;
+    scene.name = "split";
+    Material light, grey;
+    light.name = "light";
+    light.kd = Rgb(0.0);
+    light.ke = Rgb(1.0);
+    grey.name = "grey";
+    scene.materials = {light, grey};
+    scene.meshes = {quad("light", 0, Vec3(-0.5, 1.0, -0.5), Vec3(1, 0, 0), Vec3(0, 0, 1)),
+                    quad("occluder", 1, Vec3(0.2, 0.95, -0.05), Vec3(0, 0, 0.1), Vec3(0.1, 0, 0))};
+    scene.finalize();
+    DirectSamplerSettings forced;
+    forced.cpuUnoccludedPairs = false;
+    DirectLightSampler cheap(test::glContext(), scene, DirectSamplerSettings{});
+    DirectLightSampler gpu(test::glContext(), scene, forced);
+    const Vec3 x(0.0, 0.9, 0.0);
+    for (uint32_t k = 0; k < 8; ++k) {
+        const uint32_t seed = jitter::seedFor(13, k);
+        const DirectSample a = cheap.sample(0, x, kUp, seed), b = gpu.sample(0, x, kUp, seed);
+        ASSERT_EQ(a.frusta, 5u);
+        EXPECT_EQ(a.path, DirectPath::Rasterised);
+        expectSameSample(a, b, concat("seed ", seed));
+        EXPECT_LT(a.visibleSamples, a.lightSamples);  // the square hides part of the light
+        // One leaf of four triangles per rasterised face.
+        EXPECT_EQ(a.trianglesDrawn, 4u);
+        EXPECT_EQ(b.trianglesDrawn, 4u * 5u);
+    }
+}
+
+TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
+    // Cache-like points: a barycentric lattice of 15 points on each of the
+    // box's 30 non-emitting triangles (walls, floor, ceiling, blocks), with
+    // the face's normal. Every pair is sampled twice with the same seed,
+    // with and without the CPU path: the same jitter, so a CPU pair must
+    // give the rasterised value exactly and a rasterised pair is the same
+    // computation. The totals must then agree to rounding (1e-12 relative),
+    // far tighter than the sampler's noise (~1e-3 of a pass in the
+    // penumbra), which would hide a pair wrongly taken as unoccluded.
+    const Scene box = makeCornellBox();
+    std::vector<ReceiverPoint> points;
+    for (const Mesh& m : box.meshes)
+        for (size_t t = 0; t < m.triangles.size(); ++t) {
+            if (box.materials[m.materials[t]].emissive()) continue;
+            const Triangle3 p = m.triangle(t);
+            const Vec3 n = m.normals[m.triangles[t].x];
+            constexpr int k = 6;
+            for (int i = 0; i < k; ++i)
+                for (int j = 0; i + j < k - 1; ++j) {
+                    const double a = (i + 0.5) / k, b = (j + 0.5) / k;
+                    points.push_back({p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]), n});
+                }
+        }
+    ASSERT_EQ(points.size(), 30u * 15u);
+    DirectSamplerSettings forced;
+    forced.cpuUnoccludedPairs = false;
+    DirectLightSampler cheap(test::glContext(), box, DirectSamplerSettings{});
+    DirectLightSampler gpu(test::glContext(), box, forced);
+    using Clock = std::chrono::steady_clock;
+    auto micros = [](Clock::time_point a, Clock::time_point b) {
+        return std::chrono::duration<double, std::micro>(b - a).count();
+    };
+    int count[3] = {0, 0, 0};
+    double cheapTime[3] = {0, 0, 0}, gpuTime[3] = {0, 0, 0};
+    Rgb cheapTotal(0.0), gpuTotal(0.0);
+    constexpr uint32_t kPasses = 3;  // more points for the timing
+    for (uint32_t pass = 0; pass < kPasses; ++pass)
+        for (size_t i = 0; i < points.size(); ++i) {
+            const ReceiverPoint& r = points[i];
+            const uint32_t seed = jitter::seedFor(14, uint32_t(i), 0, pass);
+            const Clock::time_point t0 = Clock::now();
+            const DirectSample a = cheap.sample(0, r.position, r.normal, seed);
+            const Clock::time_point t1 = Clock::now();
+            const DirectSample b = gpu.sample(0, r.position, r.normal, seed);
+            const Clock::time_point t2 = Clock::now();
+            const int path = int(a.path);
+            ++count[path];
+            cheapTime[path] += micros(t0, t1);
+            gpuTime[path] += micros(t1, t2);
+            cheapTotal += a.irradiance;
+            gpuTotal += b.irradiance;
+            if (a.path == DirectPath::Unoccluded) {
+                EXPECT_EQ(b.visibleSamples, b.lightSamples) << at(r.position) << ": GL found an occluded sample";
+                EXPECT_NEAR(a.irradiance.r, b.irradiance.r, 1e-12 * b.irradiance.r) << at(r.position);
+            }
+        }
+    const int pairs = int(kPasses * points.size());
+    const int unlit = count[int(DirectPath::Unlit)], cpu = count[int(DirectPath::Unoccluded)];
+    const int raster = count[int(DirectPath::Rasterised)];
+    auto each = [](double total, int n) { return n ? total / n : 0.0; };
+    std::printf("[ cheap    ] Cornell box, %d pairs: %d unlit, %d on the CPU (%.0f%% of the lit), %d rasterised\n"
+                "[ cheap    ] us each: CPU pair %.1f (rasterised when forced: %.1f), rasterised pair %.1f, "
+                "unlit %.1f\n",
+                pairs, unlit, cpu, 100.0 * cpu / std::max(cpu + raster, 1), raster,
+                each(cheapTime[1], cpu), each(gpuTime[1], cpu), each(cheapTime[2], raster),
+                each(cheapTime[0], unlit));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(cheapTotal[c], gpuTotal[c], 1e-12 * gpuTotal[c]) << "channel " << c;
+    EXPECT_GT(gpuTotal.r, 0.0);
+    // The ceiling (30 points) sees the light's back, the two sides of each
+    // block that face away from it (2 × 60 points) nothing of it; the rest
+    // sees it past the blocks from most places.
+    EXPECT_EQ(unlit, int(kPasses) * 150);
+    EXPECT_GT(cpu, 2 * raster);
 }
 
 // === OccluderBvh ===========================================================

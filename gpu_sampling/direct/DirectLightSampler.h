@@ -56,9 +56,31 @@ struct DirectSamplerSettings {
     // as eyeOffset) do not occlude it: geometry coplanar with the light.
     double planeTolerance = 1e-6;
     bool cullOccluders = true;   // draw only triangles in the frustum (BVH)
+    // With the control variate on a planar light (jittered or regular), a
+    // pair whose frusta hold no occluder after culling is answered on the
+    // CPU, with no GL call: the estimate is then Lambert's closed form, the
+    // same value the GPU would return (DirectPath::Unoccluded). Needs
+    // cullOccluders (culling makes the decision); off: every pair is
+    // rasterised, as before (for comparisons).
+    bool cpuUnoccludedPairs = true;
 
     void validate() const;       // throws InputError on a bad value
 };
+
+// Which way a sample was answered.
+enum class DirectPath {
+    // The light is wholly below the receiver's horizon or seen from behind
+    // (or edge-on): zero, with no frustum, culling or GL call.
+    Unlit,
+    // No occluder in any frustum (cpuUnoccludedPairs): Lambert's closed form
+    // on the CPU, no GL call.
+    Unoccluded,
+    // Rasterised with GL: some frustum holds potential occluders, the
+    // estimator needs the light itself rasterised (plain, occlusion query,
+    // a non-planar light), or cpuUnoccludedPairs is off.
+    Rasterised,
+};
+const char* directPathName(DirectPath);  // "unlit", "unoccluded", "rasterised"
 
 // One estimate; repeats with fresh seeds are independent and their mean
 // converges to the exact irradiance.
@@ -66,10 +88,19 @@ struct DirectSample {
     Rgb irradiance{0.0};           // W·m⁻² at the point
     double cosineSolidAngle = 0;   // irradiance / radiance: ∫ vis·cosθ dω (sr)
     double unoccluded = 0;         // the same without occluders (sr)
-    uint32_t lightSamples = 0;     // jittered tests that fell on the light
-    uint32_t visibleSamples = 0;   // of those, not occluded
-    uint32_t frusta = 0;           // sampling images rendered (> 1: light split)
-    uint32_t trianglesDrawn = 0;   // occluder triangles submitted after culling
+    // Jittered tests that fell on the light, and of those, the ones not
+    // occluded. Unoccluded pairs test none (they are answered in closed
+    // form): both 0 there, so partiallyVisible() is false and the visible
+    // fraction, cosineSolidAngle / unoccluded, is 1.
+    uint32_t lightSamples = 0;
+    uint32_t visibleSamples = 0;
+    // Sampling images (> 1: light split), rasterised or, where no occluder
+    // lies in one, weighed on the CPU alone.
+    uint32_t frusta = 0;
+    uint32_t trianglesDrawn = 0;   // occluder triangles submitted to GL after culling
+    // How it was answered. RayTracedLightSampler does not set it: Rasterised
+    // there, unlit pairs included.
+    DirectPath path = DirectPath::Rasterised;
 
     // A penumbra: some but not all of the light's samples are visible.
     bool partiallyVisible() const { return visibleSamples > 0 && visibleSamples < lightSamples; }
@@ -100,6 +131,8 @@ public:
     // With phase timing on, the sampler waits for the GPU between phases
     // (glFinish) so each phase is timed alone; slightly slower overall.
     void setPhaseTiming(bool on);
+    // The last sample's phases; an Unlit or Unoccluded pair's whole time is
+    // setup (it has no draw, readback or weighting).
     const DirectPhaseTimes& lastTimes() const;
 
 private:
