@@ -127,6 +127,7 @@ void CacheWorker::run() {
         const auto directMeshes = [&] { return cache_.copyMeshes(); };
         double lastPublish = -1e30;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
+        double directRate = 0;  // direct samples per second, smoothed
         double lastDirectError = 1, lastIndirectError = 1;
         uint64_t rounds = 0;
         std::optional<RefinementCamera> lastView;
@@ -160,7 +161,13 @@ void CacheWorker::run() {
             if (!directConverged && directTurn) {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
+                const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
+                const double took = seconds() - before;
+                // Direct samples per second, for when to start indirect light.
+                if (report.estimates > 0 && took > 0)
+                    directRate = directRate > 0 ? 0.7 * directRate + 0.3 * double(report.estimates) / took
+                                                : double(report.estimates) / took;
                 directConverged = report.converged();
                 directError = lastDirectError = report.estimatedError;
             }
@@ -170,7 +177,10 @@ void CacheWorker::run() {
                 // then alternates with it round by round.
                 const size_t unsampled = cache_.unsampledCount();
                 const double firstPass = 1 - double(unsampled) / double(std::max<size_t>(cache_.totalVertices(), 1));
-                if (!indirectStarted && (directConverged || firstPass >= indirect_->settings().startFraction)) {
+                const double left = directRate > 0 ? double(unsampled) / directRate : 1e30;
+                const IndirectSettings& is = indirect_->settings();
+                if (!indirectStarted &&
+                    (directConverged || unsampled == 0 || (firstPass >= is.startFraction && left > is.startSeconds))) {
                     indirectStarted = true;
                     sourceIncomplete = unsampled > 0;
                 }

@@ -36,6 +36,7 @@ void IndirectSettings::validate() const {
     if (!(albedo >= 0 && albedo <= 1)) throw InputError(concat("albedo ", albedo, " is not in [0, 1]"));
     if (!(startFraction >= 0 && startFraction <= 1))
         throw InputError(concat("indirect start fraction ", startFraction, " is not in [0, 1]"));
+    if (!(startSeconds >= 0)) throw InputError(concat("indirect start seconds ", startSeconds, " is negative"));
     cache.validate();
 }
 
@@ -160,14 +161,14 @@ int IndirectSolver::firstPassBounce() const {
 }
 
 void IndirectSolver::restart(IndirectEstimator& estimator) {
-    for (auto& c : caches_) c->resetSamples();
+    if (caches_.empty()) return;
+    caches_.front()->resetSamples();
     finished_ = 0;
-    directRefreshed_ = false;
-    for (size_t s = 0; s < sourceBuilt_.size(); ++s)
-        if (sourceBuilt_[s]) {
-            estimator.releaseSource(s);
-            sourceBuilt_[s] = false;
-        }
+    directRefreshed_ = true;  // the source about to be built is direct light as it is now
+    if (!sourceBuilt_.empty() && sourceBuilt_[0]) {
+        estimator.releaseSource(0);
+        sourceBuilt_[0] = false;
+    }
 }
 
 void fillHiddenVertices(IrradianceMeshCopy& mesh) {

@@ -21,10 +21,9 @@
 //
 // The direct meshes bounce 1 reflects are taken when it starts, early in
 // direct light's first pass (IndirectSettings::startFraction), so that a
-// coarse first bounce is in the first complete image; every bounce is
-// gathered again once direct light's first pass is complete (restart), and
-// bounce 1's source is taken again, refined, when its own refinement starts
-// (pass 2).
+// coarse first bounce is in the first complete image; bounce 1 is gathered
+// again once direct light's first pass is complete (restart), and its source
+// is taken again, refined, when its own refinement starts (pass 2).
 #pragma once
 
 #include "IndirectEstimator.h"
@@ -44,12 +43,15 @@ struct IndirectSettings {
     // indirect light has no sharp shadows of its own and each sample is a
     // whole hemispherical gather.
     CacheSettings cache = defaultCache();
-    // Indirect light starts once this fraction of direct light's first pass
-    // is done (its copies fill the rest from sampled neighbours), so that a
-    // coarse first bounce is in the first complete image; when direct
-    // light's first pass then completes, every bounce is gathered again
-    // from it (restart). 1: once the first pass is complete.
+    // Indirect light starts once direct light's first pass is complete or,
+    // when what is left of it would take longer than `startSeconds` at the
+    // rate measured, once this fraction of it is done (its copies fill the
+    // rest from sampled neighbours), so that a coarse first bounce is in the
+    // first complete image; bounce 1 is then gathered again when direct
+    // light's first pass completes (restart). Early starts cost that second
+    // gather, so short first passes are waited for.
     double startFraction = 0.25;
+    double startSeconds = 2.0;
     static CacheSettings defaultCache();
     void validate() const;
 };
@@ -85,10 +87,11 @@ public:
     RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshCopy>()>& direct,
                       size_t budget, uint32_t seed, const std::optional<RefinementCamera>& view);
 
-    // Gathers every bounce again, first pass and all, from sources rebuilt
-    // then: for when the direct light bounce 1 reflects has changed (it
-    // started from an incomplete first pass of direct light). Until a vertex
-    // is gathered again, copies show its old value.
+    // Gathers bounce 1 again, first pass and all, from direct light as it is
+    // now: for when it started from an incomplete first pass of direct
+    // light. Later bounces, a fraction ā of its light each, are refined from
+    // it as usual (pass 2). Until a vertex is gathered again, copies show its
+    // old value.
     void restart(IndirectEstimator& estimator);
 
     // One mesh per started bounce, bounce 1 first, hidden vertices filled

@@ -60,10 +60,10 @@ struct CacheSettings {
     // Budgets over all meshes: refinement stops splitting at either.
     // Lights share: a light keeps a mesh of its own only where it gives at
     // least this share of the direct light (by a bound from its power,
-    // distance and orientation; LightCoverage.h), typical 0.05; the rest of
+    // distance and orientation; LightCoverage.h), typical 0.05..0.2; the rest of
     // its light goes to one shared mesh. 0: every light's mesh everywhere.
     // Used when the layout asks for it (CacheLayout::coverage).
-    double lightShare = 0.05;
+    double lightShare = 0.1;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
 

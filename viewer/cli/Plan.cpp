@@ -109,10 +109,11 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                     "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
                     "starts %s\n",
                     1 / ic.maxEdgeFraction, ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
-                    concat("once ", 100 * indirect.solver.startFraction,
-                           "% of direct light's first pass is done (a coarse first bounce is in the first complete "
-                           "image; every bounce is gathered again once direct light's first pass is complete), and "
-                           "shares the worker with direct light by their errors").c_str());
+                    concat("once direct light's first pass is complete, or once ", 100 * indirect.solver.startFraction,
+                           "% of it is done if the rest would take over ", indirect.solver.startSeconds,
+                           " s (a coarse first bounce is then in the first complete image, and bounce 1 is gathered "
+                           "again when direct light is complete), and shares the worker with direct light by their "
+                           "errors").c_str());
     }
     if (scene.hasGlossy())
         std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"

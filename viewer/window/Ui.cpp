@@ -240,6 +240,7 @@ UiRequests Ui::build(UiModel& m) {
         ImGui::TextWrapped("Indirect light x(%.2f, %.2f, %.2f): the lights' power-weighted mean, exact when all "
                            "lights change alike (it is cached per bounce, not per light).",
                            m.indirectWeight.r, m.indirectWeight.g, m.indirectWeight.b);
+        if (!m.sharedLights.empty()) ImGui::TextWrapped("%s", m.sharedLights.c_str());
     }
 
     // --- Walking --------------------------------------------------------------

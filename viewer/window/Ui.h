@@ -48,6 +48,10 @@ struct UiModel {
     std::vector<LightControl>* lights = nullptr;
     std::vector<UiLightInfo> lightInfo;
     Rgb indirectWeight{1.0};
+    // Where lights share a cache mesh (LightCoverage): one line saying where
+    // changing a light is exact and where approximate; empty: every light
+    // has its own mesh everywhere.
+    std::string sharedLights;
     UiStats stats;
     Camera camera;
     double speed = 1;  // scene units per second
