@@ -1,11 +1,14 @@
 // The bench report's building blocks, on values known exactly: the power-law
-// fit, HTML escaping, CSV and Markdown to HTML, the scaling scenes, and the
-// page of a report whose sections are test fixtures.
+// fit, the bench table and its number formats, HTML escaping, CSV and
+// Markdown to HTML, the scaling scenes, and the page of a report whose
+// sections are test fixtures.
 #include "core/Error.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
 #include "core/scenes/ScalingScene.h"
 #include "viewer/bench/BenchReport.h"
+#include "viewer/bench/BenchStatistics.h"
+#include "viewer/bench/BenchTable.h"
 #include "viewer/bench/PowerLawFit.h"
 #include "viewer/bench/ReportHtml.h"
 
@@ -70,6 +73,40 @@ TEST(PowerLawFit, RefusesWhatHasNoSlope) {
     EXPECT_THROW(fitPowerLaw({1, 2}, {0, 1}), std::invalid_argument);
     EXPECT_THROW(fitPowerLaw({-1, 2}, {1, 1}), std::invalid_argument);
     EXPECT_THROW(fitPowerLaw({1, NAN}, {1, 1}), std::invalid_argument);
+}
+
+// --- Bench tables and statistics --------------------------------------------------------
+
+TEST(BenchTable, AlignedCsvAndMarkdownFromTheSameCells) {
+    BenchTable t({"config", "ms"});
+    t.addRow({"jittered 64x4", benchMs(0.0123456)});
+    t.addRow({"query", ""});
+    EXPECT_EQ(t.aligned(),
+              "config            ms\n"
+              "jittered 64x4  12.35\n"
+              "query               \n");
+    EXPECT_EQ(t.csv(), "config,ms\njittered 64x4,12.35\nquery,\n");
+    EXPECT_EQ(t.markdown(), "| config | ms |\n|---|---|\n| jittered 64x4 | 12.35 |\n| query |  |\n");
+    // The summaries' tables read back as HTML tables.
+    EXPECT_NE(markdownToHtml(t.markdown()).find("<td>jittered 64x4</td>"), std::string::npos);
+}
+
+TEST(BenchTable, NumberFormats) {
+    EXPECT_EQ(benchNumber(0.097123), "0.09712");
+    EXPECT_EQ(benchNumber(123456), "1.235e+05");
+    EXPECT_EQ(benchPct(0.01234), "1.234");
+    EXPECT_EQ(benchMs(2.5), "2500");
+    EXPECT_EQ(benchYesNo(true), "yes");
+    EXPECT_EQ(benchYesNo(false), "no");
+}
+
+TEST(BenchStatistics, MedianAndSpread) {
+    EXPECT_EQ(median({}), 0.0);
+    EXPECT_EQ(median({3, 1, 2}), 2.0);
+    EXPECT_EQ(median({4, 1, 3, 2}), 2.5);
+    const std::vector<int> items = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+    EXPECT_EQ(spread(items, 4), (std::vector<int>{0, 2, 5, 7}));
+    EXPECT_EQ(spread(items, 20), items);
 }
 
 // --- HTML ------------------------------------------------------------------------------
@@ -232,11 +269,12 @@ std::vector<ReportSection> fixtureSections() {
     good.id = "fixture";
     good.title = "A <fixture> & more";
     good.about = "Writes known files.";
-    good.run = [](const BenchReportOptions&, const std::string& dir) {
+    good.run = [](const BenchOptions& o) {
+        const fs::path dir(o.outDir);  // the report's folder for this section
         fs::create_directories(dir);
-        writeAll(fs::path(dir) / "data.csv", "label,ms\n\"x<y\",1.5\nplain,2\n");
-        writeAll(fs::path(dir) / "summary.md", "# Fixture\n\n- exponent **0.5**\n");
-        writeAll(fs::path(dir) / "plot.png", "not really a PNG; the page only links it");
+        writeAll(dir / "data.csv", "label,ms\n\"x<y\",1.5\nplain,2\n");
+        writeAll(dir / "summary.md", "# Fixture\n\n- exponent **0.5**\n");
+        writeAll(dir / "plot.png", "not really a PNG; the page only links it");
         return 0;
     };
     good.summary = "summary.md";
@@ -247,7 +285,7 @@ std::vector<ReportSection> fixtureSections() {
     bad.id = "broken";
     bad.title = "Broken";
     bad.about = "Throws.";
-    bad.run = [](const BenchReportOptions&, const std::string&) -> int {
+    bad.run = [](const BenchOptions&) -> int {
         throw std::runtime_error("no GPU <today>");
     };
     return {good, bad};

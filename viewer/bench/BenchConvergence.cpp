@@ -1,5 +1,6 @@
 #include "BenchConvergence.h"
 
+#include "BenchRun.h"
 #include "BenchTable.h"
 #include "ExactDirectImage.h"
 #include "Gnuplot.h"
@@ -9,12 +10,12 @@
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/image/ImageMetrics.h"
-#include "core/io/AtomicFile.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
 #include "core/scenes/CornellBox.h"
 #include "viewer/compositor/Compositor.h"
 #include "gpu_sampling/SamplerFactory.h"
+#include "gpu_sampling/gl/GlContext.h"
 
 #include <malloc.h>
 #include <unistd.h>
@@ -23,7 +24,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -33,7 +33,6 @@ namespace ml {
 
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // --- Targets and settings ----------------------------------------------------------
@@ -86,8 +85,6 @@ Workload workloadFor(bool quick) {
     return {256, 30, {0.5, 1, 2, 4, 5, 8, 15, 30}, 48, 30, 48};
 }
 
-double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
 // Resident set size of this process in bytes (/proc/self/statm, second
 // field, in pages), read after glibc has given its free pages back to the
 // system (malloc_trim): what is left is what is held, not what was freed
@@ -99,8 +96,6 @@ size_t residentBytesTrimmed() {
     if (!(in >> total >> resident)) return 0;
     return resident * size_t(::sysconf(_SC_PAGESIZE));
 }
-
-std::string pct(double fraction) { return benchNumber(100 * fraction); }
 
 // --- Cameras ------------------------------------------------------------------------
 
@@ -605,18 +600,16 @@ WalkthroughResult runWalkthrough(const Scene& scene, const Workload& work, const
 
 // --- Tables ------------------------------------------------------------------------------
 
-std::string yesNo(bool b) { return b ? "yes" : "no"; }
-
 BenchTable stillTable(const StillResult& r) {
     BenchTable t({"method", "checkpoint_s", "seconds", "relative_rmse_pct", "off_light_rmse_pct", "spp", "vertices",
                   "samples", "rounds", "estimated_error_pct", "composite_ms"});
     for (const MeshlightPoint& p : r.meshlight)
-        t.addRow({"meshlight", benchNumber(p.checkpoint), benchNumber(p.seconds), pct(p.error), pct(p.errorOffLight),
-                  "", std::to_string(p.vertices), std::to_string(p.samples), std::to_string(p.rounds),
-                  pct(p.estimatedError), benchNumber(1e3 * p.compositeSeconds)});
+        t.addRow({"meshlight", benchNumber(p.checkpoint), benchNumber(p.seconds), benchPct(p.error),
+                  benchPct(p.errorOffLight), "", std::to_string(p.vertices), std::to_string(p.samples),
+                  std::to_string(p.rounds), benchPct(p.estimatedError), benchNumber(1e3 * p.compositeSeconds)});
     for (const PathPoint& p : r.path)
-        t.addRow({"path-tracer", "", benchNumber(p.seconds), pct(p.error), pct(p.errorOffLight), std::to_string(p.spp),
-                  "", "", "", "", ""});
+        t.addRow({"path-tracer", "", benchNumber(p.seconds), benchPct(p.error), benchPct(p.errorOffLight),
+                  std::to_string(p.spp), "", "", "", "", ""});
     return t;
 }
 
@@ -629,11 +622,11 @@ BenchTable walkthroughTable(const WalkthroughResult& r) {
         const ViewResult& w = r.views[v];
         cum += w.seconds();
         ptCum += w.pathSeconds;
-        t.addRow({std::to_string(v), benchNumber(w.seconds()), benchNumber(cum), pct(w.error),
-                  std::to_string(w.vertices), pct(w.estimatedError), yesNo(w.estimateReached),
+        t.addRow({std::to_string(v), benchNumber(w.seconds()), benchNumber(cum), benchPct(w.error),
+                  std::to_string(w.vertices), benchPct(w.estimatedError), benchYesNo(w.estimateReached),
                   benchNumber(1e3 * w.compositeSeconds), std::to_string(w.spp), benchNumber(w.pathSeconds),
-                  benchNumber(ptCum), pct(w.pathError), yesNo(w.pathReached), std::to_string(w.sppTarget),
-                  benchNumber(w.pathSecondsTarget), yesNo(w.pathReachedTarget), benchNumber(w.referenceSeconds)});
+                  benchNumber(ptCum), benchPct(w.pathError), benchYesNo(w.pathReached), std::to_string(w.sppTarget),
+                  benchNumber(w.pathSecondsTarget), benchYesNo(w.pathReachedTarget), benchNumber(w.referenceSeconds)});
     }
     return t;
 }
@@ -675,10 +668,10 @@ std::vector<TargetRow> targetRows(const StillResult& still, const WalkthroughRes
                 rows.push_back({name + " (off the light)", method, "no image yet", "not met"});
                 return;
             }
-            rows.push_back({name, method, concat(pct(p->error), "% at ", benchNumber(p->seconds), " s"),
+            rows.push_back({name, method, concat(benchPct(p->error), "% at ", benchNumber(p->seconds), " s"),
                             p->error <= target ? "met" : "not met"});
             rows.push_back({name + " (off the light)", method,
-                            concat(pct(p->errorOffLight), "% at ", benchNumber(p->seconds), " s"),
+                            concat(benchPct(p->errorOffLight), "% at ", benchNumber(p->seconds), " s"),
                             p->errorOffLight <= target ? "met" : "not met"});
         };
         add("meshlight", lastWithin(still.meshlight, seconds));
@@ -687,7 +680,7 @@ std::vector<TargetRow> targetRows(const StillResult& still, const WalkthroughRes
     stillRows(kStillTargetA, kStillSecondsA);
     stillRows(kStillTargetB, kStillSecondsB);
     const std::string views = concat("walkthrough: every view <= ", 100 * kViewTarget, "%");
-    rows.push_back({views, "meshlight", concat("worst ", pct(walk.maxError()), "%"),
+    rows.push_back({views, "meshlight", concat("worst ", benchPct(walk.maxError()), "%"),
                     walk.maxError() <= kViewTarget ? "met" : "not met"});
     // Where the path tracer did not reach the error on some view its total
     // is a lower bound: Meshlight below it is met, above it undecided.
@@ -717,7 +710,7 @@ BenchTable memoryTable(const MemoryResult& m) {
     BenchTable t({"quantity", "bytes_per_vertex", "per_1000_vertices_MB", "million_vertices_MB", "within_1GB"});
     auto row = [&](const std::string& name, double perVertex, double fixed = 0) {
         t.addRow({name, benchNumber(perVertex), benchNumber(perVertex * 1e3 / 1e6),
-                  benchNumber((fixed + perVertex * million) / 1e6), yesNo(fixed + perVertex * million <= 1e9)});
+                  benchNumber((fixed + perVertex * million) / 1e6), benchYesNo(fixed + perVertex * million <= 1e9)});
     };
     row("IrradianceCache::bytesPerVertex", double(m.bytesPerVertex));
     row("IrradianceCache::memoryBytes per vertex", m.accountedPerVertex());
@@ -745,10 +738,11 @@ std::string gnuplotScript(const StillResult& still, const WalkthroughResult& wal
           "set key top right\n\n"
           "# seconds, relative RMSE %, the same off the light %\n$meshlight << EOD\n";
     for (const MeshlightPoint& p : still.meshlight)
-        gp << benchNumber(p.seconds) << "," << pct(p.error) << "," << pct(p.errorOffLight) << "\n";
+        gp << benchNumber(p.seconds) << "," << benchPct(p.error) << "," << benchPct(p.errorOffLight) << "\n";
     gp << "EOD\n# seconds, relative RMSE %, spp, the same off the light %\n$path << EOD\n";
     for (const PathPoint& p : still.path)
-        gp << benchNumber(p.seconds) << "," << pct(p.error) << "," << p.spp << "," << pct(p.errorOffLight) << "\n";
+        gp << benchNumber(p.seconds) << "," << benchPct(p.error) << "," << p.spp << "," << benchPct(p.errorOffLight)
+           << "\n";
     gp << "EOD\n# frame, cumulative s: meshlight, path tracer at its error, path tracer at the target; "
           "relative RMSE %: meshlight, path tracer at its error\n$walk << EOD\n";
     double cum = 0, ptCum = walk.pathSetupSeconds, ptTargetCum = walk.pathSetupSeconds;
@@ -757,7 +751,7 @@ std::string gnuplotScript(const StillResult& still, const WalkthroughResult& wal
         ptCum += walk.views[v].pathSeconds;
         ptTargetCum += walk.views[v].pathSecondsTarget;
         gp << v + 1 << "," << benchNumber(cum) << "," << benchNumber(ptCum) << "," << benchNumber(ptTargetCum) << ","
-           << pct(walk.views[v].error) << "," << pct(walk.views[v].pathError) << "\n";
+           << benchPct(walk.views[v].error) << "," << benchPct(walk.views[v].pathError) << "\n";
     }
     gp << "EOD\n\n";
 
@@ -823,54 +817,15 @@ std::string gnuplotScript(const StillResult& still, const WalkthroughResult& wal
 
 // --- Summary ------------------------------------------------------------------------------
 
-std::string markdownTable(const BenchTable& table) {
-    // BenchTable's CSV holds no commas inside cells: split it.
-    std::istringstream in(table.csv());
-    std::ostringstream md;
-    std::string line;
-    bool header = true;
-    while (std::getline(in, line)) {
-        std::string row = "| ";
-        size_t columns = 1;
-        for (char c : line) {
-            if (c == ',') {
-                row += " | ";
-                ++columns;
-            } else {
-                row += c;
-            }
-        }
-        md << row << " |\n";
-        if (header) {
-            md << "|";
-            for (size_t i = 0; i < columns; ++i) md << "---|";
-            md << "\n";
-            header = false;
-        }
-    }
-    return md.str();
-}
-
-// The 1-minute load average when the run started and ended (/proc/loadavg);
-// "" when unreadable. Other processes on the machine slow every timing.
-std::string loadAverage() {
-    std::ifstream in("/proc/loadavg");
-    std::string one;
-    in >> one;
-    return one;
-}
-
-std::string summaryMarkdown(const std::string& context, const BenchConvergenceOptions& options, const Workload& work,
-                            const StillResult& still, const WalkthroughResult& walk,
-                            const std::vector<TargetRow>& targets, double wallSeconds, const std::string& loadStart,
-                            const std::string& loadEnd) {
+std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work, const StillResult& still,
+                            const WalkthroughResult& walk, const std::vector<TargetRow>& targets) {
     const unsigned threads = std::thread::hardware_concurrency();
     std::ostringstream md;
     md << "# Convergence bench: progressive cache against the path tracer\n\n"
-       << "- scene: Cornell box, direct light only; OpenGL: " << context << "\n"
-       << "- mode: " << (options.quick ? "quick" : "full") << ", seed " << options.seed << ", " << threads
-       << " hardware threads; wall time " << benchNumber(wallSeconds) << " s; load average " << loadStart
-       << " at the start, " << loadEnd << " at the end (other processes slow every timing)\n"
+       << "- scene: Cornell box, direct light only; OpenGL: " << run.glDescription() << "\n"
+       << "- mode: " << run.mode() << ", seed " << run.options().seed << ", " << threads
+       << " hardware threads; wall time " << benchNumber(wallSeconds) << " s; load average " << run.loadAtStart()
+       << " at the start, " << loadAverage() << " at the end (other processes slow every timing)\n"
        << "- Meshlight: production settings (cache defaults, jittered 64×64, 8 bits, cv), the worker thread "
           "refining and sampling, this thread compositing snapshots (" << kSupersample << "×" << kSupersample
        << " sub-pixels); its clock starts before the cache is made\n"
@@ -881,16 +836,16 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
           "(viewer/bench/ExactDirectImage.h: the compositor's " << kSupersample << "×" << kSupersample
        << " sub-pixel centres)\n\n";
 
-    md << "## Targets\n\n" << markdownTable(targetsTable(targets)) << "\n";
+    md << "## Targets\n\n" << targetsTable(targets).markdown() << "\n";
 
     md << "## Still image, " << work.stillSize << "×" << work.stillSize << "\n\n"
        << "Exact image: " << benchNumber(still.exactSeconds) << " s. Cache made in "
        << benchNumber(still.cacheBuildSeconds) << " s; path tracer BVH " << benchNumber(still.pathSetupSeconds)
        << " s. Meshlight's snapshots are taken at the checkpoints (seconds: when taken, after the previous "
           "image was composited).\n\n"
-       << markdownTable(stillTable(still)) << "\n";
+       << stillTable(still).markdown() << "\n";
     const PathPoint& last = still.path.back();
-    md << "The path tracer's floor: " << pct(last.error) << "% at " << last.spp << " spp ("
+    md << "The path tracer's floor: " << benchPct(last.error) << "% at " << last.spp << " spp ("
        << benchNumber(last.seconds) << " s). It integrates each pixel's area, while the exact image (and the "
           "compositor) average " << kSupersample << "×" << kSupersample << " sub-pixel centres; where a pixel holds "
           "a bright and a dark part, the two differ by much of the pixel. From the box's camera the light is a thin "
@@ -898,33 +853,33 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
           "dominate. On a " << work.cropSize << "×" << work.cropSize << " crop around the light (same pixel size, "
        << benchNumber(still.cropSeconds) << " s): the " << kSupersample << "×" << kSupersample
        << " exact image differs from an " << kFineSupersample << "×" << kFineSupersample << " one by "
-       << pct(still.exactGap) << "%; the path tracer at " << still.cropSpp << " spp differs from the "
-       << kSupersample << "×" << kSupersample << " one by " << pct(still.pathVsCoarse) << "% and from the "
-       << kFineSupersample << "×" << kFineSupersample << " one by " << pct(still.pathVsFine)
+       << benchPct(still.exactGap) << "%; the path tracer at " << still.cropSpp << " spp differs from the "
+       << kSupersample << "×" << kSupersample << " one by " << benchPct(still.pathVsCoarse) << "% and from the "
+       << kFineSupersample << "×" << kFineSupersample << " one by " << benchPct(still.pathVsFine)
        << "%. What the finer grid removes is sub-pixel approximation, not path-tracing noise. off_light_rmse: the "
           "same metric without the " << still.lightPixels << " pixels whose sub-pixel centres see the light, grown by "
-          "one pixel (" << pct(double(still.lightPixels) / (double(work.stillSize) * work.stillSize))
+          "one pixel (" << benchPct(double(still.lightPixels) / (double(work.stillSize) * work.stillSize))
        << "% of the image); the path tracer's remaining floor there is its noise and the geometric edges.\n\n";
 
     const bool reached = walk.pathReachedAll(), reachedTarget = walk.pathReachedTargetAll();
     md << "## Walkthrough, " << walk.views.size() << " views of " << work.viewSize << "×" << work.viewSize << "\n\n"
        << "Per view: setView, then the first snapshot made for the view whose estimated error is at most "
-       << pct(kViewEstimatedError) << "% (or that converged), else the latest after " << kViewSecondsLimit
+       << benchPct(kViewEstimatedError) << "% (or that converged), else the latest after " << kViewSecondsLimit
        << " s; its time includes compositing (and, for view 0, making the cache: "
        << benchNumber(walk.cacheBuildSeconds) << " s). The path tracer renders " << kFirstViewSpp << ", "
        << 2 * kFirstViewSpp << ", … up to " << kLastViewSpp
        << " spp; pt_* columns: the first count whose error is at most Meshlight's on that view, pt_*_target: the "
-          "first within " << pct(kViewTarget) << "%; where none does, the last count's time (a lower bound). Its "
+          "first within " << benchPct(kViewTarget) << "%; where none does, the last count's time (a lower bound). Its "
           "BVH build (" << benchNumber(walk.pathSetupSeconds) << " s) counts once. The exact references took "
        << benchNumber(walk.referenceSeconds) << " s in all, in neither total; they set the view size (see "
           "BenchConvergence.cpp, Workload).\n\n"
        << "Totals: Meshlight " << benchNumber(walk.meshlightTotal()) << " s; path tracer at Meshlight's error "
        << benchNumber(walk.pathTotal()) << " s" << (reached ? "" : " or more") << " (ratio "
        << benchNumber(walk.pathTotal() / walk.meshlightTotal()) << (reached ? "" : " or more")
-       << "), at " << pct(kViewTarget) << "% " << benchNumber(walk.pathTargetTotal()) << " s"
+       << "), at " << benchPct(kViewTarget) << "% " << benchNumber(walk.pathTargetTotal()) << " s"
        << (reachedTarget ? "" : " or more") << " (ratio " << benchNumber(walk.pathTargetTotal() / walk.meshlightTotal())
-       << (reachedTarget ? "" : " or more") << "); worst Meshlight view " << pct(walk.maxError()) << "%.\n\n"
-       << markdownTable(walkthroughTable(walk)) << "\n";
+       << (reachedTarget ? "" : " or more") << "); worst Meshlight view " << benchPct(walk.maxError()) << "%.\n\n"
+       << walkthroughTable(walk).markdown() << "\n";
 
     const MemoryResult& m = still.memory;
     md << "## Memory per cached vertex\n\n"
@@ -938,22 +893,18 @@ std::string summaryMarkdown(const std::string& context, const BenchConvergenceOp
           "also holds what the worker thread left behind (its allocator arena, the GL driver's caches); what "
           "freeing gives back is the cache's and its snapshots' live memory. Extrapolated linearly to a million "
           "vertices against the 1 GB (10^9 bytes) target.\n\n"
-       << markdownTable(memoryTable(m));
+       << memoryTable(m).markdown();
     return md.str();
 }
 
 }  // namespace
 
-int runBenchConvergence(const BenchConvergenceOptions& options) {
-    const Clock::time_point start = Clock::now();
-    const std::string loadStart = loadAverage();
+int runBenchConvergence(const BenchOptions& options) {
+    BenchRun run(options);
     const Workload work = workloadFor(options.quick);
-    makeOutputDirectory(options.outDir);
-    const fs::path dir(options.outDir);
     const Scene scene = makeCornellBox();
     // The compositor's context lives on this thread; the worker makes its own.
-    const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
-    std::printf("OpenGL: %s\n", context->describe().c_str());
+    const std::unique_ptr<GlContext> context = run.openContext();
     Compositor compositor(*context, scene);
     DirectChoice choice;  // the production sampler
     choice.seed = options.seed;
@@ -978,16 +929,15 @@ int runBenchConvergence(const BenchConvergenceOptions& options) {
                 still.memory.vertices, memoryT.aligned().c_str());
     std::printf("\nTargets (issue 4).\n\n%s", targetT.aligned().c_str());
 
-    writeTextFileAtomically((dir / "convergence_still.csv").string(), stillT.csv());
-    writeTextFileAtomically((dir / "convergence_walkthrough.csv").string(), walkT.csv());
-    writeTextFileAtomically((dir / "convergence_targets.csv").string(), targetT.csv());
-    writeTextFileAtomically((dir / "convergence_memory.csv").string(), memoryT.csv());
-    runGnuplotScript(dir, "convergence_plots.gp", gnuplotScript(still, walk, work), kPlots);
-    const double wall = secondsSince(start);
-    writeTextFileAtomically((dir / "convergence_summary.md").string(),
-                            summaryMarkdown(context->describe(), options, work, still, walk, targets, wall,
-                                            loadStart, loadAverage()));
-    std::printf("\nWall time %.1f s; files in %s\n", wall, dir.string().c_str());
+    run.writeCsv("convergence_still.csv", stillT);
+    run.writeCsv("convergence_walkthrough.csv", walkT);
+    run.writeCsv("convergence_targets.csv", targetT);
+    run.writeCsv("convergence_memory.csv", memoryT);
+    run.plot("convergence_plots.gp", gnuplotScript(still, walk, work), kPlots);
+    const double wall = run.seconds();
+    run.write("convergence_summary.md", summaryMarkdown(run, wall, work, still, walk, targets));
+    std::printf("\n");
+    run.printWallTime(wall);
     return 0;
 }
 

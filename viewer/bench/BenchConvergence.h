@@ -31,33 +31,24 @@
 // convergence_memory.csv, convergence_plots.gp and its PNGs (when gnuplot is
 // installed) and convergence_summary.md. Times are measured and reported,
 // never asserted: other processes on the machine disturb them.
+//
+// quick: CI size (under a minute on 2 cores): still 64×64 for 3 s,
+// walkthrough of 3 views at 32×32. The full run: still 256×256 for 30 s, 30
+// views at 48×48 (their exact references set the size; see Workload in
+// BenchConvergence.cpp). seed: jitter of the cache's sampler and the path
+// tracer's streams; the cache runs against the clock, so runs repeat only
+// as far as timing allows.
 #pragma once
 
-#include "gpu_sampling/gl/GlContext.h"
-
-#include <cstdint>
-#include <string>
+#include "BenchOptions.h"
 
 namespace ml {
-
-struct BenchConvergenceOptions {
-    std::string outDir = "bench-out";  // made if missing; files in it are replaced whole
-    // CI size (under a minute on 2 cores): still 64×64 for 3 s, walkthrough
-    // of 3 views at 32×32. The full run: still 256×256 for 30 s, 30 views
-    // at 48×48 (their exact references set the size; see Plan in
-    // BenchConvergence.cpp).
-    bool quick = false;
-    GlBackend backend = GlBackend::OsMesa;  // headless only: OsMesa, Egl or Auto
-    // Jitter of the cache's sampler and the path tracer's streams. The cache
-    // runs against the clock, so runs repeat only as far as timing allows.
-    uint32_t seed = 1;
-};
 
 // Runs the three parts. Returns the exit code: 0, also when a target is not
 // met (the tables say so) or gnuplot is missing (plots skipped with a note).
 // Throws InputError when outDir cannot be made or written,
 // std::runtime_error when no headless context can be made, the worker fails
 // or gnuplot fails on its script.
-int runBenchConvergence(const BenchConvergenceOptions& options);
+int runBenchConvergence(const BenchOptions& options);
 
 }  // namespace ml

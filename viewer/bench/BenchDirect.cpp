@@ -1,7 +1,10 @@
 #include "BenchDirect.h"
 
+#include "BenchRun.h"
+#include "BenchStatistics.h"
+#include "BenchTable.h"
+
 #include "core/Error.h"
-#include "core/io/AtomicFile.h"
 #include "core/loaders/ObjLoader.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/reference/ExactIrradiance.h"
@@ -9,6 +12,7 @@
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/Jitter.h"
 #include "gpu_sampling/direct/RayTracedLightSampler.h"
+#include "gpu_sampling/gl/GlContext.h"
 
 #include <algorithm>
 #include <chrono>
@@ -37,10 +41,6 @@ constexpr double kHeavyTimeTarget = 0.5e-3; // s per sample, jittered 64×4, 7,2
 // strictly between these fractions of their unoccluded value.
 constexpr double kPenumbraLow = 0.05, kPenumbraHigh = 0.95;
 constexpr int kHeavySubdivisions = 60;  // 60 × 60 × 2 = 7,200 occluder triangles
-
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // --- Sizes of a run ------------------------------------------------------------
 
@@ -150,14 +150,6 @@ struct ErrorStats {
     }
 };
 
-double median(std::vector<double> values) {
-    if (values.empty()) return 0;
-    const auto mid = values.begin() + std::ptrdiff_t(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    if (values.size() % 2) return *mid;
-    return 0.5 * (*mid + *std::max_element(values.begin(), mid));
-}
-
 // Medians over samples, in seconds. The paper reports medians (Fig. 9)
 // because other threads disturb single timings; so do other processes here.
 // `total` is the median of the per-sample totals, not the sum of the medians.
@@ -179,17 +171,6 @@ PhaseMedians medianPhases(const std::vector<DirectPhaseTimes>& times) {
     m.weighting = medianOf([](const DirectPhaseTimes& t) { return t.weighting; });
     m.total = medianOf([](const DirectPhaseTimes& t) { return t.total(); });
     return m;
-}
-
-// `count` items spread evenly through `items` (all of them when there are
-// no more), so a subset still covers the whole floor or penumbra.
-template <typename T>
-std::vector<T> spread(const std::vector<T>& items, size_t count) {
-    if (items.size() <= count) return items;
-    std::vector<T> out;
-    out.reserve(count);
-    for (size_t k = 0; k < count; ++k) out.push_back(items[k * items.size() / count]);
-    return out;
 }
 
 // --- Measuring -----------------------------------------------------------------------
@@ -270,10 +251,10 @@ struct AccuracyRow {
 };
 
 std::vector<AccuracyRow> runAccuracy(GlContext& context, const Scene& scene, const BenchPoints& bench,
-                                     const Workload& work, uint32_t seed, Clock::time_point start) {
+                                     const Workload& work, uint32_t seed, const BenchRun& run) {
     std::vector<AccuracyRow> rows;
     for (const Config& config : accuracyConfigs(work)) {
-        std::fprintf(stderr, "[%6.1f s] accuracy: %s\n", secondsSince(start), config.label().c_str());
+        run.progress("accuracy: %s\n", config.label().c_str());
         AccuracyRow row{config, {}, measure(context, scene, config, bench.points, seed)};
         for (size_t i = 0; i < bench.points.size(); ++i) row.errors.add(row.timing.estimates[i], bench.references[i]);
         rows.push_back(std::move(row));
@@ -290,11 +271,10 @@ struct SceneTimingRow {
 };
 
 std::vector<SceneTimingRow> timeScene(GlContext& context, const Scene& scene, const std::string& name,
-                                      const std::vector<ReceiverPoint>& points, uint32_t seed,
-                                      Clock::time_point start) {
+                                      const std::vector<ReceiverPoint>& points, uint32_t seed, const BenchRun& run) {
     std::vector<SceneTimingRow> rows;
     for (const Config& config : jittered64x4Configs()) {
-        std::fprintf(stderr, "[%6.1f s] timing on %s: %s\n", secondsSince(start), name.c_str(), config.label().c_str());
+        run.progress("timing on %s: %s\n", name.c_str(), config.label().c_str());
         rows.push_back({name, scene.triangleCount(), config, points.size(),
                         measure(context, scene, config, points, seed)});
     }
@@ -352,7 +332,7 @@ struct ConvergenceRow {
 // uses seedFor(seed, i, 0, p).
 std::vector<ConvergenceRow> runConvergence(GlContext& context, const Scene& scene, const BenchPoints& bench,
                                            const std::vector<size_t>& ids, const Workload& work, uint32_t seed,
-                                           Clock::time_point start) {
+                                           const BenchRun& run) {
     std::vector<Config> configs = jittered64x4Configs();
     configs.push_back({DirectMethod::Regular, DirectEstimator::Plain, 64, 1});
     std::vector<int> ks;
@@ -360,7 +340,7 @@ std::vector<ConvergenceRow> runConvergence(GlContext& context, const Scene& scen
 
     std::vector<ConvergenceRow> rows;
     for (const Config& config : configs) {
-        std::fprintf(stderr, "[%6.1f s] convergence: %s\n", secondsSince(start), config.label().c_str());
+        run.progress("convergence: %s\n", config.label().c_str());
         DirectLightSampler sampler(context, scene, config.settings());
         std::vector<ErrorStats> byK(ks.size());
         for (size_t id : ids) {
@@ -422,7 +402,7 @@ RaytraceTiming timeRaytrace(const EmbreeScene& rays, const DirectSamplerSettings
 
 std::vector<RaytraceRow> runRaytrace(const Scene& scene, const BenchPoints& bench,
                                      const std::vector<AccuracyRow>& accuracy, const Workload& work, uint32_t seed,
-                                     Clock::time_point start) {
+                                     const BenchRun& run) {
     std::vector<size_t> all(bench.points.size());
     for (size_t i = 0; i < all.size(); ++i) all[i] = i;
     const std::vector<size_t> ids = spread(all, work.raytracePoints);
@@ -431,7 +411,7 @@ std::vector<RaytraceRow> runRaytrace(const Scene& scene, const BenchPoints& benc
     for (const AccuracyRow& r : accuracy) {
         if (r.config.method != DirectMethod::Jittered || r.config.imageSize != 64 || r.config.bits != work.raytraceBits)
             continue;
-        std::fprintf(stderr, "[%6.1f s] ray-traced peer: %s\n", secondsSince(start), r.config.label().c_str());
+        run.progress("ray-traced peer: %s\n", r.config.label().c_str());
         RaytraceRow raster{r.config, "raster", r.config.imageSize, 0, {}, r.timing.total};
         for (size_t id : ids) raster.errors.add(r.timing.estimates[id], bench.references[id]);
         rows.push_back(raster);
@@ -455,62 +435,6 @@ std::vector<RaytraceRow> runRaytrace(const Scene& scene, const BenchPoints& benc
 
 // --- Tables ----------------------------------------------------------------------------
 
-// A table printed aligned on stdout and written as CSV from the same cells,
-// so the two never disagree. Cells must not contain commas.
-class Table {
-public:
-    explicit Table(std::vector<std::string> header) : header_(std::move(header)) {}
-
-    void addRow(std::vector<std::string> cells) {
-        ML_ASSERT(cells.size() == header_.size(), cells.size(), " cells for ", header_.size(), " columns");
-        rows_.push_back(std::move(cells));
-    }
-
-    // First column left-aligned (labels), the others right-aligned (numbers).
-    std::string aligned() const {
-        std::vector<size_t> width(header_.size());
-        for (size_t c = 0; c < header_.size(); ++c) {
-            width[c] = header_[c].size();
-            for (const auto& row : rows_) width[c] = std::max(width[c], row[c].size());
-        }
-        std::ostringstream os;
-        auto line = [&](const std::vector<std::string>& cells) {
-            for (size_t c = 0; c < cells.size(); ++c) {
-                const std::string pad(width[c] - cells[c].size(), ' ');
-                os << (c ? "  " : "") << (c ? pad + cells[c] : cells[c] + pad);
-            }
-            os << "\n";
-        };
-        line(header_);
-        for (const auto& row : rows_) line(row);
-        return os.str();
-    }
-
-    std::string csv() const {
-        std::ostringstream os;
-        auto line = [&](const std::vector<std::string>& cells) {
-            for (size_t c = 0; c < cells.size(); ++c) os << (c ? "," : "") << cells[c];
-            os << "\n";
-        };
-        line(header_);
-        for (const auto& row : rows_) line(row);
-        return os.str();
-    }
-
-private:
-    std::vector<std::string> header_;
-    std::vector<std::vector<std::string>> rows_;
-};
-
-// Four significant digits: far finer than the run-to-run noise of timings.
-std::string num(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4g", v);
-    return buf;
-}
-std::string pct(double fraction) { return num(100 * fraction); }
-std::string ms(double seconds) { return num(1e3 * seconds); }
-
 std::vector<std::string> operator+(std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
     return a;
@@ -519,38 +443,39 @@ std::vector<std::string> operator+(std::vector<std::string> a, const std::vector
 const std::vector<std::string> kErrorHeader = {"mean_rel_pct", "std_rel_pct", "max_rel_pct",
                                                "mean_abs_sr",  "std_abs_sr",  "max_abs_sr"};
 std::vector<std::string> errorCells(const ErrorStats& e) {
-    return {pct(e.relative.mean()), pct(e.relative.stddev()), pct(e.relative.max()),
-            num(e.absolute.mean()), num(e.absolute.stddev()), num(e.absolute.max())};
+    return {benchPct(e.relative.mean()), benchPct(e.relative.stddev()), benchPct(e.relative.max()),
+            benchNumber(e.absolute.mean()), benchNumber(e.absolute.stddev()), benchNumber(e.absolute.max())};
 }
 
 const std::vector<std::string> kTimingHeader = {"setup_ms", "draw_ms", "readback_ms",
                                                 "weighting_ms", "timed_total_ms", "total_ms"};
 std::vector<std::string> timingCells(const Measurement& m) {
-    return {ms(m.phases.setup), ms(m.phases.draw), ms(m.phases.readback),
-            ms(m.phases.weighting), ms(m.phases.total), ms(m.total)};
+    return {benchMs(m.phases.setup),     benchMs(m.phases.draw),  benchMs(m.phases.readback),
+            benchMs(m.phases.weighting), benchMs(m.phases.total), benchMs(m.total)};
 }
 
-Table accuracyTable(const std::vector<AccuracyRow>& rows) {
-    Table t(std::vector<std::string>{"config", "points"} + kErrorHeader + kTimingHeader);
+BenchTable accuracyTable(const std::vector<AccuracyRow>& rows) {
+    BenchTable t(std::vector<std::string>{"config", "points"} + kErrorHeader + kTimingHeader);
     for (const AccuracyRow& r : rows)
         t.addRow(std::vector<std::string>{r.config.label(), std::to_string(r.errors.relative.count())} +
                  errorCells(r.errors) + timingCells(r.timing));
     return t;
 }
 
-Table scenesTable(const std::vector<SceneTimingRow>& rows) {
-    Table t(std::vector<std::string>{"scene", "triangles", "config", "points", "rendered_pct", "drawn_triangles"} +
-            kTimingHeader);
+BenchTable scenesTable(const std::vector<SceneTimingRow>& rows) {
+    BenchTable t(std::vector<std::string>{"scene", "triangles", "config", "points", "rendered_pct",
+                                          "drawn_triangles"} +
+                 kTimingHeader);
     for (const SceneTimingRow& r : rows)
         t.addRow(std::vector<std::string>{r.scene, std::to_string(r.triangles), r.config.label(),
-                                          std::to_string(r.points), pct(r.timing.renderedFraction),
-                                          num(r.timing.trianglesDrawn)} +
+                                          std::to_string(r.points), benchPct(r.timing.renderedFraction),
+                                          benchNumber(r.timing.trianglesDrawn)} +
                  timingCells(r.timing));
     return t;
 }
 
-Table convergenceTable(const std::vector<ConvergenceRow>& rows) {
-    Table t(std::vector<std::string>{"config", "passes", "points"} + kErrorHeader);
+BenchTable convergenceTable(const std::vector<ConvergenceRow>& rows) {
+    BenchTable t(std::vector<std::string>{"config", "passes", "points"} + kErrorHeader);
     for (const ConvergenceRow& r : rows)
         t.addRow(std::vector<std::string>{r.config.label(), std::to_string(r.passes),
                                           std::to_string(r.errors.relative.count())} +
@@ -558,39 +483,40 @@ Table convergenceTable(const std::vector<ConvergenceRow>& rows) {
     return t;
 }
 
-Table raytraceTable(const std::vector<RaytraceRow>& rows) {
-    Table t(std::vector<std::string>{"config", "sampler", "image_size", "light_samples", "points"} + kErrorHeader +
-            std::vector<std::string>{"total_ms"});
+BenchTable raytraceTable(const std::vector<RaytraceRow>& rows) {
+    BenchTable t(std::vector<std::string>{"config", "sampler", "image_size", "light_samples", "points"} +
+                 kErrorHeader + std::vector<std::string>{"total_ms"});
     for (const RaytraceRow& r : rows)
-        t.addRow(std::vector<std::string>{r.config.label(), r.sampler, std::to_string(r.imageSize), num(r.lightSamples),
-                                          std::to_string(r.errors.relative.count())} +
-                 errorCells(r.errors) + std::vector<std::string>{ms(r.total)});
+        t.addRow(std::vector<std::string>{r.config.label(), r.sampler, std::to_string(r.imageSize),
+                                          benchNumber(r.lightSamples), std::to_string(r.errors.relative.count())} +
+                 errorCells(r.errors) + std::vector<std::string>{benchMs(r.total)});
     return t;
 }
 
 // --- Plots ------------------------------------------------------------------------------
 
-const char* const kPlotNames[] = {"direct_error_vs_time.png", "direct_phases.png", "direct_convergence.png"};
-const char* const kPlotVariables[] = {"out_error", "out_phases", "out_convergence"};
+const std::vector<GnuplotOutput> kPlots = {
+    {"out_error", "direct_error_vs_time.png"},
+    {"out_phases", "direct_phases.png"},
+    {"out_convergence", "direct_convergence.png"},
+};
 
-// A gnuplot script with its data inline. Output names are variables with
-// the final names as defaults, so the script also runs alone; the bench
-// passes temporary names and renames them once gnuplot has succeeded.
+// A gnuplot script with its data inline (Gnuplot.h: output names are
+// variables with the final names as defaults, so the script also runs alone).
 std::string gnuplotScript(const std::vector<AccuracyRow>& accuracy, const std::vector<ConvergenceRow>& convergence,
                           size_t points) {
     std::ostringstream gp;
-    gp << "# Written by 'meshlight bench direct'; run with gnuplot in this folder.\n";
-    for (int i = 0; i < 3; ++i)
-        gp << "if (!exists('" << kPlotVariables[i] << "')) " << kPlotVariables[i] << " = '" << kPlotNames[i] << "'\n";
+    gp << "# Written by 'meshlight bench direct'; run with gnuplot in this folder.\n" << gnuplotOutputDefaults(kPlots);
     gp << "set terminal pngcairo size 1400,900 font ',10'\n"
           "set datafile separator ','\n"
           "set grid\n\n"
           "# label, untimed total ms, mean %, max %, setup, draw, readback, weighting ms\n"
           "$accuracy << EOD\n";
     for (const AccuracyRow& r : accuracy)
-        gp << '"' << r.config.label() << "\"," << ms(r.timing.total) << "," << pct(r.errors.relative.mean()) << ","
-           << pct(r.errors.relative.max()) << "," << ms(r.timing.phases.setup) << "," << ms(r.timing.phases.draw)
-           << "," << ms(r.timing.phases.readback) << "," << ms(r.timing.phases.weighting) << "\n";
+        gp << '"' << r.config.label() << "\"," << benchMs(r.timing.total) << "," << benchPct(r.errors.relative.mean())
+           << "," << benchPct(r.errors.relative.max()) << "," << benchMs(r.timing.phases.setup) << ","
+           << benchMs(r.timing.phases.draw) << "," << benchMs(r.timing.phases.readback) << ","
+           << benchMs(r.timing.phases.weighting) << "\n";
     gp << "EOD\n\n";
 
     // One data block per configuration, in order of first appearance.
@@ -604,7 +530,7 @@ std::string gnuplotScript(const std::vector<AccuracyRow>& accuracy, const std::v
         gp << "# passes K, mean %\n$conv" << b << " << EOD\n";
         for (const ConvergenceRow& r : convergence) {
             if (r.config.label() != labels[b]) continue;
-            gp << r.passes << "," << pct(r.errors.relative.mean()) << "\n";
+            gp << r.passes << "," << benchPct(r.errors.relative.mean()) << "\n";
             if (b == 0 && r.passes == 1) firstError = 100 * r.errors.relative.mean();
             maxPasses = std::max(maxPasses, r.passes);
         }
@@ -659,45 +585,7 @@ std::string gnuplotScript(const std::vector<AccuracyRow>& accuracy, const std::v
     return gp.str();
 }
 
-std::string shellQuote(const std::string& s) {
-    std::string out = "'";
-    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-}
-
-// Writes the script, runs gnuplot on it if installed, and moves its PNGs
-// into place; only a note when gnuplot is missing, since the CSVs hold the data.
-void writePlots(const fs::path& dir, const std::string& script) {
-    writeTextFileAtomically((dir / "direct_plots.gp").string(), script);
-    if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
-        std::printf("note: gnuplot not found (Debian: apt-get install gnuplot-nox); plots skipped, "
-                    "CSVs and %s written\n",
-                    (dir / "direct_plots.gp").string().c_str());
-        return;
-    }
-    std::vector<std::unique_ptr<AtomicOutput>> outputs;
-    std::string assignments;
-    for (int i = 0; i < 3; ++i) {
-        outputs.push_back(std::make_unique<AtomicOutput>((dir / kPlotNames[i]).string()));
-        // Temporary names are ".NAME.tmp-PID-N": nothing to escape.
-        assignments += concat(kPlotVariables[i], "='", outputs.back()->path().filename().string(), "';");
-    }
-    const std::string command =
-        concat("cd ", shellQuote(dir.string()), " && gnuplot -e \"", assignments, "\" direct_plots.gp");
-    if (std::system(command.c_str()) != 0)
-        throw std::runtime_error(concat("gnuplot failed on ", (dir / "direct_plots.gp").string()));
-    for (auto& out : outputs) out->commit();
-}
-
 // --- Summary ------------------------------------------------------------------------------
-
-struct RunInfo {
-    std::string context;      // GlContext::describe()
-    std::string mode;         // "full" or "quick"
-    uint32_t seed = 0;
-    size_t receivers = 0, skipped = 0;
-    double wallSeconds = 0;
-};
 
 const AccuracyRow* recommended(const std::vector<AccuracyRow>& rows) {
     const AccuracyRow* best = nullptr;
@@ -710,12 +598,12 @@ const AccuracyRow* recommended(const std::vector<AccuracyRow>& rows) {
 
 std::string recommendationLine(const std::vector<AccuracyRow>& rows) {
     if (const AccuracyRow* r = recommended(rows))
-        return concat(r->config.label(), ": mean ", pct(r->errors.relative.mean()), " %, max ",
-                      pct(r->errors.relative.max()), " % of unoccluded, ", ms(r->timing.total),
-                      " ms median per sample — the fastest configuration with mean ≤ ", pct(kMeanErrorTarget),
-                      " % and max ≤ ", pct(kMaxErrorTarget), " %.");
-    return concat("No configuration reaches mean ≤ ", pct(kMeanErrorTarget), " % and max ≤ ", pct(kMaxErrorTarget),
-                  " % in one pass; no default is recommended by this rule.");
+        return concat(r->config.label(), ": mean ", benchPct(r->errors.relative.mean()), " %, max ",
+                      benchPct(r->errors.relative.max()), " % of unoccluded, ", benchMs(r->timing.total),
+                      " ms median per sample — the fastest configuration with mean ≤ ", benchPct(kMeanErrorTarget),
+                      " % and max ≤ ", benchPct(kMaxErrorTarget), " %.");
+    return concat("No configuration reaches mean ≤ ", benchPct(kMeanErrorTarget), " % and max ≤ ",
+                  benchPct(kMaxErrorTarget), " % in one pass; no default is recommended by this rule.");
 }
 
 // For progressive refinement the figure of merit is different: averaging K
@@ -731,29 +619,29 @@ std::string efficiencyLine(const std::vector<AccuracyRow>& rows) {
     for (const AccuracyRow& r : rows)
         if (r.config.method == DirectMethod::Jittered && (!best || merit(r) < merit(*best))) best = &r;
     if (!best) return "no jittered configuration was measured.";
-    return concat(best->config.label(), ": mean ", pct(best->errors.relative.mean()), " % at ", ms(best->timing.total),
+    return concat(best->config.label(), ": mean ", benchPct(best->errors.relative.mean()), " % at ",
+                  benchMs(best->timing.total),
                   " ms per sample — the lowest error² × time, what progressive averaging converges by.");
 }
 
 // `heavy`: the rows of the 7,200-triangle scene, checked against its target.
-std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>& accuracy,
-                            const std::vector<SceneTimingRow>& heavy, const std::vector<ConvergenceRow>& convergence,
-                            const std::vector<RaytraceRow>& raytrace) {
+std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const BenchPoints& points,
+                            const std::vector<AccuracyRow>& accuracy, const std::vector<SceneTimingRow>& heavy,
+                            const std::vector<ConvergenceRow>& convergence, const std::vector<RaytraceRow>& raytrace) {
     std::ostringstream md;
     md << "# Direct-light sampler bench (Fournier & Péroche §6.1)\n\n"
-       << "- OpenGL: " << info.context << "\n"
-       << "- mode: " << info.mode << ", seed " << info.seed << ", " << info.receivers << " bench receivers";
-    if (info.skipped) md << " (" << info.skipped << " more skipped: unoccluded value 0)";
-    md << "\n- wall time: " << num(info.wallSeconds) << " s\n";
-    if (info.context.find("llvmpipe") != std::string::npos || info.context.find("softpipe") != std::string::npos)
-        md << "- timings come from Mesa's software rasteriser on the CPU, not from a GPU\n";
+       << "- OpenGL: " << run.glDescription() << "\n"
+       << "- mode: " << run.mode() << ", seed " << run.options().seed << ", " << points.points.size()
+       << " bench receivers";
+    if (points.skipped) md << " (" << points.skipped << " more skipped: unoccluded value 0)";
+    md << "\n- wall time: " << benchNumber(wallSeconds) << " s\n" << softwareRasteriserNote(run.glDescription());
 
     md << "\n## Recommended default\n\n- one pass: " << recommendationLine(accuracy)
        << "\n- progressive refinement: " << efficiencyLine(accuracy) << "\n\n## Targets\n\n"
        << "| target | measured | met |\n|---|---|---|\n";
     auto target = [&](const std::string& what, double value, double limit, const char* unit, double scale) {
-        md << "| " << what << " ≤ " << num(scale * limit) << " " << unit << " | " << num(scale * value) << " " << unit
-           << " | " << (value <= limit ? "yes" : "**no**") << " |\n";
+        md << "| " << what << " ≤ " << benchNumber(scale * limit) << " " << unit << " | "
+           << benchNumber(scale * value) << " " << unit << " | " << (value <= limit ? "yes" : "**no**") << " |\n";
     };
     for (const AccuracyRow& r : accuracy) {
         if (!r.config.isJittered64x4()) continue;
@@ -775,17 +663,17 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>&
         const ConvergenceRow* last = &first;
         for (const ConvergenceRow& r : convergence)
             if (r.config.label() == label) last = &r;
-        md << "- " << label << ": mean error " << pct(first.errors.relative.mean()) << " % at K = " << first.passes
-           << ", " << pct(last->errors.relative.mean()) << " % at K = " << last->passes << " (×"
-           << num(last->errors.relative.mean() / std::max(first.errors.relative.mean(), 1e-300)) << ")\n";
+        md << "- " << label << ": mean error " << benchPct(first.errors.relative.mean()) << " % at K = " << first.passes
+           << ", " << benchPct(last->errors.relative.mean()) << " % at K = " << last->passes << " (×"
+           << benchNumber(last->errors.relative.mean() / std::max(first.errors.relative.mean(), 1e-300)) << ")\n";
     }
-    md << "\n## Ray-traced peer (Embree shadow rays through the same sample points, one CPU core)\n\n"
-       << "| config | sampler | image | rays per estimate | mean error % | max error % | ms per estimate |\n"
-       << "|---|---|---|---|---|---|---|\n";
+    BenchTable peer(
+        {"config", "sampler", "image", "rays per estimate", "mean error %", "max error %", "ms per estimate"});
     for (const RaytraceRow& r : raytrace)
-        md << "| " << r.config.label() << " | " << r.sampler << " | " << r.imageSize << " | " << num(r.lightSamples)
-           << " | " << pct(r.errors.relative.mean()) << " | " << pct(r.errors.relative.max()) << " | " << ms(r.total)
-           << " |\n";
+        peer.addRow({r.config.label(), r.sampler, std::to_string(r.imageSize), benchNumber(r.lightSamples),
+                     benchPct(r.errors.relative.mean()), benchPct(r.errors.relative.max()), benchMs(r.total)});
+    md << "\n## Ray-traced peer (Embree shadow rays through the same sample points, one CPU core)\n\n"
+       << peer.markdown();
     md << "\nJittered passes are independent, so their mean converges (about 1/√K); every regular pass repeats "
           "the same value, so its error cannot fall.\n\nTables: direct_accuracy.csv, direct_timing_scenes.csv, "
           "direct_convergence.csv, direct_raytrace.csv. Times are medians per sample; total_ms is measured without glFinish between "
@@ -796,13 +684,9 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<AccuracyRow>&
 }  // namespace
 
 int runBenchDirect(const BenchDirectOptions& options) {
-    const Clock::time_point start = Clock::now();
+    BenchRun run(options);
     const Workload work = workloadFor(options);
-    // Before minutes of work, so that a bad path fails at once.
-    makeOutputDirectory(options.outDir);
-    const fs::path dir(options.outDir);
-    const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
-    std::printf("OpenGL: %s\n", context->describe().c_str());
+    const std::unique_ptr<GlContext> context = run.openContext();
 
     const Scene bench = makeBenchScene();
     const BenchPoints points = benchPoints(bench, work.pointsPerSide);
@@ -810,14 +694,14 @@ int runBenchDirect(const BenchDirectOptions& options) {
     if (points.skipped) std::printf(", %zu skipped (unoccluded value 0: no relative error)", points.skipped);
     std::printf("\n");
 
-    const std::vector<AccuracyRow> accuracy = runAccuracy(*context, bench, points, work, options.seed, start);
-    const std::vector<RaytraceRow> raytrace = runRaytrace(bench, points, accuracy, work, options.seed, start);
+    const std::vector<AccuracyRow> accuracy = runAccuracy(*context, bench, points, work, options.seed, run);
+    const std::vector<RaytraceRow> raytrace = runRaytrace(bench, points, accuracy, work, options.seed, run);
 
     const Scene heavy = makeBenchScene(kHeavySubdivisions);
     const int heavySide = int(std::ceil(std::sqrt(double(work.heavyPoints))));
     const std::vector<SceneTimingRow> heavyRows =
         timeScene(*context, heavy, concat("bench-", heavy.triangleCount(), "-triangles"),
-                  spread(makeBenchReceivers(heavySide), work.heavyPoints), options.seed, start);
+                  spread(makeBenchReceivers(heavySide), work.heavyPoints), options.seed, run);
     std::vector<SceneTimingRow> scenes = heavyRows;
     const std::string waterPath = work.waterPoints ? findWaterScene() : std::string();
     if (!work.waterPoints) {
@@ -829,7 +713,7 @@ int runBenchDirect(const BenchDirectOptions& options) {
         const Scene water = loadObj(waterPath);
         for (SceneTimingRow& row : timeScene(*context, water, "CornellBox-Water",
                                              sceneReceivers(water, work.waterPoints, options.seed), options.seed,
-                                             start))
+                                             run))
             scenes.push_back(std::move(row));
     }
 
@@ -843,10 +727,10 @@ int runBenchDirect(const BenchDirectOptions& options) {
         std::printf("note: only %zu penumbra receivers for convergence (%zu asked)\n", convergenceIds.size(),
                     work.convergencePoints);
     const std::vector<ConvergenceRow> convergence =
-        runConvergence(*context, bench, points, convergenceIds, work, options.seed, start);
+        runConvergence(*context, bench, points, convergenceIds, work, options.seed, run);
 
-    const Table accuracyT = accuracyTable(accuracy), scenesT = scenesTable(scenes),
-                convergenceT = convergenceTable(convergence);
+    const BenchTable accuracyT = accuracyTable(accuracy), scenesT = scenesTable(scenes),
+                     convergenceT = convergenceTable(convergence);
     std::printf("\nAccuracy, one pass (Fig. 7) and median times per sample (Fig. 9), bench scene.\n"
                 "Errors |estimate - exact|: relative in %% of each point's unoccluded value, absolute in sr.\n"
                 "Phase columns and timed_total with glFinish between phases; total_ms without (the real cost).\n\n%s",
@@ -854,7 +738,7 @@ int runBenchDirect(const BenchDirectOptions& options) {
     std::printf("\nTimings on larger scenes (median ms per sample; rendered_pct: samples that saw the light;\n"
                 "drawn_triangles: mean occluder triangles drawn after culling).\n\n%s",
                 scenesT.aligned().c_str());
-    const Table raytraceT = raytraceTable(raytrace);
+    const BenchTable raytraceT = raytraceTable(raytrace);
     std::printf("\nRay-traced peer (Embree shadow rays through the raster sampler's sample points, one core): at "
                 "equal samples (same seeds) and at equal time per estimate; errors over %zu receivers.\n\n%s",
                 raytrace.empty() ? size_t(0) : raytrace.front().errors.relative.count(), raytraceT.aligned().c_str());
@@ -862,19 +746,17 @@ int runBenchDirect(const BenchDirectOptions& options) {
                 "(exact between %g%% and %g%% of unoccluded).\n\n%s",
                 100 * kPenumbraLow, 100 * kPenumbraHigh, convergenceT.aligned().c_str());
 
-    writeTextFileAtomically((dir / "direct_accuracy.csv").string(), accuracyT.csv());
-    writeTextFileAtomically((dir / "direct_timing_scenes.csv").string(), scenesT.csv());
-    writeTextFileAtomically((dir / "direct_convergence.csv").string(), convergenceT.csv());
-    writeTextFileAtomically((dir / "direct_raytrace.csv").string(), raytraceT.csv());
-    writePlots(dir, gnuplotScript(accuracy, convergence, points.points.size()));
+    run.writeCsv("direct_accuracy.csv", accuracyT);
+    run.writeCsv("direct_timing_scenes.csv", scenesT);
+    run.writeCsv("direct_convergence.csv", convergenceT);
+    run.writeCsv("direct_raytrace.csv", raytraceT);
+    run.plot("direct_plots.gp", gnuplotScript(accuracy, convergence, points.points.size()), kPlots);
 
-    const RunInfo info{context->describe(), options.quick ? "quick" : "full", options.seed, points.points.size(),
-                       points.skipped, secondsSince(start)};
-    writeTextFileAtomically((dir / "direct_summary.md").string(),
-                            summaryMarkdown(info, accuracy, heavyRows, convergence, raytrace));
-    std::printf("\nRecommended for one pass: %s\nRecommended for progressive refinement: %s\nWall time %.1f s; files in %s\n",
-                recommendationLine(accuracy).c_str(), efficiencyLine(accuracy).c_str(),
-                info.wallSeconds, dir.string().c_str());
+    const double wall = run.seconds();
+    run.write("direct_summary.md", summaryMarkdown(run, wall, points, accuracy, heavyRows, convergence, raytrace));
+    std::printf("\nRecommended for one pass: %s\nRecommended for progressive refinement: %s\n",
+                recommendationLine(accuracy).c_str(), efficiencyLine(accuracy).c_str());
+    run.printWallTime(wall);
     return 0;
 }
 

@@ -16,24 +16,18 @@
 // PNGs (when gnuplot is installed) and direct_summary.md.
 #pragma once
 
-#include "gpu_sampling/gl/GlContext.h"
-
-#include <cstdint>
-#include <string>
+#include "BenchOptions.h"
 
 namespace ml {
 
-struct BenchDirectOptions {
-    std::string outDir = "bench-out";  // made if missing; files in it are replaced whole
+// quick: CI size (seconds on a CPU rasteriser): 20×20 points, image sizes
+// {32, 64}, bits {1, 4}, 40 convergence points and K ≤ 8, 300 points on the
+// 7,200-triangle scene, no Water scene. seed: the jitter; runs repeat bit
+// for bit.
+struct BenchDirectOptions : BenchOptions {
     // Receivers per side of the bench floor grid; 100 gives the paper's
     // 10,000 points. Ignored in quick mode, which uses 20.
     int pointsPerSide = 100;
-    // CI size (seconds on a CPU rasteriser): 20×20 points, image sizes
-    // {32, 64}, bits {1, 4}, 40 convergence points and K ≤ 8, 300 points on
-    // the 7,200-triangle scene, no Water scene.
-    bool quick = false;
-    GlBackend backend = GlBackend::OsMesa;  // headless only: OsMesa, Egl or Auto
-    uint32_t seed = 1;                      // user seed of the jitter: runs repeat bit for bit
 };
 
 // Runs the whole bench. Returns the exit code: 0, also when gnuplot is

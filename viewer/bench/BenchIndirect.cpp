@@ -1,31 +1,31 @@
 #include "BenchIndirect.h"
 
+#include "BenchRun.h"
+#include "BenchStatistics.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
+#include "ParallelFor.h"
 
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"
 #include "core/Random.h"
-#include "core/io/AtomicFile.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
+#include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/VoxelMarchGather.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -35,10 +35,7 @@ namespace ml {
 
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // The issue's target: the slice gather at least this many times faster than
 // the perspective triangle gather at equal error (the paper: 18 ms against 46 ms).
@@ -75,7 +72,7 @@ struct Workload {
     std::map<std::string, int> mainResolution;
 };
 
-Workload workloadFor(const BenchIndirectOptions& options) {
+Workload workloadFor(const BenchOptions& options) {
     Workload p;
     std::vector<Config>& c = p.configs;
     auto sizes = [&](const std::string& method, std::initializer_list<int> ns, int res, int near = 0) {
@@ -136,51 +133,47 @@ struct Gatherer {
     size_t proxyTriangles = 0;
 };
 
-Gatherer makeGatherer(GlContext& context, const Scene& scene, const Config& c) {
+// The three gather classes share these accessors without a common base;
+// `drawn` reads the one they name differently.
+template <typename Gather, typename Drawn>
+Gatherer gathererOf(std::unique_ptr<Gather> gather, Drawn drawn) {
     Gatherer g;
+    Gather* p = gather.get();
+    g.timePhases = [p](bool on) { p->setTimePhases(on); };
+    g.phases = [p] { return p->phases(); };
+    g.drawn = [p, drawn] { return drawn(*p); };
+    g.proxyTriangles = p->proxy().triangles().size();
+    g.estimator = std::move(gather);
+    return g;
+}
+
+Gatherer makeGatherer(GlContext& context, const Scene& scene, const Config& c) {
+    auto nearCount = [](const auto& gather) { return gather.lastNearCount(); };
     if (c.method == "slices" || c.method == "slice-quads") {
         GatherSettings s;
         s.imageSize = c.imageSize;
         s.resolution = c.resolution;
         s.quadPerFace = c.method == "slice-quads";
         s.nearVoxels = c.nearVoxels;
-        auto e = std::make_unique<SliceGather>(context, scene, s);
-        SliceGather* p = e.get();
-        g.timePhases = [p](bool on) { p->setTimePhases(on); };
-        g.phases = [p] { return p->phases(); };
-        g.drawn = [p] { return p->lastNearCount(); };
-        g.proxyTriangles = p->proxy().triangles().size();
-        g.estimator = std::move(e);
-    } else if (c.method == "raymarch") {
+        return gathererOf(std::make_unique<SliceGather>(context, scene, s), nearCount);
+    }
+    if (c.method == "raymarch") {
         GatherSettings s;
         s.imageSize = c.imageSize;
         s.resolution = c.resolution;
         s.nearVoxels = c.nearVoxels;
-        auto e = std::make_unique<VoxelMarchGather>(context, scene, s);
-        VoxelMarchGather* p = e.get();
-        g.timePhases = [p](bool on) { p->setTimePhases(on); };
-        g.phases = [p] { return p->phases(); };
-        g.drawn = [p] { return p->lastNearCount(); };
-        g.proxyTriangles = p->proxy().triangles().size();
-        g.estimator = std::move(e);
-    } else {
-        TriangleGatherSettings s;
-        s.imageSize = c.imageSize;
-        s.resolution = c.resolution;
-        bool known = false;
-        for (TriangleProjection p :
-             {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
-            if (c.method == triangleProjectionName(p)) s.projection = p, known = true;
-        ML_ASSERT(known, "bench indirect: unknown method ", c.method);
-        auto e = std::make_unique<TriangleGather>(context, scene, s);
-        TriangleGather* p = e.get();
-        g.timePhases = [p](bool on) { p->setTimePhases(on); };
-        g.phases = [p] { return p->phases(); };
-        g.drawn = [p] { return p->lastTriangles(); };
-        g.proxyTriangles = p->proxy().triangles().size();
-        g.estimator = std::move(e);
+        return gathererOf(std::make_unique<VoxelMarchGather>(context, scene, s), nearCount);
     }
-    return g;
+    TriangleGatherSettings s;
+    s.imageSize = c.imageSize;
+    s.resolution = c.resolution;
+    bool known = false;
+    for (TriangleProjection p :
+         {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
+        if (c.method == triangleProjectionName(p)) s.projection = p, known = true;
+    ML_ASSERT(known, "bench indirect: unknown method ", c.method);
+    return gathererOf(std::make_unique<TriangleGather>(context, scene, s),
+                      [](const TriangleGather& gather) { return gather.lastTriangles(); });
 }
 
 // --- Points -------------------------------------------------------------------------
@@ -304,25 +297,6 @@ struct PointReference {
     double source = 0;  // luminance of the exact-geometry gather of the source
 };
 
-// Runs work(i) for i in [0, count) on `threads` threads.
-void parallelFor(size_t count, int threads, const std::function<void(size_t)>& work) {
-    std::atomic<size_t> next{0};
-    std::vector<std::thread> pool;
-    std::exception_ptr error;
-    std::mutex m;
-    for (int t = 0; t < threads; ++t)
-        pool.emplace_back([&] {
-            for (size_t i; (i = next++) < count;) try {
-                    work(i);
-                } catch (...) {
-                    std::lock_guard<std::mutex> lock(m);
-                    if (!error) error = std::current_exception();
-                }
-        });
-    for (std::thread& t : pool) t.join();
-    if (error) std::rethrow_exception(error);
-}
-
 // What a perfect gather of the source gives: cosine-weighted rays on exact
 // geometry (Embree), each taking Kd/π × the cache's irradiance where it lands
 // on the side it sees (zero where the cache has no mesh: the back of a
@@ -362,14 +336,6 @@ double sourceGather(const Scene& scene, const EmbreeScene& rays, const std::vect
 }
 
 // --- Measuring -----------------------------------------------------------------------------
-
-double median(std::vector<double> v) {
-    if (v.empty()) return 0;
-    const auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    if (v.size() % 2) return *mid;
-    return 0.5 * (*mid + *std::max_element(v.begin(), mid));
-}
 
 // Relative RMS error: sqrt(Σ (e − r)² / Σ r²) over the points (luminance),
 // and the mean and max of |e − r| / r over points with r > 0.
@@ -572,8 +538,6 @@ std::vector<Comparison> compare(const std::vector<Row>& rows) {
 
 // --- Tables ------------------------------------------------------------------------------------
 
-std::string pct(double f) { return benchNumber(100 * f); }
-
 BenchTable methodsTable(const std::vector<Row>& rows, int passes) {
     BenchTable t({"config",
                   "method",
@@ -613,15 +577,15 @@ BenchTable methodsTable(const std::vector<Row>& rows, int passes) {
                   benchNumber(r.readbackMs),
                   benchNumber(r.timedTotalMs),
                   benchNumber(r.totalMs),
-                  pct(r.single.relRms),
-                  pct(r.meanK.relRms),
-                  pct(r.single.meanRel),
-                  pct(r.single.maxRel),
-                  pct(r.gatherSingle.relRms),
-                  pct(r.gatherMeanK.relRms),
-                  pct(r.byGroup.at(PointGroup::Walls).relRms),
-                  pct(r.byGroup.at(PointGroup::Blocks).relRms),
-                  pct(r.byGroup.at(PointGroup::Fixed).relRms)});
+                  benchPct(r.single.relRms),
+                  benchPct(r.meanK.relRms),
+                  benchPct(r.single.meanRel),
+                  benchPct(r.single.maxRel),
+                  benchPct(r.gatherSingle.relRms),
+                  benchPct(r.gatherMeanK.relRms),
+                  benchPct(r.byGroup.at(PointGroup::Walls).relRms),
+                  benchPct(r.byGroup.at(PointGroup::Blocks).relRms),
+                  benchPct(r.byGroup.at(PointGroup::Fixed).relRms)});
     return t;
 }
 
@@ -631,7 +595,7 @@ BenchTable comparisonTable(const std::vector<Comparison>& cs) {
     for (const Comparison& c : cs) {
         std::string how = c.perspective.how;
         std::replace(how.begin(), how.end(), ',', ';');
-        t.addRow({c.slices, c.metric, c.against, benchNumber(c.slicesMs), pct(c.slicesError),
+        t.addRow({c.slices, c.metric, c.against, benchNumber(c.slicesMs), benchPct(c.slicesError),
                   c.perspective.reached ? benchNumber(c.perspective.ms) : std::string("never"),
                   c.perspective.reached ? (c.perspective.bounded ? "<=" : "") + benchNumber(c.speedup())
                                         : std::string(">max"),
@@ -685,9 +649,9 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Workload& work, do
                 const bool isMain =
                     it != work.mainResolution.end() && it->second == r.config.resolution && r.config.nearVoxels == 0;
                 if (isMain != main) continue;
-                data << benchNumber(r.totalMs) << "," << pct(r.single.relRms) << "," << pct(r.meanK.relRms) << ","
-                     << pct(r.gatherSingle.relRms) << "," << pct(r.gatherMeanK.relRms) << ",\"" << r.config.shortLabel()
-                     << "\"\n";
+                data << benchNumber(r.totalMs) << "," << benchPct(r.single.relRms) << ","
+                     << benchPct(r.meanK.relRms) << "," << benchPct(r.gatherSingle.relRms) << ","
+                     << benchPct(r.gatherMeanK.relRms) << ",\"" << r.config.shortLabel() << "\"\n";
             }
             if (data.str().empty()) continue;
             const std::string name = concat("$m", m, main ? "main" : "other");
@@ -762,10 +726,8 @@ std::string gnuplotScript(const std::vector<Row>& rows, const Workload& work, do
 
 // --- Summary ---------------------------------------------------------------------------------------
 
+// What the summary says of the run besides its tables.
 struct RunInfo {
-    std::string context;
-    bool quick = false;
-    uint32_t seed = 0;
     size_t points = 0, fixedPoints = 0;
     size_t cacheVertices = 0, refineRounds = 0;
     int referenceSamples = 0, sourceRays = 0, passes = 0;
@@ -789,11 +751,12 @@ std::string verdictLine(const Comparison& c) {
                   "× (", c.perspective.how, ")");
 }
 
-std::string summaryMarkdown(const RunInfo& info, const std::vector<Row>& rows, const std::vector<Comparison>& cs) {
+std::string summaryMarkdown(const BenchRun& run, const RunInfo& info, const std::vector<Row>& rows,
+                            const std::vector<Comparison>& cs) {
     std::ostringstream md;
     md << "# Indirect light: six gathers of one source, error against time (§6.2)\n\n"
-       << "- OpenGL: " << info.context << "\n"
-       << "- mode: " << (info.quick ? "quick" : "full") << ", seed " << info.seed << ", wall time "
+       << "- OpenGL: " << run.glDescription() << "\n"
+       << "- mode: " << run.mode() << ", seed " << run.options().seed << ", wall time "
        << benchNumber(info.wallSeconds) << " s\n"
        << "- scene: the Cornell box; source: its direct-light cache sampled exactly (ExactDirect) at every vertex "
           "of its base mesh, then refined "
@@ -802,15 +765,14 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<Row>& rows, c
        << " random by area, none inside a block; " << info.fixedPoints
        << " fixed in corners, along contacts, beside the light)\n"
        << "- reference: the path tracer's one-bounce indirect irradiance (max depth 2), " << info.referenceSamples
-       << " samples per point; its RMS relative standard error is " << pct(info.pathNoise) << " %\n"
+       << " samples per point; its RMS relative standard error is " << benchPct(info.pathNoise) << " %\n"
        << "- floor: the exact-geometry gather of the source (" << info.sourceRays
        << " stratified cosine-weighted Embree rays per point, the cache's irradiance where they land) is "
-       << pct(info.floor.relRms) << " % RMS from the path tracer (mean " << pct(info.floor.meanRel) << " %, max "
-       << pct(info.floor.maxRel) << " %): the cache's interpolation error, under every method\n"
+       << benchPct(info.floor.relRms) << " % RMS from the path tracer (mean " << benchPct(info.floor.meanRel)
+       << " %, max " << benchPct(info.floor.maxRel) << " %): the cache's interpolation error, under every method\n"
        << "- each configuration: one phase-timed gather per point, then " << info.passes - 1
-       << " more with fresh jitter; time = median wall time per gather without glFinish between phases\n";
-    if (info.context.find("llvmpipe") != std::string::npos || info.context.find("softpipe") != std::string::npos)
-        md << "- timings come from Mesa's software rasteriser on the CPU, not from a GPU\n";
+       << " more with fresh jitter; time = median wall time per gather without glFinish between phases\n"
+       << softwareRasteriserNote(run.glDescription());
 
     md << "\n## The target: slices at least " << kSpeedupTarget
        << "× faster than the perspective triangle gather at equal error\n\n";
@@ -820,20 +782,21 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<Row>& rows, c
         if (paper ? c.slices == paper->config.label() : true) shown.push_back(&c);
     if (shown.empty()) md << "No slice configuration ran.\n";
     for (const Comparison* c : shown)
-        md << "- " << c->slices << ", error " << c->metric << " (" << pct(c->slicesError) << " %), against "
+        md << "- " << c->slices << ", error " << c->metric << " (" << benchPct(c->slicesError) << " %), against "
            << c->against << ": " << verdictLine(*c) << "\n";
     md << "\nThe paper measured 18 ms (slices, 40×40) against 46 ms (perspective, 128×128) on a 7,000-triangle office "
           "on a GPU. Every slice configuration's comparison is in indirect_equal_error.csv.\n";
 
-    md << "\n## Per method (one gather; error against the path tracer)\n\n"
-       << "| configuration | ms per gather | setup / draw / readback ms | rel. RMS % | mean of " << info.passes
-       << " % | gather alone % | walls / blocks / corners % |\n|---|---|---|---|---|---|---|\n";
+    BenchTable methods({"configuration", "ms per gather", "setup / draw / readback ms", "rel. RMS %",
+                        concat("mean of ", info.passes, " %"), "gather alone %", "walls / blocks / corners %"});
     for (const Row& r : rows)
-        md << "| " << r.config.label() << " | " << benchNumber(r.totalMs) << " | " << benchNumber(r.setupMs) << " / "
-           << benchNumber(r.drawMs) << " / " << benchNumber(r.readbackMs) << " | " << pct(r.single.relRms) << " | "
-           << pct(r.meanK.relRms) << " | " << pct(r.gatherSingle.relRms) << " | "
-           << pct(r.byGroup.at(PointGroup::Walls).relRms) << " / " << pct(r.byGroup.at(PointGroup::Blocks).relRms)
-           << " / " << pct(r.byGroup.at(PointGroup::Fixed).relRms) << " |\n";
+        methods.addRow({r.config.label(), benchNumber(r.totalMs),
+                        concat(benchNumber(r.setupMs), " / ", benchNumber(r.drawMs), " / ", benchNumber(r.readbackMs)),
+                        benchPct(r.single.relRms), benchPct(r.meanK.relRms), benchPct(r.gatherSingle.relRms),
+                        concat(benchPct(r.byGroup.at(PointGroup::Walls).relRms), " / ",
+                               benchPct(r.byGroup.at(PointGroup::Blocks).relRms), " / ",
+                               benchPct(r.byGroup.at(PointGroup::Fixed).relRms))});
+    md << "\n## Per method (one gather; error against the path tracer)\n\n" << methods.markdown();
     md << "\nConfigurations are `method N @R [nearK]`: N pixels per side (hemicube: of its top face; its sides are "
           "N × N/2), R voxels along the box's longest side (slices, raymarch: the voxel grid, near box of K voxels "
           "each way, 0 if not said; triangle methods: the radiance proxy they draw, pieces at most two voxels "
@@ -856,13 +819,10 @@ std::string summaryMarkdown(const RunInfo& info, const std::vector<Row>& rows, c
 
 }  // namespace
 
-int runBenchIndirect(const BenchIndirectOptions& options) {
-    const Clock::time_point start = Clock::now();
+int runBenchIndirect(const BenchOptions& options) {
+    BenchRun run(options);
     const Workload work = workloadFor(options);
-    makeOutputDirectory(options.outDir);
-    const fs::path dir(options.outDir);
-    const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
-    std::printf("OpenGL: %s\n", context->describe().c_str());
+    const std::unique_ptr<GlContext> context = run.openContext();
 
     // The source: the direct cache's base mesh, sampled exactly.
     const Scene scene = makeCornellBox();
@@ -888,8 +848,7 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
             if (r.converged() || r.estimates == 0) break;
         }
     }
-    std::fprintf(stderr, "[%6.1f s] source cache: %zu vertices after %zu refinement rounds\n", secondsSince(start),
-                 cache.totalVertices(), refineRounds);
+    run.progress("source cache: %zu vertices after %zu refinement rounds\n", cache.totalVertices(), refineRounds);
     std::vector<IrradianceMeshCopy> source = cache.copyMeshes();
 
     // Points and references.
@@ -897,7 +856,7 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     std::vector<BenchPoint> points = areaPoints(scene, rays, work.areaPoints, options.seed);
     const std::vector<BenchPoint> fixed = fixedPoints(scene);
     points.insert(points.end(), fixed.begin(), fixed.end());
-    std::fprintf(stderr, "[%6.1f s] references at %zu points\n", secondsSince(start), points.size());
+    run.progress("references at %zu points\n", points.size());
     const Clock::time_point refStart = Clock::now();
     std::vector<PointReference> refs(points.size());
     const int threads = int(std::clamp(std::thread::hardware_concurrency(), 1u, 2u));
@@ -935,12 +894,12 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
         info.pathNoise = n ? std::sqrt(sum / double(n)) : 0;
         info.floor = errorsOf(src, path);
     }
-    std::fprintf(stderr, "[%6.1f s] references done in %.1f s: path tracer noise %.3g %%, floor %.3g %%\n",
-                 secondsSince(start), info.referenceSeconds, 100 * info.pathNoise, 100 * info.floor.relRms);
+    run.progress("references done in %.1f s: path tracer noise %.3g %%, floor %.3g %%\n", info.referenceSeconds,
+                 100 * info.pathNoise, 100 * info.floor.relRms);
 
     std::vector<Row> rows;
     for (const Config& c : work.configs) {
-        std::fprintf(stderr, "[%6.1f s] %s\n", secondsSince(start), c.label().c_str());
+        run.progress("%s\n", c.label().c_str());
         rows.push_back(measure(*context, scene, source, c, points, refs, work.passes, options.seed));
     }
     const std::vector<Comparison> comparisons = compare(rows);
@@ -950,18 +909,15 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
         "\nIndirect gathers on the Cornell box, %zu points (ms per gather; rel_rms: relative RMS error of one "
         "gather against the path tracer; gather_rel_rms: against the exact gather of the source).\n"
         "Floor (exact gather of the source against the path tracer): %s %%; path tracer noise %s %%.\n\n%s",
-        points.size(), pct(info.floor.relRms).c_str(), pct(info.pathNoise).c_str(), methodsT.aligned().c_str());
+        points.size(), benchPct(info.floor.relRms).c_str(), benchPct(info.pathNoise).c_str(),
+        methodsT.aligned().c_str());
     std::printf("\nSlices against the perspective triangle gather at equal error (target: %gx faster).\n\n%s",
                 kSpeedupTarget, compareT.aligned().c_str());
 
-    writeTextFileAtomically((dir / "indirect_methods.csv").string(), methodsT.csv());
-    writeTextFileAtomically((dir / "indirect_equal_error.csv").string(), compareT.csv());
-    writeTextFileAtomically((dir / "indirect_points.csv").string(), pointsTable(points, refs).csv());
-    runGnuplotScript(dir, "indirect_plots.gp",
-                     gnuplotScript(rows, work, info.floor.relRms, info.pathNoise, points.size()), kPlots);
-    info.context = context->describe();
-    info.quick = options.quick;
-    info.seed = options.seed;
+    run.writeCsv("indirect_methods.csv", methodsT);
+    run.writeCsv("indirect_equal_error.csv", compareT);
+    run.writeCsv("indirect_points.csv", pointsTable(points, refs));
+    run.plot("indirect_plots.gp", gnuplotScript(rows, work, info.floor.relRms, info.pathNoise, points.size()), kPlots);
     info.points = points.size();
     info.fixedPoints = fixed.size();
     info.cacheVertices = cache.totalVertices();
@@ -969,9 +925,10 @@ int runBenchIndirect(const BenchIndirectOptions& options) {
     info.referenceSamples = work.referenceSamples;
     info.sourceRays = work.sourceRaysSide * work.sourceRaysSide;
     info.passes = work.passes;
-    info.wallSeconds = secondsSince(start);
-    writeTextFileAtomically((dir / "indirect_summary.md").string(), summaryMarkdown(info, rows, comparisons));
-    std::printf("\nWall time %.1f s; files in %s\n", info.wallSeconds, dir.string().c_str());
+    info.wallSeconds = run.seconds();
+    run.write("indirect_summary.md", summaryMarkdown(run, info, rows, comparisons));
+    std::printf("\n");
+    run.printWallTime(info.wallSeconds);
     return 0;
 }
 

@@ -27,27 +27,19 @@
 // Prints aligned tables and writes, into outDir: indirect_methods.csv,
 // indirect_equal_error.csv, indirect_points.csv, indirect_plots.gp and its
 // PNGs (when gnuplot is installed) and indirect_summary.md.
+//
+// quick: CI size (well under a minute on a CPU rasteriser): fewer points,
+// passes and configurations, coarse voxels and proxies. seed: points,
+// jitter and path tracer; runs repeat.
 #pragma once
 
-#include "gpu_sampling/gl/GlContext.h"
-
-#include <cstdint>
-#include <string>
+#include "BenchOptions.h"
 
 namespace ml {
-
-struct BenchIndirectOptions {
-    std::string outDir = "bench-out";  // made if missing; files in it are replaced whole
-    // CI size (well under a minute on a CPU rasteriser): fewer points,
-    // passes and configurations, coarse voxels and proxies.
-    bool quick = false;
-    GlBackend backend = GlBackend::OsMesa;  // headless only: OsMesa, Egl or Auto
-    uint32_t seed = 1;                      // points, jitter and path tracer: runs repeat
-};
 
 // Runs the whole bench. Returns the exit code: 0, also when gnuplot is
 // missing. Throws InputError when outDir cannot be made or written,
 // std::runtime_error when no headless context can be made or gnuplot fails.
-int runBenchIndirect(const BenchIndirectOptions& options);
+int runBenchIndirect(const BenchOptions& options);
 
 }  // namespace ml

@@ -3,6 +3,7 @@
 #include "BenchConvergence.h"
 #include "BenchDirect.h"
 #include "BenchIndirect.h"
+#include "BenchRun.h"
 #include "BenchScaling.h"
 #include "BenchView.h"
 #include "Gnuplot.h"
@@ -10,20 +11,17 @@
 
 #include "core/Error.h"
 #include "core/io/AtomicFile.h"
-
-#include <sys/utsname.h>
+#include "gpu_sampling/gl/GlContext.h"
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
-#include <cstdlib>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <thread>
 
 #ifndef MESHLIGHT_SOURCE_DIR
 #define MESHLIGHT_SOURCE_DIR "."
@@ -34,204 +32,143 @@ namespace ml {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 // --- The sections ----------------------------------------------------------------
 
-ReportSection directSection() {
-    ReportSection s;
-    s.id = "direct";
-    s.title = "Direct light: error against time per method";
-    s.about = "Fournier & Péroche §6.1 (Figs. 7–9): every sampling scheme × image size × tests per pixel × "
-              "estimator on the bench scene's receiver grid, one pass per point, against the exact visible "
-              "cosine solid angle (CGAL), with the median time of each phase of a sample.";
-    s.run = [](const BenchReportOptions& o, const std::string& dir) {
-        BenchDirectOptions d;
-        d.outDir = dir;
-        d.quick = o.quick;
-        d.backend = o.backend;
-        d.seed = o.seed;
-        return runBenchDirect(d);
-    };
-    s.summary = "direct_summary.md";
-    s.figures = {
-        {"direct_error_vs_time.png",
-         "Error against time: mean and max |error| (% of the unoccluded value) against the median time per "
-         "sample, one point per configuration.",
-         {"direct_accuracy.csv"}},
-        {"direct_phases.png",
-         "Time split by phase: median setup, draw, readback and weighting per sample for each configuration "
-         "(glFinish between phases).",
-         {"direct_accuracy.csv"}},
-        {"direct_convergence.png", "Error of the mean of K passes at penumbra receivers.", {"direct_convergence.csv"}},
-    };
-    s.tables = {
-        {"direct_accuracy.csv",
-         "Error and time per phase per method (ms per sample; total_ms without glFinish between phases: the real "
-         "cost).",
-         {"config", "points", "mean_rel_pct", "max_rel_pct", "setup_ms", "draw_ms", "readback_ms", "weighting_ms",
-          "timed_total_ms", "total_ms"}},
-        {"direct_timing_scenes.csv", "Timings on larger scenes.", {}},
-    };
-    return s;
+// bench direct with its own option at its default (quick mode ignores it).
+int runDirect(const BenchOptions& options) {
+    BenchDirectOptions direct;
+    static_cast<BenchOptions&>(direct) = options;
+    return runBenchDirect(direct);
 }
 
-ReportSection convergenceSection() {
-    ReportSection s;
-    s.id = "convergence";
-    s.title = "Convergence: progressive image against the path tracer at equal time";
-    s.about = "Issue 4: the Cornell box, direct light only. A still image: the progressive cache (worker thread, "
-              "production settings) composited at fixed elapsed times, and the path tracer (depth 1, every core) at "
-              "doubling samples per pixel, both against the exact direct image. A walkthrough with one cache "
-              "refined all along, against the path tracer's time to the same error per view. Memory per cached "
-              "vertex.";
-    s.run = [](const BenchReportOptions& o, const std::string& dir) {
-        BenchConvergenceOptions b;
-        b.outDir = dir;
-        b.quick = o.quick;
-        b.backend = o.backend;
-        b.seed = o.seed;
-        return runBenchConvergence(b);
+}  // namespace
+
+std::vector<ReportSection> reportSections() {
+    // Page order; each later bench adds its section here. The fields in
+    // ReportSection's order: id, title, about, run, summary, then the
+    // figures and the tables.
+    return {
+        {"direct", "Direct light: error against time per method",
+         "Fournier & Péroche §6.1 (Figs. 7–9): every sampling scheme × image size × tests per pixel × estimator on "
+         "the bench scene's receiver grid, one pass per point, against the exact visible cosine solid angle (CGAL), "
+         "with the median time of each phase of a sample.",
+         runDirect, "direct_summary.md",
+         {
+             {"direct_error_vs_time.png",
+              "Error against time: mean and max |error| (% of the unoccluded value) against the median time per "
+              "sample, one point per configuration.",
+              {"direct_accuracy.csv"}},
+             {"direct_phases.png",
+              "Time split by phase: median setup, draw, readback and weighting per sample for each configuration "
+              "(glFinish between phases).",
+              {"direct_accuracy.csv"}},
+             {"direct_convergence.png", "Error of the mean of K passes at penumbra receivers.",
+              {"direct_convergence.csv"}},
+         },
+         {
+             {"direct_accuracy.csv",
+              "Error and time per phase per method (ms per sample; total_ms without glFinish between phases: the "
+              "real cost).",
+              {"config", "points", "mean_rel_pct", "max_rel_pct", "setup_ms", "draw_ms", "readback_ms",
+               "weighting_ms", "timed_total_ms", "total_ms"}},
+             {"direct_timing_scenes.csv", "Timings on larger scenes.", {}},
+         }},
+        {"convergence", "Convergence: progressive image against the path tracer at equal time",
+         "Issue 4: the Cornell box, direct light only. A still image: the progressive cache (worker thread, "
+         "production settings) composited at fixed elapsed times, and the path tracer (depth 1, every core) at "
+         "doubling samples per pixel, both against the exact direct image. A walkthrough with one cache refined all "
+         "along, against the path tracer's time to the same error per view. Memory per cached vertex.",
+         runBenchConvergence, "convergence_summary.md",
+         {
+             {"convergence_still.png",
+              "Still image: relative RMSE against the exact image over wall-clock time, Meshlight and the path "
+              "tracer (labels: samples per pixel); dashed: the targets.",
+              {"convergence_still.csv"}},
+             {"convergence_walkthrough.png", "Walkthrough: cumulative time over the frames.",
+              {"convergence_walkthrough.csv"}},
+             {"convergence_walkthrough_error.png", "Walkthrough: relative RMSE per view.",
+              {"convergence_walkthrough.csv"}},
+         },
+         {
+             {"convergence_targets.csv", "Targets of issue 4.", {}},
+             {"convergence_memory.csv", "Memory per cached vertex, extrapolated to a million vertices.", {}},
+         }},
+        {"scaling", "Scaling: cost against scene size and number of lights",
+         "The bench scene and the Cornell box with every triangle split into 4 recursively, sampled at the same "
+         "receivers at every size (the sampler culls occluders with a BVH), with the one-off costs of the sampler, "
+         "the cache and the compositor; and the Cornell box with N ceiling lights of constant total power. Growth "
+         "exponents are least-squares slopes in log-log.",
+         runBenchScaling, "scaling_summary.md",
+         {
+             {"scaling_triangles_sample.png",
+              "Cost per sample at fixed receivers and per estimate of the cache's first pass against the number of "
+              "triangles; dashed: least-squares power-law fits.",
+              {"scaling_triangles.csv", "scaling_fits.csv"}},
+             {"scaling_triangles_setup.png",
+              "One-off costs against the number of triangles: occluder BVH, sampler setup, cache build, "
+              "compositing.",
+              {"scaling_triangles.csv", "scaling_fits.csv"}},
+             {"scaling_lights.png", "Costs against the number of lights, total power constant.",
+              {"scaling_lights.csv", "scaling_fits.csv"}},
+         },
+         {
+             {"scaling_triangles.csv", "Cost against scene size (ms).",
+              {"scene", "triangles", "drawn_triangles", "bvh_build_ms", "setup_ms", "per_sample_ms", "grid_objects",
+               "cache_build_ms", "first_pass_estimates", "per_estimate_ms", "composite_ms", "first_image_ms"}},
+             {"scaling_lights.csv", "Cost against the number of lights (ms; first_image extrapolated).", {}},
+         }},
+        {"view", "Viewer: frame rate, first frame and light changes",
+         "Issue 6: meshlight view in a real GLFW window (under Xvfb when there is no display), driven by its own "
+         "scripts at 1280x720 on the Cornell box: a walk with refinement paused and refining, the same walk over a "
+         "cache of about a million triangles, and light changes at a still camera, timed to the end of the frame "
+         "that shows them.",
+         runBenchView, "view_summary.md",
+         {
+             {"view_frames.png",
+              "Frame time while walking: refinement paused, refining, and over a million-triangle cache.",
+              {"view_frames.csv"}},
+             {"view_latency.png", "Time from each light change to the end of the frame that shows it.",
+              {"view_latency.csv"}},
+         },
+         {
+             {"view_targets.csv", "Targets of issue 6.", {}},
+             {"view_scenarios.csv", "Frames per scenario (rates after the first second).", {}},
+         }},
+        {"indirect", "Indirect light: gather methods, error against time",
+         "Fournier & Péroche §6.2 on the Cornell box: one source (the direct cache sampled exactly, as exitant "
+         "radiance on the radiance proxy) gathered six ways (voxel slices walked per pixel or drawn as quads, the "
+         "voxels ray-marched as a 3D texture, the proxy's triangles in a fish-eye image, one 160-degree "
+         "perspective image or a hemicube) at several image sizes and resolutions: time per gather by phase, and "
+         "error against the path tracer's one-bounce indirect irradiance and against an exact-geometry gather of "
+         "the same source.",
+         runBenchIndirect, "indirect_summary.md",
+         {
+             {"indirect_error_vs_time.png",
+              "Error against time: relative RMS error against the path tracer over the points, one gather (solid) "
+              "and the mean of K (dashed), against the median time per gather; one curve per method over image "
+              "sizes, squares for other resolutions; dotted: the floor (the exact gather of the same source).",
+              {"indirect_methods.csv", "indirect_points.csv"}},
+             {"indirect_gather_error_vs_time.png",
+              "The gathers alone: the same against the exact-geometry gather of the source.",
+              {"indirect_methods.csv"}},
+             {"indirect_phases.png", "Time split by phase per gather (glFinish between phases).",
+              {"indirect_methods.csv"}},
+         },
+         {
+             {"indirect_equal_error.csv",
+              "Slices against the perspective triangle gather at equal error (target: 2x).", {}},
+             {"indirect_methods.csv", "Every configuration: ms per gather and relative RMS error (%).",
+              {"config", "proxy_triangles", "drawn_triangles", "setup_ms", "draw_ms", "readback_ms", "total_ms",
+               "rel_rms_pct", "gather_rel_rms_pct", "rel_rms_walls_pct", "rel_rms_blocks_pct",
+               "rel_rms_corners_pct"}},
+         }},
     };
-    s.summary = "convergence_summary.md";
-    s.figures = {
-        {"convergence_still.png",
-         "Still image: relative RMSE against the exact image over wall-clock time, Meshlight and the path tracer "
-         "(labels: samples per pixel); dashed: the targets.",
-         {"convergence_still.csv"}},
-        {"convergence_walkthrough.png", "Walkthrough: cumulative time over the frames.",
-         {"convergence_walkthrough.csv"}},
-        {"convergence_walkthrough_error.png", "Walkthrough: relative RMSE per view.", {"convergence_walkthrough.csv"}},
-    };
-    s.tables = {
-        {"convergence_targets.csv", "Targets of issue 4.", {}},
-        {"convergence_memory.csv", "Memory per cached vertex, extrapolated to a million vertices.", {}},
-    };
-    return s;
 }
 
-ReportSection scalingSection() {
-    ReportSection s;
-    s.id = "scaling";
-    s.title = "Scaling: cost against scene size and number of lights";
-    s.about = "The bench scene and the Cornell box with every triangle split into 4 recursively, sampled at the "
-              "same receivers at every size (the sampler culls occluders with a BVH), with the one-off costs of "
-              "the sampler, the cache and the compositor; and the Cornell box with N ceiling lights of constant "
-              "total power. Growth exponents are least-squares slopes in log-log.";
-    s.run = [](const BenchReportOptions& o, const std::string& dir) {
-        BenchScalingOptions b;
-        b.outDir = dir;
-        b.quick = o.quick;
-        b.backend = o.backend;
-        b.seed = o.seed;
-        return runBenchScaling(b);
-    };
-    s.summary = "scaling_summary.md";
-    s.figures = {
-        {"scaling_triangles_sample.png",
-         "Cost per sample at fixed receivers and per estimate of the cache's first pass against the number of "
-         "triangles; dashed: least-squares power-law fits.",
-         {"scaling_triangles.csv", "scaling_fits.csv"}},
-        {"scaling_triangles_setup.png",
-         "One-off costs against the number of triangles: occluder BVH, sampler setup, cache build, compositing.",
-         {"scaling_triangles.csv", "scaling_fits.csv"}},
-        {"scaling_lights.png", "Costs against the number of lights, total power constant.",
-         {"scaling_lights.csv", "scaling_fits.csv"}},
-    };
-    s.tables = {
-        {"scaling_triangles.csv", "Cost against scene size (ms).",
-         {"scene", "triangles", "drawn_triangles", "bvh_build_ms", "setup_ms", "per_sample_ms", "grid_objects",
-          "cache_build_ms", "first_pass_estimates", "per_estimate_ms", "composite_ms", "first_image_ms"}},
-        {"scaling_lights.csv", "Cost against the number of lights (ms; first_image extrapolated).", {}},
-    };
-    return s;
-}
-
-ReportSection viewSection() {
-    ReportSection s;
-    s.id = "view";
-    s.title = "Viewer: frame rate, first frame and light changes";
-    s.about = "Issue 6: meshlight view in a real GLFW window (under Xvfb when there is no display), driven by its "
-              "own scripts at 1280x720 on the Cornell box: a walk with refinement paused and refining, the same walk "
-              "over a cache of about a million triangles, and light changes at a still camera, timed to the end of "
-              "the frame that shows them.";
-    s.run = [](const BenchReportOptions& o, const std::string& dir) {
-        BenchViewOptions b;
-        b.outDir = dir;
-        b.quick = o.quick;
-        b.seed = o.seed;
-        return runBenchView(b);
-    };
-    s.summary = "view_summary.md";
-    s.figures = {
-        {"view_frames.png", "Frame time while walking: refinement paused, refining, and over a million-triangle cache.",
-         {"view_frames.csv"}},
-        {"view_latency.png", "Time from each light change to the end of the frame that shows it.",
-         {"view_latency.csv"}},
-    };
-    s.tables = {
-        {"view_targets.csv", "Targets of issue 6.", {}},
-        {"view_scenarios.csv", "Frames per scenario (rates after the first second).", {}},
-    };
-    return s;
-}
-
-ReportSection indirectSection() {
-    ReportSection s;
-    s.id = "indirect";
-    s.title = "Indirect light: gather methods, error against time";
-    s.about = "Fournier & Péroche §6.2 on the Cornell box: one source (the direct cache sampled exactly, as exitant "
-              "radiance on the radiance proxy) gathered six ways (voxel slices walked per pixel or drawn as quads, "
-              "the voxels ray-marched as a 3D texture, the proxy's triangles in a fish-eye image, one 160-degree "
-              "perspective image or a hemicube) at several image sizes and resolutions: time per gather by phase, "
-              "and error against the path tracer's one-bounce indirect irradiance and against an exact-geometry "
-              "gather of the same source.";
-    s.run = [](const BenchReportOptions& o, const std::string& dir) {
-        BenchIndirectOptions b;
-        b.outDir = dir;
-        b.quick = o.quick;
-        b.backend = o.backend;
-        b.seed = o.seed;
-        return runBenchIndirect(b);
-    };
-    s.summary = "indirect_summary.md";
-    s.figures = {
-        {"indirect_error_vs_time.png",
-         "Error against time: relative RMS error against the path tracer over the points, one gather (solid) and "
-         "the mean of K (dashed), against the median time per gather; one curve per method over image sizes, "
-         "squares for other resolutions; dotted: the floor (the exact gather of the same source).",
-         {"indirect_methods.csv", "indirect_points.csv"}},
-        {"indirect_gather_error_vs_time.png",
-         "The gathers alone: the same against the exact-geometry gather of the source.", {"indirect_methods.csv"}},
-        {"indirect_phases.png", "Time split by phase per gather (glFinish between phases).", {"indirect_methods.csv"}},
-    };
-    s.tables = {
-        {"indirect_equal_error.csv", "Slices against the perspective triangle gather at equal error (target: 2x).",
-         {}},
-        {"indirect_methods.csv", "Every configuration: ms per gather and relative RMS error (%).",
-         {"config", "proxy_triangles", "drawn_triangles", "setup_ms", "draw_ms", "readback_ms", "total_ms",
-          "rel_rms_pct", "gather_rel_rms_pct", "rel_rms_walls_pct", "rel_rms_blocks_pct", "rel_rms_corners_pct"}},
-    };
-    return s;
-}
+namespace {
 
 // --- The machine -------------------------------------------------------------------
-
-// The first "KEY : value" line of a /proc file with that key, or "".
-std::string procField(const char* file, const std::string& key) {
-    std::ifstream in(file);
-    std::string line;
-    while (std::getline(in, line)) {
-        const size_t colon = line.find(':');
-        if (colon == std::string::npos) continue;
-        std::string k = line.substr(0, colon);
-        k.erase(k.find_last_not_of(" \t") + 1);
-        if (k != key) continue;
-        const size_t v = line.find_first_not_of(" \t", colon + 1);
-        return v == std::string::npos ? std::string() : line.substr(v);
-    }
-    return {};
-}
 
 // stdout of a shell command, trailing newline dropped; "" when it fails.
 std::string commandOutput(const std::string& command) {
@@ -257,15 +194,7 @@ std::vector<HeaderRow> machineRows(const BenchReportOptions& options) {
     gmtime_r(&now, &utc);
     std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", &utc);
     rows.push_back({"date", date});
-
-    std::string cpu = procField("/proc/cpuinfo", "model name");
-    if (cpu.empty()) cpu = "unknown CPU";
-    std::string machine = concat(cpu, ", ", std::thread::hardware_concurrency(), " hardware threads");
-    const std::string mem = procField("/proc/meminfo", "MemTotal");  // "131900000 kB"
-    if (!mem.empty()) machine += concat(", ", std::llround(std::atof(mem.c_str()) / 1048576.0), " GiB memory");
-    utsname u{};
-    if (::uname(&u) == 0) machine += concat(", ", u.sysname, " ", u.release, " ", u.machine);
-    rows.push_back({"machine", machine});
+    rows.push_back({"machine", describeMachine()});
 
     std::string gl;
     try {
@@ -459,20 +388,10 @@ void checkSection(const ReportSection& s) {
 
 }  // namespace
 
-std::vector<ReportSection> reportSections() {
-    // Page order. Each later bench adds its section here, e.g. the
-    // indirect-light bench.
-    return {directSection(), convergenceSection(), scalingSection(), viewSection(), indirectSection()};
-}
-
 int runBenchReport(const BenchReportOptions& options, const std::vector<ReportSection>& sections) {
     for (const ReportSection& s : sections) checkSection(s);
     const fs::path outDir(options.outDir);
-    std::error_code ec;
-    fs::create_directories(outDir, ec);
-    if (ec || !fs::is_directory(outDir, ec))
-        throwInputError(SourceLocation{options.outDir}, "cannot make the output directory",
-                        ec ? concat(": ", ec.message()) : std::string());
+    makeOutputDirectory(options.outDir);
     const std::vector<HeaderRow> header = machineRows(options);
 
     std::vector<Outcome> outcomes;
@@ -480,15 +399,18 @@ int runBenchReport(const BenchReportOptions& options, const std::vector<ReportSe
         std::printf("\n=== bench %s ===\n", s.id.c_str());
         Outcome o;
         o.section = &s;
-        const Clock::time_point start = Clock::now();
+        const auto start = std::chrono::steady_clock::now();
+        // The report's options, with the bench's own folder.
+        BenchOptions bench = options;
+        bench.outDir = (outDir / s.id).string();
         try {
-            const int code = s.run(options, (outDir / s.id).string());
+            const int code = s.run(bench);
             o.ok = code == 0;
             if (!o.ok) o.error = concat("exit code ", code);
         } catch (const std::exception& e) {
             o.error = e.what();
         }
-        o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        o.seconds = secondsSince(start);
         if (!o.ok) std::fprintf(stderr, "meshlight: bench %s failed: %s\n", s.id.c_str(), o.error.c_str());
         outcomes.push_back(std::move(o));
     }

@@ -9,21 +9,20 @@
 // exist yet is simply not listed, and the page names the benches that ran.
 #pragma once
 
-#include "gpu_sampling/gl/GlContext.h"
+#include "BenchOptions.h"
 
-#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
 namespace ml {
 
-struct BenchReportOptions {
-    std::string outDir = "bench-report";  // made if missing; index.html and one folder per bench
-    bool quick = false;                   // every bench in its CI size (seconds, not minutes)
-    GlBackend backend = GlBackend::OsMesa;  // headless only: OsMesa, Egl or Auto
-    uint32_t seed = 1;                      // passed to every bench
-    std::string commandLine;                // shown in the page's header, as typed
+// outDir: index.html and one folder per bench (made if missing); quick:
+// every bench in its CI size (seconds, not minutes); backend and seed:
+// passed to every bench.
+struct BenchReportOptions : BenchOptions {
+    BenchReportOptions() { outDir = "bench-report"; }
+    std::string commandLine;  // shown in the page's header, as typed
 };
 
 // A plot a bench wrote, and the data behind it. File names are relative to
@@ -45,9 +44,9 @@ struct ReportSection {
     std::string id;     // folder and anchor: lower-case letters, digits and '-'
     std::string title;  // plain text
     std::string about;  // one paragraph on what the bench measures, plain text
-    // Runs the bench with its output in `dir` (made if missing) and returns
-    // its exit code; may throw.
-    std::function<int(const BenchReportOptions&, const std::string& dir)> run;
+    // Runs the bench with the report's options, outDir its own folder
+    // (outDir/<id>, made if missing), and returns its exit code; may throw.
+    std::function<int(const BenchOptions&)> run;
     std::string summary;  // a Markdown file the bench writes, shown first; "" for none
     std::vector<ReportFigure> figures;
     std::vector<ReportTable> tables;

@@ -1,5 +1,7 @@
 #include "BenchScaling.h"
 
+#include "BenchRun.h"
+#include "BenchStatistics.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
 #include "PowerLawFit.h"
@@ -7,19 +9,18 @@
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"
 #include "core/Random.h"
-#include "core/io/AtomicFile.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
 #include "core/scenes/ScalingScene.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/OccluderBvh.h"
+#include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <functional>
 #include <iterator>
 #include <memory>
@@ -31,22 +32,13 @@ namespace ml {
 
 namespace {
 
-namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // Seconds taken by `work`.
 template <typename F>
 double timed(F&& work) {
-    const Clock::time_point start = Clock::now();
+    const auto start = std::chrono::steady_clock::now();
     work();
     return secondsSince(start);
 }
-
-std::string ms(double seconds) { return benchNumber(1e3 * seconds); }
 
 // --- Sizes of a run ------------------------------------------------------------
 
@@ -61,28 +53,9 @@ struct Workload {
     int compositeSize;     // composited image, pixels per side (2×2 supersampled)
 };
 
-Workload workloadFor(const BenchScalingOptions& options) {
+Workload workloadFor(const BenchOptions& options) {
     if (options.quick) return {{4, 5, 6, 7}, {3, 4, 5}, {1, 2, 4, 8}, 64, 96, 96};
     return {{4, 5, 6, 7, 8, 9}, {3, 4, 5, 6, 7}, {1, 2, 4, 8, 16, 32, 64}, 200, 400, 256};
-}
-
-// `count` items spread evenly through `items` (all of them when there are
-// no more), so a subset still covers the whole floor or mesh.
-template <typename T>
-std::vector<T> spread(const std::vector<T>& items, size_t count) {
-    if (items.size() <= count) return items;
-    std::vector<T> out;
-    out.reserve(count);
-    for (size_t k = 0; k < count; ++k) out.push_back(items[k * items.size() / count]);
-    return out;
-}
-
-double median(std::vector<double> values) {
-    if (values.empty()) return 0;
-    const auto mid = values.begin() + std::ptrdiff_t(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    if (values.size() % 2) return *mid;
-    return 0.5 * (*mid + *std::max_element(values.begin(), mid));
 }
 
 // One-off costs are timed this many times and the median kept: a single
@@ -385,11 +358,11 @@ BenchTable trianglesTable(const std::vector<TriangleRow>& rows) {
                   "per_estimate_ms", "composite_ms", "first_image_ms"});
     for (const TriangleRow& r : rows)
         t.addRow({r.scene, std::to_string(r.levels), std::to_string(r.triangles), std::to_string(r.receivers),
-                  benchNumber(r.sample.trianglesDrawn), ms(r.bvh), ms(r.setup), ms(r.sample.setup), ms(r.sample.draw),
-                  ms(r.sample.readback), ms(r.sample.weighting), ms(r.sample.total), std::to_string(r.cache.vertices),
-                  std::to_string(r.cache.gridObjects), ms(r.cache.build), std::to_string(r.cache.estimates),
-                  std::to_string(r.cache.sampled), ms(r.cache.perEstimate), ms(r.cache.composite),
-                  ms(r.cache.firstImage(r.setup))});
+                  benchNumber(r.sample.trianglesDrawn), benchMs(r.bvh), benchMs(r.setup), benchMs(r.sample.setup),
+                  benchMs(r.sample.draw), benchMs(r.sample.readback), benchMs(r.sample.weighting),
+                  benchMs(r.sample.total), std::to_string(r.cache.vertices), std::to_string(r.cache.gridObjects),
+                  benchMs(r.cache.build), std::to_string(r.cache.estimates), std::to_string(r.cache.sampled),
+                  benchMs(r.cache.perEstimate), benchMs(r.cache.composite), benchMs(r.cache.firstImage(r.setup))});
     return t;
 }
 
@@ -397,9 +370,10 @@ BenchTable lightsTable(const std::vector<LightRow>& rows) {
     BenchTable t({"lights", "triangles", "setup_ms", "cache_vertices", "cache_build_ms", "first_pass_estimates",
                   "timed_estimates", "per_estimate_ms", "per_vertex_ms", "composite_ms", "first_image_ms"});
     for (const LightRow& r : rows)
-        t.addRow({std::to_string(r.lights), std::to_string(r.triangles), ms(r.setup), std::to_string(r.cache.vertices),
-                  ms(r.cache.build), std::to_string(r.cache.estimates), std::to_string(r.cache.sampled),
-                  ms(r.cache.perEstimate), ms(r.perVertex()), ms(r.cache.composite), ms(r.cache.firstImage(r.setup))});
+        t.addRow({std::to_string(r.lights), std::to_string(r.triangles), benchMs(r.setup),
+                  std::to_string(r.cache.vertices), benchMs(r.cache.build), std::to_string(r.cache.estimates),
+                  std::to_string(r.cache.sampled), benchMs(r.cache.perEstimate), benchMs(r.perVertex()),
+                  benchMs(r.cache.composite), benchMs(r.cache.firstImage(r.setup))});
     return t;
 }
 
@@ -543,23 +517,21 @@ std::string gnuplotScript(const std::vector<TriangleRow>& triangles, const std::
 
 // --- Summary --------------------------------------------------------------------------
 
-std::string summaryMarkdown(const std::string& context, const BenchScalingOptions& options, const Workload& work,
+std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work,
                             const std::vector<TriangleRow>& triangles, const std::vector<LightRow>& lights,
-                            const std::vector<FitRow>& fits, double wallSeconds) {
+                            const std::vector<FitRow>& fits) {
     std::ostringstream md;
     md << "# Scaling bench: cost against scene size and number of lights\n\n"
-       << "- OpenGL: " << context << "\n"
-       << "- mode: " << (options.quick ? "quick" : "full") << ", seed " << options.seed
+       << "- OpenGL: " << run.glDescription() << "\n"
+       << "- mode: " << run.mode() << ", seed " << run.options().seed
        << ", sampler: default settings (jittered 64×64, 8 bits, cv)\n"
        << "- fixed receivers per scene: " << work.receivers
        << "; estimates of the cache's first pass timed: " << work.timedEstimates
        << "; composited image " << work.compositeSize << "×" << work.compositeSize << ", 2×2 supersampled\n"
-       << "- wall time: " << benchNumber(wallSeconds) << " s\n";
-    if (context.find("llvmpipe") != std::string::npos || context.find("softpipe") != std::string::npos)
-        md << "- timings come from Mesa's software rasteriser on the CPU, not from a GPU\n";
+       << "- wall time: " << benchNumber(wallSeconds) << " s\n"
+       << softwareRasteriserNote(run.glDescription());
 
-    md << "\n## Growth exponents (cost ≈ a·x^b, least squares in log-log)\n\n"
-       << "| sweep | scene | quantity | from | to | b | r² |\n|---|---|---|---|---|---|---|\n";
+    BenchTable growth({"sweep", "scene", "quantity", "from", "to", "b", "r²"});
     for (const FitRow& f : fits) {
         std::string from, to;
         if (f.sweep == "triangles") {
@@ -571,9 +543,10 @@ std::string summaryMarkdown(const std::string& context, const BenchScalingOption
             from = concat(lights.front().lights, lights.front().lights == 1 ? " light" : " lights");
             to = concat(lights.back().lights, lights.back().lights == 1 ? " light" : " lights");
         }
-        md << "| " << f.sweep << " | " << f.scene << " | " << f.quantity << " | " << from << " | " << to << " | "
-           << exponentText(&f) << " | " << (f.fit ? benchNumber(f.fit->r2) : std::string("n/a")) << " |\n";
+        growth.addRow({f.sweep, f.scene, f.quantity, from, to, exponentText(&f),
+                       f.fit ? benchNumber(f.fit->r2) : std::string("n/a")});
     }
+    md << "\n## Growth exponents (cost ≈ a·x^b, least squares in log-log)\n\n" << growth.markdown();
     md << "\nb = 1 is linear growth, b = 0 a constant cost. The sampler culls occluders with a BVH, so the cost "
           "per sample follows the triangles drawn after culling (drawn_triangles), not the scene's size; the "
           "bench scene's occluder faces every shadowed receiver (nothing to cull), the Cornell box hides most of "
@@ -592,13 +565,10 @@ std::string summaryMarkdown(const std::string& context, const BenchScalingOption
 
 }  // namespace
 
-int runBenchScaling(const BenchScalingOptions& options) {
-    const Clock::time_point start = Clock::now();
+int runBenchScaling(const BenchOptions& options) {
+    BenchRun run(options);
     const Workload work = workloadFor(options);
-    makeOutputDirectory(options.outDir);
-    const fs::path dir(options.outDir);
-    const std::unique_ptr<GlContext> context = createHeadlessContext(options.backend);
-    std::printf("OpenGL: %s\n", context->describe().c_str());
+    const std::unique_ptr<GlContext> context = run.openContext();
 
     // The receivers are placed on the base scenes: subdivision does not move
     // a surface, so they are the same points at every size.
@@ -620,8 +590,7 @@ int runBenchScaling(const BenchScalingOptions& options) {
                      const std::vector<ReceiverPoint>& receivers) {
         for (int k : levels) {
             const Scene scene = subdivideScene(base, k);
-            std::fprintf(stderr, "[%6.1f s] triangles: %s, %zu triangles\n", secondsSince(start), family.c_str(),
-                         scene.triangleCount());
+            run.progress("triangles: %s, %zu triangles\n", family.c_str(), scene.triangleCount());
             triangles.push_back(measureTriangles(*context, scene, family, k, receivers, work, options.seed));
         }
     };
@@ -630,7 +599,7 @@ int runBenchScaling(const BenchScalingOptions& options) {
 
     std::vector<LightRow> lights;
     for (int n : work.lightCounts) {
-        std::fprintf(stderr, "[%6.1f s] lights: %d\n", secondsSince(start), n);
+        run.progress("lights: %d\n", n);
         lights.push_back(measureLights(*context, n, work, options.seed));
     }
 
@@ -644,19 +613,17 @@ int runBenchScaling(const BenchScalingOptions& options) {
                 lightT.aligned().c_str());
     std::printf("\nGrowth exponents b of cost = a * x^b (least squares in log-log).\n\n%s", fitT.aligned().c_str());
 
-    writeTextFileAtomically((dir / "scaling_triangles.csv").string(), triT.csv());
-    writeTextFileAtomically((dir / "scaling_lights.csv").string(), lightT.csv());
-    writeTextFileAtomically((dir / "scaling_fits.csv").string(), fitT.csv());
-    runGnuplotScript(dir, "scaling_plots.gp", gnuplotScript(triangles, lights, fits, work), kPlots);
-    const double wall = secondsSince(start);
-    writeTextFileAtomically((dir / "scaling_summary.md").string(),
-                            summaryMarkdown(context->describe(), options, work, triangles, lights, fits, wall));
-    std::printf("\nper-sample exponent: bench %s, cornell %s; per-vertex exponent against lights: %s\n"
-                "Wall time %.1f s; files in %s\n",
+    run.writeCsv("scaling_triangles.csv", triT);
+    run.writeCsv("scaling_lights.csv", lightT);
+    run.writeCsv("scaling_fits.csv", fitT);
+    run.plot("scaling_plots.gp", gnuplotScript(triangles, lights, fits, work), kPlots);
+    const double wall = run.seconds();
+    run.write("scaling_summary.md", summaryMarkdown(run, wall, work, triangles, lights, fits));
+    std::printf("\nper-sample exponent: bench %s, cornell %s; per-vertex exponent against lights: %s\n",
                 exponentText(findFit(fits, "triangles", "bench", "per_sample_ms")).c_str(),
                 exponentText(findFit(fits, "triangles", "cornell", "per_sample_ms")).c_str(),
-                exponentText(findFit(fits, "lights", "cornell-light-grid", "per_vertex_ms")).c_str(), wall,
-                dir.string().c_str());
+                exponentText(findFit(fits, "lights", "cornell-light-grid", "per_vertex_ms")).c_str());
+    run.printWallTime(wall);
     return 0;
 }
 

@@ -24,30 +24,22 @@
 // scaling_triangles.csv, scaling_lights.csv, scaling_fits.csv,
 // scaling_plots.gp and its PNGs (when gnuplot is installed) and
 // scaling_summary.md.
+//
+// quick: CI size (well under a minute on a CPU rasteriser): bench scene 1k
+// to 64k triangles, Cornell box 2k to 31k, 1 to 8 lights, 64 receivers and
+// 96 cache estimates per point. The full run goes to 1M triangles and 64
+// lights, with 200 receivers and 400 cache estimates. seed: jitter and
+// receiver placement; runs repeat bit for bit.
 #pragma once
 
-#include "gpu_sampling/gl/GlContext.h"
-
-#include <cstdint>
-#include <string>
+#include "BenchOptions.h"
 
 namespace ml {
-
-struct BenchScalingOptions {
-    std::string outDir = "bench-out";  // made if missing; files in it are replaced whole
-    // CI size (well under a minute on a CPU rasteriser): bench scene 1k to
-    // 64k triangles, Cornell box 2k to 31k, 1 to 8 lights, 64 receivers and
-    // 96 cache estimates per point. The full run goes to 1M triangles and 64
-    // lights, with 200 receivers and 400 cache estimates.
-    bool quick = false;
-    GlBackend backend = GlBackend::OsMesa;  // headless only: OsMesa, Egl or Auto
-    uint32_t seed = 1;                      // jitter and receiver placement: runs repeat bit for bit
-};
 
 // Runs both sweeps. Returns the exit code: 0, also when gnuplot is missing
 // (plots skipped with a note). Throws InputError when outDir cannot be made
 // or written, std::runtime_error when no headless context can be made or
 // gnuplot fails on its script.
-int runBenchScaling(const BenchScalingOptions& options);
+int runBenchScaling(const BenchOptions& options);
 
 }  // namespace ml

@@ -15,6 +15,22 @@ void checkCell(const std::string& cell) {
               "' holds a comma, quote or line break");
 }
 
+// The header line, then `afterHeader` as it is, then a line per row: each
+// line's cells written by `cells`, then a line break. Every format of a
+// table is this, with its own way of writing the cells of one line.
+template <typename Cells>
+std::string tableText(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
+                      const std::string& afterHeader, Cells cells) {
+    std::ostringstream os;
+    cells(os, header);
+    os << "\n" << afterHeader;
+    for (const auto& row : rows) {
+        cells(os, row);
+        os << "\n";
+    }
+    return os.str();
+}
+
 }  // namespace
 
 BenchTable::BenchTable(std::vector<std::string> header) : header_(std::move(header)) {
@@ -33,28 +49,28 @@ std::string BenchTable::aligned() const {
         width[c] = header_[c].size();
         for (const auto& row : rows_) width[c] = std::max(width[c], row[c].size());
     }
-    std::ostringstream os;
-    auto line = [&](const std::vector<std::string>& cells) {
+    return tableText(header_, rows_, "", [&](std::ostream& os, const std::vector<std::string>& cells) {
         for (size_t c = 0; c < cells.size(); ++c) {
             const std::string pad(width[c] - cells[c].size(), ' ');
             os << (c ? "  " : "") << (c ? pad + cells[c] : cells[c] + pad);
         }
-        os << "\n";
-    };
-    line(header_);
-    for (const auto& row : rows_) line(row);
-    return os.str();
+    });
 }
 
 std::string BenchTable::csv() const {
-    std::ostringstream os;
-    auto line = [&](const std::vector<std::string>& cells) {
+    return tableText(header_, rows_, "", [](std::ostream& os, const std::vector<std::string>& cells) {
         for (size_t c = 0; c < cells.size(); ++c) os << (c ? "," : "") << cells[c];
-        os << "\n";
-    };
-    line(header_);
-    for (const auto& row : rows_) line(row);
-    return os.str();
+    });
+}
+
+std::string BenchTable::markdown() const {
+    std::string separator = "|";
+    for (size_t c = 0; c < header_.size(); ++c) separator += "---|";
+    return tableText(header_, rows_, separator + "\n", [](std::ostream& os, const std::vector<std::string>& cells) {
+        os << "| ";
+        for (size_t c = 0; c < cells.size(); ++c) os << (c ? " | " : "") << cells[c];
+        os << " |";
+    });
 }
 
 std::string benchNumber(double v) {
@@ -62,5 +78,11 @@ std::string benchNumber(double v) {
     std::snprintf(buf, sizeof buf, "%.4g", v);
     return buf;
 }
+
+std::string benchPct(double fraction) { return benchNumber(100 * fraction); }
+
+std::string benchMs(double seconds) { return benchNumber(1e3 * seconds); }
+
+std::string benchYesNo(bool b) { return b ? "yes" : "no"; }
 
 }  // namespace ml

@@ -1,5 +1,6 @@
-// A bench table: printed aligned on stdout and written as CSV from the same
-// cells, so the two never disagree; and the number format benches share.
+// A bench table: printed aligned on stdout, written as CSV and shown as a
+// Markdown table in a summary, all from the same cells, so they never
+// disagree; and the number formats benches share.
 #pragma once
 
 #include <string>
@@ -18,6 +19,9 @@ public:
     // First column left-aligned (labels), the others right-aligned (numbers).
     std::string aligned() const;
     std::string csv() const;
+    // A pipe table with a |---| separator row under the header, as
+    // ReportHtml's markdownToHtml reads it.
+    std::string markdown() const;
 
 private:
     std::vector<std::string> header_;
@@ -27,5 +31,12 @@ private:
 // Four significant digits ("0.09712", "1.234e+05"): far finer than the
 // run-to-run noise of timings.
 std::string benchNumber(double v);
+// The cells of the "_pct" and "_ms" columns, four significant digits: a
+// fraction as a percentage (0.01234 -> "1.234"), seconds as milliseconds
+// (0.01234 -> "12.34").
+std::string benchPct(double fraction);
+std::string benchMs(double seconds);
+// "yes" or "no": a table's answer to a target or a condition.
+std::string benchYesNo(bool b);
 
 }  // namespace ml

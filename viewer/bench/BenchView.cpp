@@ -1,10 +1,10 @@
 #include "BenchView.h"
 
+#include "BenchRun.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
 
 #include "core/Error.h"
-#include "core/io/AtomicFile.h"
 #include "core/scenes/CornellBox.h"
 #include "viewer/window/ViewScript.h"
 #include "viewer/window/ViewSession.h"
@@ -12,11 +12,9 @@
 #include <sys/wait.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <thread>
 
@@ -25,7 +23,6 @@ namespace ml {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 constexpr int kWidth = 1280, kHeight = 720;
 // Frames in the first second after the first snapshot is shown are left
@@ -135,7 +132,7 @@ std::string lightScript(int changes) {
     return s.str();
 }
 
-Result runScenario(const Scene& scene, const Scenario& sc, const BenchViewOptions& options) {
+Result runScenario(const Scene& scene, const Scenario& sc, const BenchOptions& options) {
     ViewSettings s;
     s.width = kWidth;
     s.height = kHeight;
@@ -169,8 +166,6 @@ Result runScenario(const Scene& scene, const Scenario& sc, const BenchViewOption
     r.firstSnapshotFrame = session.firstSnapshotFrameSeconds();
     return r;
 }
-
-std::string yesNo(bool b) { return b ? "yes" : "no"; }
 
 std::string gnuplotScript(const std::vector<Result>& results, const std::vector<GnuplotOutput>& plots) {
     std::ostringstream gp;
@@ -217,42 +212,8 @@ std::string gnuplotScript(const std::vector<Result>& results, const std::vector<
     return gp.str();
 }
 
-std::string markdownTable(const BenchTable& table) {
-    std::istringstream in(table.csv());
-    std::ostringstream md;
-    std::string line;
-    bool header = true;
-    while (std::getline(in, line)) {
-        std::string row = "| ";
-        size_t columns = 1;
-        for (char c : line) {
-            if (c == ',') {
-                row += " | ";
-                ++columns;
-            } else {
-                row += c;
-            }
-        }
-        md << row << " |\n";
-        if (header) {
-            md << "|";
-            for (size_t i = 0; i < columns; ++i) md << "---|";
-            md << "\n";
-            header = false;
-        }
-    }
-    return md.str();
-}
-
-std::string loadAverage() {
-    std::ifstream in("/proc/loadavg");
-    std::string one;
-    in >> one;
-    return one;
-}
-
 // Runs `meshlight bench view ...` again inside a virtual display.
-int runUnderXvfb(const BenchViewOptions& o) {
+int runUnderXvfb(const BenchOptions& o) {
     if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0)
         throw std::runtime_error("bench view opens a window and there is no display, nor xvfb-run to make one "
                                  "(Debian: apt-get install xvfb xauth)");
@@ -269,12 +230,9 @@ int runUnderXvfb(const BenchViewOptions& o) {
 
 }  // namespace
 
-int runBenchView(const BenchViewOptions& options) {
+int runBenchView(const BenchOptions& options) {
     if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) return runUnderXvfb(options);
-    const auto start = Clock::now();
-    const std::string loadStart = loadAverage();
-    makeOutputDirectory(options.outDir);
-    const fs::path dir(options.outDir);
+    BenchRun run(options);
     const Scene scene = makeCornellBox();
     const double d = options.quick ? 4 : 15;
 
@@ -315,44 +273,45 @@ int runBenchView(const BenchViewOptions& options) {
 
     BenchTable targets({"target", "value", "met"});
     targets.addRow({"first frame within 1 s of start (s)", benchNumber(walk.firstFrame),
-                    yesNo(walk.firstFrame >= 0 && walk.firstFrame <= kTargetFirstFrame)});
+                    benchYesNo(walk.firstFrame >= 0 && walk.firstFrame <= kTargetFirstFrame)});
     targets.addRow({"first frame showing a snapshot (s; informative)", benchNumber(walk.firstSnapshotFrame), "-"});
     const Stats ws = statsOf(walk), ms = statsOf(million);
     targets.addRow({"30 frames/s at 1280x720 on the Cornell box while refining", benchNumber(ws.fps),
-                    yesNo(ws.fps >= kTargetFps)});
+                    benchYesNo(ws.fps >= kTargetFps)});
     targets.addRow({concat("10 frames/s with ", ms.triangles, " cached triangles"), benchNumber(ms.fps),
-                    yesNo(ms.fps >= kTargetMillionFps && ms.triangles >= 1000000)});
+                    benchYesNo(ms.fps >= kTargetMillionFps && ms.triangles >= 1000000)});
     // The change is applied before the frame is composited: shown by that frame.
     targets.addRow({"a light change shows in the next frame (max latency ms vs median frame ms)",
                     concat(benchNumber(1e3 * maxLatency), " vs ", benchNumber(lightFrameMs)),
-                    yesNo(!lights.latencies.empty() && 1e3 * maxLatency <= 2 * std::max(lightFrameMs, 1.0))});
+                    benchYesNo(!lights.latencies.empty() && 1e3 * maxLatency <= 2 * std::max(lightFrameMs, 1.0))});
 
     std::printf("\nViewer frames at %dx%d (rates from %.0f s after the first snapshot shown).\n\n%s", kWidth,
                 kHeight, kWarmUp,
                 table.aligned().c_str());
     std::printf("\nLight changes (%zu).\n\n%s", lights.latencies.size(), latency.aligned().c_str());
     std::printf("\nTargets (issue 6).\n\n%s", targets.aligned().c_str());
-    writeTextFileAtomically((dir / "view_scenarios.csv").string(), table.csv());
-    writeTextFileAtomically((dir / "view_frames.csv").string(), frames.csv());
-    writeTextFileAtomically((dir / "view_latency.csv").string(), latency.csv());
-    writeTextFileAtomically((dir / "view_targets.csv").string(), targets.csv());
+    run.writeCsv("view_scenarios.csv", table);
+    run.writeCsv("view_frames.csv", frames);
+    run.writeCsv("view_latency.csv", latency);
+    run.writeCsv("view_targets.csv", targets);
     const std::vector<GnuplotOutput> plots = {{"out_frames", "view_frames.png"}, {"out_latency", "view_latency.png"}};
-    runGnuplotScript(dir, "view_plots.gp", gnuplotScript(results, plots), plots);
+    run.plot("view_plots.gp", gnuplotScript(results, plots), plots);
 
-    const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+    const double wall = run.seconds();
     std::ostringstream md;
     md << "# Viewer bench\n\n"
        << "- OpenGL (window): " << walk.gl << "\n"
-       << "- mode: " << (options.quick ? "quick" : "full") << ", " << d << " s per walk, seed " << options.seed
+       << "- mode: " << run.mode() << ", " << d << " s per walk, seed " << options.seed
        << "; 1280×720, one sub-pixel per pixel, no frame cap; rates from " << kWarmUp
        << " s after the first snapshot shown\n"
-       << "- load average " << loadStart << " at the start, " << loadAverage() << " at the end; wall time "
+       << "- load average " << run.loadAtStart() << " at the start, " << loadAverage() << " at the end; wall time "
        << benchNumber(wall) << " s\n"
        << "- the worker and the window share this machine's " << std::thread::hardware_concurrency()
        << " hardware threads: on llvmpipe both render on the CPU\n\n"
-       << markdownTable(targets) << "\n" << markdownTable(table);
-    writeTextFileAtomically((dir / "view_summary.md").string(), md.str());
-    std::printf("\nWall time %.1f s; files in %s\n", wall, dir.string().c_str());
+       << targets.markdown() << "\n" << table.markdown();
+    run.write("view_summary.md", md.str());
+    std::printf("\n");
+    run.printWallTime(wall);
     return 0;
 }
 

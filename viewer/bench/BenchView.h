@@ -17,22 +17,19 @@
 // Writes view_frames.csv (every frame), view_scenarios.csv, view_latency.csv,
 // view_targets.csv, view_plots.gp and its PNGs, view_summary.md. Times are
 // reported, never asserted.
+//
+// quick: CI size, 4 s per scenario instead of 15, 8 light changes instead
+// of 20. seed: the worker's jitter. options.backend is not read: the bench
+// draws in a GLFW window, as `view` does.
 #pragma once
 
-#include <cstdint>
-#include <string>
+#include "BenchOptions.h"
 
 namespace ml {
-
-struct BenchViewOptions {
-    std::string outDir = "bench-out";  // made if missing
-    bool quick = false;                // CI size: 4 s per scenario instead of 15, 8 light changes instead of 20
-    uint32_t seed = 1;                 // the worker's jitter
-};
 
 // Needs a display; without one, runs itself again under xvfb-run when it is
 // installed. Returns the exit code; throws std::runtime_error when no window
 // can be opened.
-int runBenchView(const BenchViewOptions& options);
+int runBenchView(const BenchOptions& options);
 
 }  // namespace ml

@@ -1,14 +1,14 @@
 #include "ExactDirectImage.h"
 
+#include "ParallelFor.h"
+
 #include "core/Error.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/reference/ExactIrradiance.h"
 
-#include <atomic>
+#include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <thread>
-#include <vector>
 
 namespace ml {
 
@@ -51,22 +51,7 @@ ImageRgb renderExactDirect(const Scene& scene, const Camera& camera, const Exact
         }
     };
     const int threads = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-    std::atomic<int> next{0};
-    std::vector<std::thread> pool;
-    std::exception_ptr failure;
-    std::mutex failureMutex;
-    for (int t = 0; t < threads; ++t)
-        pool.emplace_back([&] {
-            try {
-                for (int y = next++; y < s.height; y = next++) shadeRow(y);
-            } catch (...) {
-                std::lock_guard<std::mutex> lock(failureMutex);
-                failure = std::current_exception();
-                next = s.height;
-            }
-        });
-    for (std::thread& t : pool) t.join();
-    if (failure) std::rethrow_exception(failure);
+    parallelFor(size_t(s.height), threads, [&](size_t y) { shadeRow(int(y)); });
     return image;
 }
 

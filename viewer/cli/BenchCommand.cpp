@@ -3,9 +3,11 @@
 #include "Options.h"
 
 #include "core/Error.h"
+#include "gpu_sampling/gl/GlContext.h"
 #include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
 #include "viewer/bench/BenchIndirect.h"
+#include "viewer/bench/BenchOptions.h"
 #include "viewer/bench/BenchReport.h"
 #include "viewer/bench/BenchScaling.h"
 #include "viewer/bench/BenchView.h"
@@ -19,123 +21,102 @@ namespace {
 // More benches arrive with later issues; each adds itself here.
 const char* const kBenches = "direct, scaling, convergence, view, indirect, report";
 
+// What a bench's --help says of the options every bench takes: the same
+// options, in each bench's own words.
+struct CommonHelp {
+    const char* quick;  // what --quick makes smaller
+    const char* seed;   // what --seed drives
+    const char* out = "folder for the CSVs, plots and summary (made if missing)";
+    // Takes --gl, a headless back end; false for a bench that opens a window
+    // of its own (bench view).
+    bool headless = true;
+    const char* needs = "the bench needs";  // who, in the message that refuses --gl glfw
+};
+
+// The options every bench takes (BenchOptions: --out, --quick, --gl,
+// --seed), declared and read in one place. A bench declares its own options
+// through options() between the constructor (--out) and parse() (the
+// rest), so that its --help lists them in that order.
+class BenchCommandLine {
+public:
+    BenchCommandLine(const std::string& bench, const CommonHelp& help, const BenchOptions& defaults)
+        : help_(help), defaults_(defaults), options_("bench " + bench) {
+        options_.value("out", "DIR", help.out, defaults.outDir);
+    }
+
+    Options& options() { return options_; }
+    const Options& options() const { return options_; }
+
+    // Declares the rest of the common options and parses `args`; false when
+    // --help was given (printed): nothing more to do.
+    bool parse(const std::vector<std::string>& args) {
+        options_.flag("quick", help_.quick);
+        if (help_.headless)
+            options_.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults_.backend));
+        options_.value("seed", "N", help_.seed, std::to_string(defaults_.seed));
+        return options_.parseOrPrintHelp(args);
+    }
+
+    // Fills the common part of `into` from the parsed arguments.
+    void read(BenchOptions& into) const {
+        into.outDir = options_.str("out");
+        into.quick = options_.isSet("quick");
+        if (help_.headless) {
+            into.backend = parseGlBackend(options_.str("gl"));
+            if (into.backend == GlBackend::Glfw)
+                throw InputError(concat("option --gl: ", help_.needs,
+                                        " a headless back end (osmesa, egl or auto), not glfw"));
+        }
+        into.seed = options_.seed("seed");
+    }
+
+private:
+    CommonHelp help_;
+    BenchOptions defaults_;
+    Options options_;
+};
+
+// A bench with no options of its own.
+int runCommon(const std::string& bench, const CommonHelp& help, const std::vector<std::string>& args,
+              int (*run)(const BenchOptions&)) {
+    BenchCommandLine command(bench, help, BenchOptions{});
+    if (!command.parse(args)) return 0;
+    BenchOptions options;
+    command.read(options);
+    return run(options);
+}
+
 int runDirect(const std::vector<std::string>& args) {
     const BenchDirectOptions defaults;
-    Options o("bench direct");
-    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
+    BenchCommandLine command("direct",
+                             {"CI size: 20x20 points, fewer configurations and passes, no Water scene",
+                              "jitter seed; the same seed repeats a run bit for bit"},
+                             defaults);
     // No default here, so that combining it with --quick can be refused.
-    o.value("points-per-side", "N",
-            concat("receivers per side of the bench floor, N x N in all (default ", defaults.pointsPerSide,
-                   "; --quick uses 20)"));
-    o.flag("quick", "CI size: 20x20 points, fewer configurations and passes, no Water scene");
-    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
-    o.value("seed", "N", "jitter seed; the same seed repeats a run bit for bit", std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
+    command.options().value("points-per-side", "N",
+                            concat("receivers per side of the bench floor, N x N in all (default ",
+                                   defaults.pointsPerSide, "; --quick uses 20)"));
+    if (!command.parse(args)) return 0;
 
     BenchDirectOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    if (o.has("points-per-side")) {
+    command.read(options);
+    if (command.options().has("points-per-side")) {
         if (options.quick)
             throw InputError("--points-per-side cannot be combined with --quick, which uses 20 per side");
-        options.pointsPerSide = o.integer("points-per-side", 1, 1000);
+        options.pointsPerSide = command.options().integer("points-per-side", 1, 1000);
     }
-    options.backend = parseGlBackend(o.str("gl"));
-    if (options.backend == GlBackend::Glfw)
-        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
-    options.seed = o.seed("seed");
     return runBenchDirect(options);
 }
 
-int runScaling(const std::vector<std::string>& args) {
-    const BenchScalingOptions defaults;
-    Options o("bench scaling");
-    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
-    o.flag("quick", "CI size: 1k to 64k triangles, 1 to 8 lights, fewer points");
-    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
-    o.value("seed", "N", "jitter and receiver seed; the same seed repeats a run", std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
-
-    BenchScalingOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    options.backend = parseGlBackend(o.str("gl"));
-    if (options.backend == GlBackend::Glfw)
-        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
-    options.seed = o.seed("seed");
-    return runBenchScaling(options);
-}
-
-int runConvergence(const std::vector<std::string>& args) {
-    const BenchConvergenceOptions defaults;
-    Options o("bench convergence");
-    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
-    o.flag("quick", "CI size: still 64x64 for 3 s, walkthrough of 3 views at 32x32");
-    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
-    o.value("seed", "N", "jitter seed of the cache's sampler and the path tracer", std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
-
-    BenchConvergenceOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    options.backend = parseGlBackend(o.str("gl"));
-    if (options.backend == GlBackend::Glfw)
-        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
-    options.seed = o.seed("seed");
-    return runBenchConvergence(options);
-}
-
-int runViewBench(const std::vector<std::string>& args) {
-    const BenchViewOptions defaults;
-    Options o("bench view");
-    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
-    o.flag("quick", "CI size: 4 s per scenario, 8 light changes");
-    o.value("seed", "N", "the worker's jitter seed", std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
-
-    BenchViewOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    options.seed = o.seed("seed");
-    return runBenchView(options);
-}
-
-int runIndirect(const std::vector<std::string>& args) {
-    const BenchIndirectOptions defaults;
-    Options o("bench indirect");
-    o.value("out", "DIR", "folder for the CSVs, plots and summary (made if missing)", defaults.outDir);
-    o.flag("quick", "CI size: fewer points, passes and configurations, coarse voxels and proxies");
-    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
-    o.value("seed", "N", "points, jitter and path tracer seed; the same seed repeats a run",
-            std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
-
-    BenchIndirectOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    options.backend = parseGlBackend(o.str("gl"));
-    if (options.backend == GlBackend::Glfw)
-        throw InputError("option --gl: the bench needs a headless back end (osmesa, egl or auto), not glfw");
-    options.seed = o.seed("seed");
-    return runBenchIndirect(options);
-}
-
 int runReport(const std::vector<std::string>& args) {
-    const BenchReportOptions defaults;
-    Options o("bench report");
-    o.value("out", "DIR", "folder for index.html and one subfolder per bench (made if missing)", defaults.outDir);
-    o.flag("quick", "every bench in its CI size");
-    o.value("gl", "BACKEND", "headless OpenGL: osmesa, egl or auto", glBackendName(defaults.backend));
-    o.value("seed", "N", "seed passed to every bench", std::to_string(defaults.seed));
-    if (!o.parseOrPrintHelp(args)) return 0;
+    CommonHelp help{"every bench in its CI size", "seed passed to every bench"};
+    help.out = "folder for index.html and one subfolder per bench (made if missing)";
+    help.needs = "the benches need";
+    BenchCommandLine command("report", help, BenchReportOptions{});
+    if (!command.parse(args)) return 0;
 
     BenchReportOptions options;
-    options.outDir = o.str("out");
-    options.quick = o.isSet("quick");
-    options.backend = parseGlBackend(o.str("gl"));
-    if (options.backend == GlBackend::Glfw)
-        throw InputError("option --gl: the benches need a headless back end (osmesa, egl or auto), not glfw");
-    options.seed = o.seed("seed");
+    command.read(options);
     options.commandLine = "meshlight bench report";
     for (const std::string& a : args) options.commandLine += " " + a;
     return runBenchReport(options);
@@ -148,10 +129,26 @@ int runBench(const std::vector<std::string>& args) {
     const std::string& name = args.front();
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     if (name == "direct") return runDirect(rest);
-    if (name == "scaling") return runScaling(rest);
-    if (name == "convergence") return runConvergence(rest);
-    if (name == "indirect") return runIndirect(rest);
-    if (name == "view") return runViewBench(rest);
+    if (name == "scaling")
+        return runCommon(name,
+                         {"CI size: 1k to 64k triangles, 1 to 8 lights, fewer points",
+                          "jitter and receiver seed; the same seed repeats a run"},
+                         rest, runBenchScaling);
+    if (name == "convergence")
+        return runCommon(name,
+                         {"CI size: still 64x64 for 3 s, walkthrough of 3 views at 32x32",
+                          "jitter seed of the cache's sampler and the path tracer"},
+                         rest, runBenchConvergence);
+    if (name == "indirect")
+        return runCommon(name,
+                         {"CI size: fewer points, passes and configurations, coarse voxels and proxies",
+                          "points, jitter and path tracer seed; the same seed repeats a run"},
+                         rest, runBenchIndirect);
+    if (name == "view") {
+        CommonHelp help{"CI size: 4 s per scenario, 8 light changes", "the worker's jitter seed"};
+        help.headless = false;  // it opens a GLFW window, as `view` does
+        return runCommon(name, help, rest, runBenchView);
+    }
     if (name == "report") return runReport(rest);
     if (name == "--help" || name == "-h") {
         std::printf("usage: meshlight bench <name> [options]\nbenches: %s\n"

@@ -54,47 +54,48 @@ def parse_args():
     return a
 
 
-def read_mtl(path):
-    mats, cur = {}, None
+def statements(path):
+    """The lines of an OBJ or MTL file, each as its list of words; blank lines and comments left out."""
     with open(path) as f:
         for line in f:
             t = line.split()
-            if not t or t[0].startswith("#"):
-                continue
-            if t[0] == "newmtl":
-                cur = mats.setdefault(" ".join(t[1:]), {"Kd": (0.8, 0.8, 0.8), "Ke": (0.0, 0.0, 0.0)})
-            elif t[0] in ("Kd", "Ke") and cur is not None:
-                v = [float(x) for x in t[1:4]]
-                cur[t[0]] = tuple(v if len(v) == 3 else [v[0]] * 3)
+            if t and not t[0].startswith("#"):
+                yield t
+
+
+def read_mtl(path):
+    mats, cur = {}, None
+    for t in statements(path):
+        if t[0] == "newmtl":
+            cur = mats.setdefault(" ".join(t[1:]), {"Kd": (0.8, 0.8, 0.8), "Ke": (0.0, 0.0, 0.0)})
+        elif t[0] in ("Kd", "Ke") and cur is not None:
+            v = [float(x) for x in t[1:4]]
+            cur[t[0]] = tuple(v if len(v) == 3 else [v[0]] * 3)
     return mats
 
 
 def read_obj(path, scale):
     verts, faces, face_mat, mat_names, mats = [], [], [], [], {}
     cur = None
-    with open(path) as f:
-        for line in f:
-            t = line.split()
-            if not t or t[0].startswith("#"):
-                continue
-            if t[0] == "v":
-                verts.append(tuple(scale * float(x) for x in t[1:4]))
-            elif t[0] == "f":
-                idx = []
-                for c in t[1:]:
-                    i = int(c.split("/")[0])
-                    idx.append(i - 1 if i > 0 else len(verts) + i)
-                if cur is None:
-                    cur = "default"
-                    mats.setdefault(cur, {"Kd": (0.8, 0.8, 0.8), "Ke": (0.0, 0.0, 0.0)})
-                if cur not in mat_names:
-                    mat_names.append(cur)
-                faces.append(idx)
-                face_mat.append(mat_names.index(cur))
-            elif t[0] == "usemtl":
-                cur = " ".join(t[1:])
-            elif t[0] == "mtllib":
-                mats.update(read_mtl(os.path.join(os.path.dirname(path), " ".join(t[1:]))))
+    for t in statements(path):
+        if t[0] == "v":
+            verts.append(tuple(scale * float(x) for x in t[1:4]))
+        elif t[0] == "f":
+            idx = []
+            for c in t[1:]:
+                i = int(c.split("/")[0])
+                idx.append(i - 1 if i > 0 else len(verts) + i)
+            if cur is None:
+                cur = "default"
+                mats.setdefault(cur, {"Kd": (0.8, 0.8, 0.8), "Ke": (0.0, 0.0, 0.0)})
+            if cur not in mat_names:
+                mat_names.append(cur)
+            faces.append(idx)
+            face_mat.append(mat_names.index(cur))
+        elif t[0] == "usemtl":
+            cur = " ".join(t[1:])
+        elif t[0] == "mtllib":
+            mats.update(read_mtl(os.path.join(os.path.dirname(path), " ".join(t[1:]))))
     return verts, faces, face_mat, [(n, mats[n]) for n in mat_names]
 
 

@@ -1,0 +1,16 @@
+// Work spread over threads for the benches' CPU references (exact images,
+// exact-geometry gathers), where each item is independent of the others.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+
+namespace ml {
+
+// Runs work(i) for every i in [0, count) on `threads` threads (at least
+// one), handing out items one at a time so that uneven items balance. Once
+// an item throws, no more are handed out; when every thread has stopped,
+// the first exception is rethrown on the calling thread.
+void parallelFor(size_t count, int threads, const std::function<void(size_t)>& work);
+
+}  // namespace ml
