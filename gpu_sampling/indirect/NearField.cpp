@@ -1,7 +1,5 @@
 #include "NearField.h"
 
-#include "gpu_sampling/gl/GlApi.h"
-
 #include <algorithm>
 
 namespace ml {
@@ -81,16 +79,6 @@ NearField::Gather NearField::collect(const std::vector<Rgb>& radiance, const Vec
         out.push_back(nt);
     }
     return g;
-}
-
-Rgb readFisheyeIrradiance(const GlApi& gl, int imageSize, std::vector<float>& pixels) {
-    pixels.resize(size_t(imageSize) * imageSize * 4);
-    gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-    gl.ReadPixels(0, 0, imageSize, imageSize, GL_RGBA, GL_FLOAT, pixels.data());
-    Rgb sum(0.0);
-    for (size_t q = 0; q < size_t(imageSize) * imageSize; ++q)
-        sum += Rgb(pixels[4 * q], pixels[4 * q + 1], pixels[4 * q + 2]);
-    return sum * (4.0 / (double(imageSize) * imageSize));
 }
 
 }  // namespace ml

@@ -55,10 +55,4 @@ private:
     uint32_t generation_ = 0;
 };
 
-struct GlApi;
-// Reads the bound framebuffer's N×N fish-eye image (RGBA32F, into `pixels`)
-// and returns its irradiance: each pixel covers (2/N)² of the unit disc,
-// whose area π is the hemisphere's projected solid angle.
-Rgb readFisheyeIrradiance(const GlApi& gl, int imageSize, std::vector<float>& pixels);
-
 }  // namespace ml

@@ -1,6 +1,7 @@
 #include "ProxyClusters.h"
 
 #include "core/Error.h"
+#include "detail/ProxyClustersGpu.h"
 #include "gpu_sampling/gl/GlContext.h"
 
 #include <algorithm>
@@ -20,9 +21,11 @@ struct ClusterVertex {
 }  // namespace
 
 ProxyClusters::ProxyClusters(GlContext& context, const RadianceProxy& proxy, int blockVoxels)
-    : gl_(&context.gl()), positionCount_(proxy.positions().size()) {
+    : gpu_(std::make_unique<Gpu>()) {
     ML_ASSERT(blockVoxels >= 1, "cluster block of ", blockVoxels, " voxels");
     const GlApi& gl = context.gl();
+    gpu_->gl = &gl;
+    gpu_->positionCount = proxy.positions().size();
     const VoxelGrid& grid = proxy.grid();
     const std::vector<Vec3>& positions = proxy.positions();
     const std::vector<ProxyTriangle>& triangles = proxy.triangles();
@@ -106,27 +109,30 @@ ProxyClusters::ProxyClusters(GlContext& context, const RadianceProxy& proxy, int
         for (int k = 0; k < 3; ++k)
             vertices[t.corners[k]].normalClosed = glm::vec4(glm::vec3(t.normal), t.closed ? 1.f : 0.f);
     vertexBytes_ = std::max<size_t>(vertices.size(), 1) * sizeof(ClusterVertex);
-    vertices_ = makeBuffer(gl, vertexBytes_, vertices.data());
-    vao_ = makeVertexArray(gl);
-    gl.EnableVertexArrayAttrib(vao_.id(), 0);
-    gl.VertexArrayAttribFormat(vao_.id(), 0, 3, GL_FLOAT, GL_FALSE, 0);
-    gl.VertexArrayAttribBinding(vao_.id(), 0, 0);
-    gl.EnableVertexArrayAttrib(vao_.id(), 1);
-    gl.VertexArrayAttribFormat(vao_.id(), 1, 4, GL_FLOAT, GL_FALSE, GLuint(sizeof(glm::vec3)));
-    gl.VertexArrayAttribBinding(vao_.id(), 1, 0);
-    gl.VertexArrayVertexBuffer(vao_.id(), 0, vertices_.id(), 0, sizeof(ClusterVertex));
-    gl.EnableVertexArrayAttrib(vao_.id(), 2);
-    gl.VertexArrayAttribFormat(vao_.id(), 2, 3, GL_FLOAT, GL_FALSE, 0);
-    gl.VertexArrayAttribBinding(vao_.id(), 2, 1);
+    gpu_->vertices = makeBuffer(gl, vertexBytes_, vertices.data());
+    gpu_->vao = makeVertexArray(gl);
+    const GLuint vao = gpu_->vao.id();
+    gl.EnableVertexArrayAttrib(vao, 0);
+    gl.VertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
+    gl.VertexArrayAttribBinding(vao, 0, 0);
+    gl.EnableVertexArrayAttrib(vao, 1);
+    gl.VertexArrayAttribFormat(vao, 1, 4, GL_FLOAT, GL_FALSE, GLuint(sizeof(glm::vec3)));
+    gl.VertexArrayAttribBinding(vao, 1, 0);
+    gl.VertexArrayVertexBuffer(vao, 0, gpu_->vertices.id(), 0, sizeof(ClusterVertex));
+    gl.EnableVertexArrayAttrib(vao, 2);
+    gl.VertexArrayAttribFormat(vao, 2, 3, GL_FLOAT, GL_FALSE, 0);
+    gl.VertexArrayAttribBinding(vao, 2, 1);
     checkGl(gl, "uploading the proxy's clusters");
 }
 
-GlBuffer ProxyClusters::uploadRadiance(const std::vector<Rgb>& radiance) const {
-    ML_ASSERT(radiance.size() == positionCount_, radiance.size(), " radiances for ", positionCount_,
+ProxyClusters::~ProxyClusters() = default;
+
+GlBuffer ProxyClusters::Gpu::uploadRadiance(const std::vector<Rgb>& radiance) const {
+    ML_ASSERT(radiance.size() == positionCount, radiance.size(), " radiances for ", positionCount,
               " proxy positions");
     std::vector<glm::vec3> values(std::max<size_t>(radiance.size(), 1), glm::vec3(0.f));
     for (size_t v = 0; v < radiance.size(); ++v) values[v] = glm::vec3(radiance[v]);
-    return makeBuffer(*gl_, values.size() * sizeof(glm::vec3), values.data());
+    return makeBuffer(*gl, values.size() * sizeof(glm::vec3), values.data());
 }
 
 size_t ProxyClusters::cull(const Vec3& x, const Vec3& n, double lift, const Vec3& eye,

@@ -13,8 +13,8 @@
 #pragma once
 
 #include "RadianceProxy.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
+#include <memory>
 #include <vector>
 
 namespace ml {
@@ -30,14 +30,13 @@ class ProxyClusters {
 public:
     // `blockVoxels`: cluster edge in voxels, typical 4. `context` current on this thread.
     ProxyClusters(GlContext& context, const RadianceProxy& proxy, int blockVoxels = 4);
+    ~ProxyClusters();
 
-    // A vertex buffer of one radiance per proxy position (RGB float), for
-    // binding point 1 of vertexArray().
-    GlBuffer uploadRadiance(const std::vector<Rgb>& radiance) const;
-    // Attributes 0: position relative to the grid's origin (vec3), 1: the
-    // reflecting side's normal and 1 if closed (vec4), both from binding 0;
-    // 2: radiance (vec3) from binding 1. Indices come from the caller's buffer.
-    const GlVertexArray& vertexArray() const { return vao_; }
+    // The proxy's vertices and the vertex array that draws them, and the
+    // radiance uploads, defined in detail/ProxyClustersGpu.h for the gathers
+    // that draw them, so that this header needs no GL.
+    struct Gpu;
+    const Gpu& gpu() const { return *gpu_; }
 
     // Appends to `indices` the triangles (3 indices each) of every cluster
     // that may show something to an eye at `eye` (world units) gathering
@@ -61,14 +60,11 @@ private:
         bool closed = false;
         uint32_t first = 0, count = 0;  // range in indices_
     };
-    const GlApi* gl_;
-    size_t positionCount_ = 0;
     std::vector<Cluster> clusters_;
     std::vector<uint32_t> indices_;     // every triangle, cluster by cluster
     std::vector<uint32_t> triangleOf_;  // the proxy triangle of each, in the same order
-    GlBuffer vertices_;
-    GlVertexArray vao_;
     size_t vertexBytes_ = 0;
+    std::unique_ptr<Gpu> gpu_;
 };
 
 }  // namespace ml

@@ -1,7 +1,10 @@
 #include "SliceGather.h"
 
 #include "core/Error.h"
+#include "detail/GatherReadback.h"
+#include "detail/VoxelSlicesGpu.h"
 #include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/gl/GlObjects.h"
 #include "meshlight_gpu_shaders.h"
 
 #include <chrono>
@@ -25,36 +28,51 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 }  // namespace
 
+struct SliceGather::Gpu {
+    GlProgram slicePass, marchPass, nearPass;
+    // One colour + depth target per image size in use.
+    struct Target {
+        GlTexture color, depth;
+        GlFramebuffer fb;
+    };
+    Target& target(const GlApi& gl, int imageSize);
+    std::map<int, Target> targets;
+    GlVertexArray emptyVao;
+    GlBuffer nearBuffer;
+    size_t nearCapacity = 0;
+};
+
 SliceGather::SliceGather(GlContext& context, const Scene& scene, const GatherSettings& settings)
     : context_(context),
       settings_((settings.validate(), settings)),
       proxy_(scene, VoxelGrid::fit(scene.bounds, settings.resolution)),
+      gpu_(std::make_unique<Gpu>()),
       nearField_(proxy_) {
     const GlApi& gl = context_.gl();
     const std::string common = glslSource({shaders::common_jitter_glsl, shaders::fisheye_common_glsl});
     auto body = [&](const char* src) { return common + src; };
-    slicePass_ = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
-                                {GL_FRAGMENT_SHADER, "gather_slices.frag", body(shaders::gather_slices_frag)}});
-    marchPass_ = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
-                                {GL_FRAGMENT_SHADER, "gather_slices_march.frag", body(shaders::gather_slices_march_frag)}});
-    nearPass_ = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
-                               {GL_FRAGMENT_SHADER, "gather_near.frag", body(shaders::gather_near_frag)}});
-    emptyVao_ = makeVertexArray(gl);
+    Gpu& g = *gpu_;
+    g.slicePass = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
+                                 {GL_FRAGMENT_SHADER, "gather_slices.frag", body(shaders::gather_slices_frag)}});
+    g.marchPass = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
+                                 {GL_FRAGMENT_SHADER, "gather_slices_march.frag", body(shaders::gather_slices_march_frag)}});
+    g.nearPass = GlProgram(gl, {{GL_VERTEX_SHADER, "fullscreen.vert", glslSource({shaders::fullscreen_vert})},
+                                {GL_FRAGMENT_SHADER, "gather_near.frag", body(shaders::gather_near_frag)}});
+    g.emptyVao = makeVertexArray(gl);
     checkGl(gl, "creating the slice gather");
 }
 
 SliceGather::~SliceGather() = default;
 
-SliceGather::Target& SliceGather::target(int n) {
-    auto it = targets_.find(n);
-    if (it != targets_.end()) return it->second;
-    const GlApi& gl = context_.gl();
+SliceGather::Gpu::Target& SliceGather::Gpu::target(const GlApi& gl, int n) {
+    auto it = targets.find(n);
+    if (it != targets.end()) return it->second;
     Target t;
     t.color = makeTexture2D(gl, GL_RGBA32F, n, n);
     t.depth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, n, n);
     t.fb = makeFramebuffer(gl, {t.color.id()}, t.depth.id(), "fish-eye gather");
     gl.NamedFramebufferReadBuffer(t.fb.id(), GL_COLOR_ATTACHMENT0);
-    return targets_.emplace(n, std::move(t)).first->second;
+    return targets.emplace(n, std::move(t)).first->second;
 }
 
 void SliceGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance) {
@@ -76,7 +94,7 @@ void SliceGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& 
 void SliceGather::releaseSource(size_t slot) { slots_.erase(slot); }
 
 Rgb SliceGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uint32_t seed) {
-    const auto t0 = Clock::now();
+    GatherReadback readback(phases_, stats_, timePhases_);
     const Slot& s = slots_.at(slot);
     const VoxelSlices& slices = *s.slices;
     const VoxelGrid& grid = proxy_.grid();
@@ -96,15 +114,16 @@ Rgb SliceGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uint32
     const Vec3 nearLo = box.lo, nearHi = box.hi;
     const int k = settings_.nearVoxels;
     lastNear_ = near.size();
-    if (near.size() > nearCapacity_) {
-        nearCapacity_ = std::max(near.size(), 2 * nearCapacity_);
-        nearBuffer_ = makeBuffer(gl, nearCapacity_ * sizeof(NearTriangleGpu), nullptr, GL_DYNAMIC_DRAW);
+    Gpu& g = *gpu_;
+    if (near.size() > g.nearCapacity) {
+        g.nearCapacity = std::max(near.size(), 2 * g.nearCapacity);
+        g.nearBuffer = makeBuffer(gl, g.nearCapacity * sizeof(NearTriangleGpu), nullptr, GL_DYNAMIC_DRAW);
     }
-    if (!near.empty()) gl.NamedBufferSubData(nearBuffer_.id(), 0, GLsizeiptr(near.size() * sizeof(NearTriangleGpu)), near.data());
-    const auto t1 = Clock::now();
-    phases_.nearField += std::chrono::duration<double>(t1 - t0).count();
+    if (!near.empty())
+        gl.NamedBufferSubData(g.nearBuffer.id(), 0, GLsizeiptr(near.size() * sizeof(NearTriangleGpu)), near.data());
+    readback.cpuDone();
 
-    Target& target = this->target(imageSize);
+    Gpu::Target& target = g.target(gl, imageSize);
     pixels_.resize(size_t(imageSize) * imageSize * 4);
     lastImageSize_ = imageSize;
     gl.BindFramebuffer(GL_FRAMEBUFFER, target.fb.id());
@@ -123,7 +142,7 @@ Rgb SliceGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uint32
     gl.DepthMask(GL_TRUE);
     gl.Disable(GL_BLEND);
     gl.Disable(GL_CULL_FACE);
-    gl.BindVertexArray(emptyVao_.id());
+    gl.BindVertexArray(g.emptyVao.id());
     const glm::mat3 basis{glm::vec3(r), glm::vec3(u), glm::vec3(n)};
     auto common = [&](const GlProgram& p) {
         p.use();
@@ -138,84 +157,73 @@ Rgb SliceGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uint32
         gl.Uniform3i(p.uniform("nearCellHi"), cell[0] + k, cell[1] + k, cell[2] + k);
     };
     if (!near.empty()) {
-        common(nearPass_);
-        gl.Uniform1i(nearPass_.uniform("nearCount"), GLint(near.size()));
-        gl.Uniform1f(nearPass_.uniform("minDistance"), float(1e-7 * diagonal));
-        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, nearBuffer_.id());
+        common(g.nearPass);
+        gl.Uniform1i(g.nearPass.uniform("nearCount"), GLint(near.size()));
+        gl.Uniform1f(g.nearPass.uniform("minDistance"), float(1e-7 * diagonal));
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g.nearBuffer.id());
         gl.DrawArrays(GL_TRIANGLES, 0, 3);
     }
     if (settings_.quadPerFace) {
-        common(slicePass_);
+        const GlProgram& slicePass = g.slicePass;
+        common(slicePass);
         for (int a = 0; a < 3; ++a) {
             const VoxelSlices::Axis& ax = slices.axes()[size_t(a)];
             if (ax.layers() == 0) continue;
             const int dims = grid.dims[size_t(a)];
             const int c = std::clamp(int(std::floor(eye[a] / grid.voxel)), 0, dims - 1);
-            gl.Uniform1i(slicePass_.uniform("axis"), a);
-            gl.Uniform2f(slicePass_.uniform("extentUV"), float(ax.width * grid.voxel), float(ax.height * grid.voxel));
-            gl.Uniform1f(slicePass_.uniform("voxel"), float(grid.voxel));
-            gl.Uniform2f(slicePass_.uniform("texelOrigin"), float(0.5 * grid.voxel), float(0.5 * grid.voxel));
-            gl.Uniform2f(slicePass_.uniform("texScale"), float(ax.width) / float(slices.arrayWidth()),
+            gl.Uniform1i(slicePass.uniform("axis"), a);
+            gl.Uniform2f(slicePass.uniform("extentUV"), float(ax.width * grid.voxel), float(ax.height * grid.voxel));
+            gl.Uniform1f(slicePass.uniform("voxel"), float(grid.voxel));
+            gl.Uniform2f(slicePass.uniform("texelOrigin"), float(0.5 * grid.voxel), float(0.5 * grid.voxel));
+            gl.Uniform2f(slicePass.uniform("texScale"), float(ax.width) / float(slices.arrayWidth()),
                          float(ax.height) / float(slices.arrayHeight()));
-            gl.BindTextureUnit(0, slices.faces().id());
-            gl.BindTextureUnit(1, slices.depths().id());
-            gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, slices.planes().id());
-            gl.Uniform1i(slicePass_.uniform("ownSlice"), 0);
+            gl.BindTextureUnit(0, slices.gpu().faces.id());
+            gl.BindTextureUnit(1, slices.gpu().depths.id());
+            gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, slices.gpu().planes.id());
+            gl.Uniform1i(slicePass.uniform("ownSlice"), 0);
             // Upper faces of the slices below the point, seen when it can look down...
             const int uppers = ax.upperBefore[size_t(c)];
             if (uppers > 0 && n[a] < 0.99999) {
-                gl.Uniform1i(slicePass_.uniform("firstLayer"), ax.firstLayer);
+                gl.Uniform1i(slicePass.uniform("firstLayer"), ax.firstLayer);
                 gl.DrawArraysInstancedBaseInstance(GL_TRIANGLES, 0, 3, uppers, 0);
             }
             // ...lower faces of the slices above it, when it can look up.
             const int lowerFirst = ax.upperBefore[size_t(dims)] + ax.lowerBefore[size_t(c) + 1];
             const int lowers = ax.layers() - lowerFirst;
             if (lowers > 0 && n[a] > -0.99999) {
-                gl.Uniform1i(slicePass_.uniform("firstLayer"), ax.firstLayer + lowerFirst);
+                gl.Uniform1i(slicePass.uniform("firstLayer"), ax.firstLayer + lowerFirst);
                 gl.DrawArraysInstancedBaseInstance(GL_TRIANGLES, 0, 3, lowers, 0);
             }
             // ...and the point's own slice, along axes its surface is nearly
             // parallel to (gather_slices_march.frag says why).
             if (std::abs(n[a]) < 0.1) {
-                gl.Uniform1i(slicePass_.uniform("ownSlice"), 1);
+                gl.Uniform1i(slicePass.uniform("ownSlice"), 1);
                 if (ax.upperBefore[size_t(c) + 1] > ax.upperBefore[size_t(c)]) {
-                    gl.Uniform1i(slicePass_.uniform("firstLayer"), ax.firstLayer + ax.upperBefore[size_t(c)]);
+                    gl.Uniform1i(slicePass.uniform("firstLayer"), ax.firstLayer + ax.upperBefore[size_t(c)]);
                     gl.DrawArraysInstancedBaseInstance(GL_TRIANGLES, 0, 3, 1, 0);
                 }
                 if (ax.lowerBefore[size_t(c) + 1] > ax.lowerBefore[size_t(c)]) {
-                    gl.Uniform1i(slicePass_.uniform("firstLayer"),
+                    gl.Uniform1i(slicePass.uniform("firstLayer"),
                                  ax.firstLayer + ax.upperBefore[size_t(dims)] + ax.lowerBefore[size_t(c)]);
                     gl.DrawArraysInstancedBaseInstance(GL_TRIANGLES, 0, 3, 1, 0);
                 }
             }
         }
     } else {
-        common(marchPass_);
-        gl.Uniform3i(marchPass_.uniform("layerOffset"), slices.layerTableOffset(0), slices.layerTableOffset(1),
+        const GlProgram& marchPass = g.marchPass;
+        common(marchPass);
+        gl.Uniform3i(marchPass.uniform("layerOffset"), slices.layerTableOffset(0), slices.layerTableOffset(1),
                      slices.layerTableOffset(2));
-        gl.Uniform3i(marchPass_.uniform("dims"), grid.dims[0], grid.dims[1], grid.dims[2]);
-        gl.Uniform1f(marchPass_.uniform("voxel"), float(grid.voxel));
-        gl.Uniform2f(marchPass_.uniform("arraySize"), float(slices.arrayWidth()), float(slices.arrayHeight()));
-        gl.BindTextureUnit(0, slices.faces().id());
-        gl.BindTextureUnit(1, slices.depths().id());
-        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, slices.layerTable().id());
+        gl.Uniform3i(marchPass.uniform("dims"), grid.dims[0], grid.dims[1], grid.dims[2]);
+        gl.Uniform1f(marchPass.uniform("voxel"), float(grid.voxel));
+        gl.Uniform2f(marchPass.uniform("arraySize"), float(slices.arrayWidth()), float(slices.arrayHeight()));
+        gl.BindTextureUnit(0, slices.gpu().faces.id());
+        gl.BindTextureUnit(1, slices.gpu().depths.id());
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, slices.gpu().layerTable.id());
         gl.DrawArrays(GL_TRIANGLES, 0, 3);
     }
-    if (timePhases_) gl.Finish();
-    const auto t2 = Clock::now();
-    phases_.draw += std::chrono::duration<double>(t2 - t1).count();
-
-    const Rgb e = readFisheyeIrradiance(gl, imageSize, pixels_);
-    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-    const auto t3 = Clock::now();
-    phases_.readback += std::chrono::duration<double>(t3 - t2).count();
-    stats_.estimates += 1;
-    stats_.estimateSeconds += std::chrono::duration<double>(t3 - t0).count();
-    if (!isFinite(e)) {
-        checkGl(gl, "gathering indirect light");
-        throw std::runtime_error(concat("non-finite indirect irradiance at (", x.x, ", ", x.y, ", ", x.z, ")"));
-    }
-    return e;
+    return readback.finish(
+        gl, [&] { return readFisheyeIrradiance(gl, imageSize, pixels_); }, "gathering indirect light", x);
 }
 
 IndirectStats SliceGather::stats() const {

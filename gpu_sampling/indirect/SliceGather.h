@@ -12,7 +12,6 @@
 #include "RadianceProxy.h"
 #include "VoxelSlices.h"
 #include "cache/IndirectEstimator.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
 #include <map>
 #include <memory>
@@ -20,7 +19,6 @@
 namespace ml {
 
 class GlContext;
-
 
 // Seconds per phase over every gather so far (with `timePhases`, the GPU is
 // waited for after each phase, so the parts add up to the whole).
@@ -64,22 +62,15 @@ private:
         std::vector<Rgb> radiance;
         std::unique_ptr<VoxelSlices> slices;
     };
+    // Its programs, targets and near-triangle buffer, defined in the .cpp so
+    // that this header needs no GL.
+    struct Gpu;
 
     GlContext& context_;
     GatherSettings settings_;
     RadianceProxy proxy_;
     std::map<size_t, Slot> slots_;
-    GlProgram slicePass_, marchPass_, nearPass_;
-    // One colour + depth target per image size in use.
-    struct Target {
-        GlTexture color, depth;
-        GlFramebuffer fb;
-    };
-    Target& target(int imageSize);
-    std::map<int, Target> targets_;
-    GlVertexArray emptyVao_;
-    GlBuffer nearBuffer_;
-    size_t nearCapacity_ = 0;
+    std::unique_ptr<Gpu> gpu_;
     NearField nearField_;
     std::vector<NearTriangleGpu> near_;
     std::vector<float> pixels_;

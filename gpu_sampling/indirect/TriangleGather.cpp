@@ -2,7 +2,10 @@
 
 #include "core/Error.h"
 #include "core/Random.h"
+#include "detail/GatherReadback.h"
+#include "detail/ProxyClustersGpu.h"
 #include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/gl/GlObjects.h"
 #include "meshlight_gpu_shaders.h"
 
 #include <chrono>
@@ -72,13 +75,28 @@ constexpr size_t kMaxPieces = size_t(1) << 18;
 
 }  // namespace
 
+struct TriangleGather::Gpu {
+    GlProgram program;
+    GlTexture color, depth;
+    GlFramebuffer fb;
+    GlBuffer indexBuffer;  // the culled triangles' indices, view by view
+    size_t indexCapacity = 0;
+    // Fish-eye tessellation: the pieces (TriangleGather::pieces_) and how they are read.
+    GlBuffer pieceBuffer;
+    size_t pieceCapacity = 0;
+    GlVertexArray pieceVao;
+    std::map<size_t, GlBuffer> radiance;  // per slot: ProxyClusters::Gpu::uploadRadiance
+};
+
 TriangleGather::TriangleGather(GlContext& context, const Scene& scene, const TriangleGatherSettings& settings)
     : context_(context),
       settings_((settings.validate(), settings)),
       proxy_(scene, VoxelGrid::fit(scene.bounds, settings.resolution)),
       clusters_(context, proxy_, settings.clusterVoxels),
-      eyeRule_(proxy_) {
+      eyeRule_(proxy_),
+      gpu_(std::make_unique<Gpu>()) {
     const GlApi& gl = context_.gl();
+    Gpu& g = *gpu_;
     const int n = settings_.imageSize;
     switch (settings_.projection) {
         case TriangleProjection::Perspective: {
@@ -154,26 +172,26 @@ TriangleGather::TriangleGather(GlContext& context, const Scene& scene, const Tri
             maxProxyEdge_ = std::max(maxProxyEdge_, glm::length(proxy_.positions()[t.corners[k]] -
                                                                 proxy_.positions()[t.corners[(k + 1) % 3]]));
     if (fisheye) {
-        pieceVao_ = makeVertexArray(gl);
+        g.pieceVao = makeVertexArray(gl);
         const int counts[] = {3, 4, 3};
         GLuint offset = 0;
         for (GLuint i = 0; i < 3; ++i) {
-            gl.EnableVertexArrayAttrib(pieceVao_.id(), i);
-            gl.VertexArrayAttribFormat(pieceVao_.id(), i, counts[i], GL_FLOAT, GL_FALSE, offset);
-            gl.VertexArrayAttribBinding(pieceVao_.id(), i, 0);
+            gl.EnableVertexArrayAttrib(g.pieceVao.id(), i);
+            gl.VertexArrayAttribFormat(g.pieceVao.id(), i, counts[i], GL_FLOAT, GL_FALSE, offset);
+            gl.VertexArrayAttribBinding(g.pieceVao.id(), i, 0);
             offset += GLuint(counts[i] * sizeof(float));
         }
     }
-    program_ = GlProgram(
+    g.program = GlProgram(
         gl,
         {{GL_VERTEX_SHADER, fisheye ? "gather_triangles_fisheye.vert" : "gather_triangles_perspective.vert",
           glslSource({fisheye ? shaders::gather_triangles_fisheye_vert : shaders::gather_triangles_perspective_vert})},
          {GL_FRAGMENT_SHADER, "gather_triangles.frag",
           glslSource({fisheye ? "#define FISHEYE_DEPTH\n" : "", shaders::gather_triangles_frag})}});
-    color_ = makeTexture2D(gl, GL_RGBA32F, atlasWidth_, atlasHeight_);
-    depth_ = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, atlasWidth_, atlasHeight_);
-    fb_ = makeFramebuffer(gl, {color_.id()}, depth_.id(), "triangle gather");
-    gl.NamedFramebufferReadBuffer(fb_.id(), GL_COLOR_ATTACHMENT0);
+    g.color = makeTexture2D(gl, GL_RGBA32F, atlasWidth_, atlasHeight_);
+    g.depth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, atlasWidth_, atlasHeight_);
+    g.fb = makeFramebuffer(gl, {g.color.id()}, g.depth.id(), "triangle gather");
+    gl.NamedFramebufferReadBuffer(g.fb.id(), GL_COLOR_ATTACHMENT0);
     pixels_.resize(size_t(atlasWidth_) * atlasHeight_ * 4);
     checkGl(gl, "creating the triangle gather");
 }
@@ -182,10 +200,10 @@ TriangleGather::~TriangleGather() = default;
 
 void TriangleGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
     const auto t0 = Clock::now();
-    Slot s;
-    s.radiance = proxy_.radianceFrom(irradiance);
-    s.buffer = clusters_.uploadRadiance(s.radiance);
-    slots_[slot] = std::move(s);
+    std::vector<Rgb> radiance = proxy_.radianceFrom(irradiance);
+    GlBuffer buffer = clusters_.gpu().uploadRadiance(radiance);
+    radiance_[slot] = std::move(radiance);
+    gpu_->radiance[slot] = std::move(buffer);
     checkGl(context_.gl(), "uploading the proxy's radiance");
     stats_.buildSeconds += since(t0);
     stats_.source =
@@ -193,11 +211,16 @@ void TriangleGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy
                clusters_.clusterCount(), " clusters, ", memoryBytes() / 1e6, " MB; built in ", since(t0), " s");
 }
 
-void TriangleGather::releaseSource(size_t slot) { slots_.erase(slot); }
+void TriangleGather::releaseSource(size_t slot) {
+    radiance_.erase(slot);
+    gpu_->radiance.erase(slot);
+}
 
 Rgb TriangleGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uint32_t seed) {
-    const auto t0 = Clock::now();
-    const Slot& s = slots_.at(slot);
+    GatherReadback readback(phases_, stats_, timePhases_);
+    const std::vector<Rgb>& radiance = radiance_.at(slot);
+    Gpu& g = *gpu_;
+    const GlBuffer& radianceBuffer = g.radiance.at(slot);
     const VoxelGrid& grid = proxy_.grid();
     const GlApi& gl = context_.gl();
     const bool fisheye = settings_.projection == TriangleProjection::Fisheye;
@@ -256,29 +279,29 @@ Rgb TriangleGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uin
                                  tessellate ? &nearTriangles_ : nullptr);
     }
     lastTriangles_ = indices_.size() / 3;
-    if (fisheye && settings_.tessellationDegrees > 0) tessellate(s.radiance, x, n, lift, eye);
+    if (fisheye && settings_.tessellationDegrees > 0) tessellate(radiance, x, n, lift, eye);
     nearTriangles_.clear();
-    if (indices_.size() > indexCapacity_) {
-        indexCapacity_ = std::max(indices_.size(), 2 * indexCapacity_);
-        indexBuffer_ = makeBuffer(gl, indexCapacity_ * sizeof(uint32_t), nullptr, GL_DYNAMIC_DRAW);
+    if (indices_.size() > g.indexCapacity) {
+        g.indexCapacity = std::max(indices_.size(), 2 * g.indexCapacity);
+        g.indexBuffer = makeBuffer(gl, g.indexCapacity * sizeof(uint32_t), nullptr, GL_DYNAMIC_DRAW);
     }
     if (!indices_.empty())
-        gl.NamedBufferSubData(indexBuffer_.id(), 0, GLsizeiptr(indices_.size() * sizeof(uint32_t)), indices_.data());
+        gl.NamedBufferSubData(g.indexBuffer.id(), 0, GLsizeiptr(indices_.size() * sizeof(uint32_t)), indices_.data());
     const size_t pieceVertices = pieces_.size() / kPieceFloats;
     if (pieceVertices > 0) {
-        if (pieces_.size() > pieceCapacity_) {
-            pieceCapacity_ = std::max(pieces_.size(), 2 * pieceCapacity_);
-            pieceBuffer_ = makeBuffer(gl, pieceCapacity_ * sizeof(float), nullptr, GL_DYNAMIC_DRAW);
-            gl.VertexArrayVertexBuffer(pieceVao_.id(), 0, pieceBuffer_.id(), 0, kPieceFloats * sizeof(float));
+        if (pieces_.size() > g.pieceCapacity) {
+            g.pieceCapacity = std::max(pieces_.size(), 2 * g.pieceCapacity);
+            g.pieceBuffer = makeBuffer(gl, g.pieceCapacity * sizeof(float), nullptr, GL_DYNAMIC_DRAW);
+            gl.VertexArrayVertexBuffer(g.pieceVao.id(), 0, g.pieceBuffer.id(), 0, kPieceFloats * sizeof(float));
         }
-        gl.NamedBufferSubData(pieceBuffer_.id(), 0, GLsizeiptr(pieces_.size() * sizeof(float)), pieces_.data());
+        gl.NamedBufferSubData(g.pieceBuffer.id(), 0, GLsizeiptr(pieces_.size() * sizeof(float)), pieces_.data());
         lastTriangles_ += pieceVertices / 3;
     }
-    const auto t1 = Clock::now();
-    phases_.nearField += std::chrono::duration<double>(t1 - t0).count();
+    readback.cpuDone();
 
     // Draw. Every state the pass relies on is set here: other passes share the context.
-    gl.BindFramebuffer(GL_FRAMEBUFFER, fb_.id());
+    const GlProgram& program = g.program;
+    gl.BindFramebuffer(GL_FRAMEBUFFER, g.fb.id());
     gl.Viewport(0, 0, atlasWidth_, atlasHeight_);
     gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     gl.DepthMask(GL_TRUE);
@@ -296,18 +319,18 @@ Rgb TriangleGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uin
     } else {
         gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     }
-    program_.use();
-    gl.Uniform3f(program_.uniform("eye"), float(eyeRel.x), float(eyeRel.y), float(eyeRel.z));
-    gl.Uniform1f(program_.uniform("maxDistance"), float(2 * diagonal));
-    const GlVertexArray& vao = clusters_.vertexArray();
-    gl.VertexArrayVertexBuffer(vao.id(), 1, s.buffer.id(), 0, sizeof(glm::vec3));
-    gl.VertexArrayElementBuffer(vao.id(), indexBuffer_.id());
+    program.use();
+    gl.Uniform3f(program.uniform("eye"), float(eyeRel.x), float(eyeRel.y), float(eyeRel.z));
+    gl.Uniform1f(program.uniform("maxDistance"), float(2 * diagonal));
+    const GlVertexArray& vao = clusters_.gpu().vao;
+    gl.VertexArrayVertexBuffer(vao.id(), 1, radianceBuffer.id(), 0, sizeof(glm::vec3));
+    gl.VertexArrayElementBuffer(vao.id(), g.indexBuffer.id());
     gl.BindVertexArray(vao.id());
     const double nearDistance = 1e-7 * diagonal;
     if (fisheye) {
         const glm::mat3 basis{glm::vec3(r), glm::vec3(u), glm::vec3(n)};
-        gl.UniformMatrix3fv(program_.uniform("basis"), 1, GL_FALSE, &basis[0][0]);
-        gl.Uniform2f(program_.uniform("shift"), float(shift.x), float(shift.y));
+        gl.UniformMatrix3fv(program.uniform("basis"), 1, GL_FALSE, &basis[0][0]);
+        gl.Uniform2f(program.uniform("shift"), float(shift.x), float(shift.y));
     }
     for (size_t k = 0; k < views_.size(); ++k) {
         const View& v = views_[k];
@@ -334,14 +357,14 @@ Rgb TriangleGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uin
             proj[3][2] = nearDistance;
             proj[2][3] = 1.0;
             const glm::mat4 clipFromOrigin(proj * view);
-            gl.UniformMatrix4fv(program_.uniform("clipFromOrigin"), 1, GL_FALSE, &clipFromOrigin[0][0]);
+            gl.UniformMatrix4fv(program.uniform("clipFromOrigin"), 1, GL_FALSE, &clipFromOrigin[0][0]);
         }
         gl.DrawElements(GL_TRIANGLES, GLsizei(3 * c.count), GL_UNSIGNED_INT,
                         reinterpret_cast<const void*>(3 * c.first * sizeof(uint32_t)));
     }
     if (pieceVertices > 0) {
         gl.Viewport(0, 0, atlasWidth_, atlasHeight_);
-        gl.BindVertexArray(pieceVao_.id());
+        gl.BindVertexArray(g.pieceVao.id());
         gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(pieceVertices));
     }
     if (fisheye) {
@@ -349,25 +372,15 @@ Rgb TriangleGather::estimate(size_t slot, const Vec3& x, const Vec3& normal, uin
     } else {
         gl.ClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);  // GL's default, which other passes assume
     }
-    if (timePhases_) gl.Finish();
-    const auto t2 = Clock::now();
-    phases_.draw += std::chrono::duration<double>(t2 - t1).count();
-
-    gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-    gl.ReadPixels(0, 0, atlasWidth_, atlasHeight_, GL_RGBA, GL_FLOAT, pixels_.data());
-    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-    Rgb e(0.0);
-    for (size_t p = 0; p < weights_.size(); ++p)
-        e += weights_[p] * Rgb(pixels_[4 * p], pixels_[4 * p + 1], pixels_[4 * p + 2]);
-    const auto t3 = Clock::now();
-    phases_.readback += std::chrono::duration<double>(t3 - t2).count();
-    stats_.estimates += 1;
-    stats_.estimateSeconds += std::chrono::duration<double>(t3 - t0).count();
-    if (!isFinite(e)) {
-        checkGl(gl, "gathering indirect light from triangles");
-        throw std::runtime_error(concat("non-finite indirect irradiance at (", x.x, ", ", x.y, ", ", x.z, ")"));
-    }
-    return e;
+    // Each atlas pixel weighted by its ∫cosθ dω.
+    auto sum = [&] {
+        readRgba(gl, atlasWidth_, atlasHeight_, pixels_);
+        Rgb e(0.0);
+        for (size_t p = 0; p < weights_.size(); ++p)
+            e += weights_[p] * Rgb(pixels_[4 * p], pixels_[4 * p + 1], pixels_[4 * p + 2]);
+        return e;
+    };
+    return readback.finish(gl, sum, "gathering indirect light from triangles", x);
 }
 
 void TriangleGather::tessellate(const std::vector<Rgb>& radiance, const Vec3& x, const Vec3& n, double lift,
@@ -430,7 +443,7 @@ void TriangleGather::tessellate(const std::vector<Rgb>& radiance, const Vec3& x,
 
 size_t TriangleGather::memoryBytes() const {
     size_t bytes = proxy_.memoryBytes() + clusters_.memoryBytes();
-    for (const auto& [slot, s] : slots_) bytes += s.radiance.size() * (sizeof(Rgb) + sizeof(glm::vec3));
+    for (const auto& [slot, radiance] : radiance_) bytes += radiance.size() * (sizeof(Rgb) + sizeof(glm::vec3));
     return bytes;
 }
 

@@ -42,17 +42,15 @@
 #include "RadianceProxy.h"
 #include "SliceGather.h"
 #include "cache/IndirectEstimator.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace ml {
 
 class GlContext;
-
-
 
 class TriangleGather : public IndirectEstimator {
 public:
@@ -98,29 +96,21 @@ private:
     RadianceProxy proxy_;
     ProxyClusters clusters_;
     NearField eyeRule_;  // only its eye: lifted, and nudged off edges
-    struct Slot {
-        std::vector<Rgb> radiance;
-        GlBuffer buffer;
-    };
-    std::map<size_t, Slot> slots_;
+    std::map<size_t, std::vector<Rgb>> radiance_;  // per slot: one per proxy position
+    // Its program, target, index and piece buffers and each slot's radiance
+    // buffer, defined in the .cpp so that this header needs no GL.
+    struct Gpu;
+    std::unique_ptr<Gpu> gpu_;
     std::vector<View> views_;
     int atlasWidth_ = 0, atlasHeight_ = 0;
     std::vector<double> weights_;  // per atlas pixel: ∫cosθ dω (0 where no view draws)
     double coverage_ = 1;
-    GlProgram program_;
-    GlTexture color_, depth_;
-    GlFramebuffer fb_;
-    GlBuffer indexBuffer_;
-    size_t indexCapacity_ = 0;
     std::vector<uint32_t> indices_;
-    // Fish-eye tessellation: the triangles near the eye, their pieces (one
-    // vertex each: position, normal and closed, radiance) and their buffer.
+    // Fish-eye tessellation: the triangles near the eye and their pieces (one
+    // vertex each: position, normal and closed, radiance; Gpu::pieceBuffer).
     double maxProxyEdge_ = 0;
     std::vector<uint32_t> nearTriangles_;
     std::vector<float> pieces_;
-    GlBuffer pieceBuffer_;
-    size_t pieceCapacity_ = 0;
-    GlVertexArray pieceVao_;
     std::vector<float> pixels_;
     GatherPhaseTimes phases_;
     bool timePhases_ = false;

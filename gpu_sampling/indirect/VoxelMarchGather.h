@@ -16,9 +16,9 @@
 #include "RadianceProxy.h"
 #include "SliceGather.h"
 #include "cache/IndirectEstimator.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
 #include <map>
+#include <memory>
 
 namespace ml {
 
@@ -47,22 +47,16 @@ public:
     size_t lastNearCount() const { return lastNear_; }
 
 private:
-    struct Slot {
-        std::vector<Rgb> radiance;
-        GlTexture volume;
-    };
+    // Its programs, target, near-triangle buffer and each slot's 3D texture,
+    // defined in the .cpp so that this header needs no GL.
+    struct Gpu;
 
     GlContext& context_;
     GatherSettings settings_;
     RadianceProxy proxy_;
     NearField near_;
-    std::map<size_t, Slot> slots_;
-    GlProgram marchPass_, fillPass_;
-    GlTexture color_;
-    GlFramebuffer fb_;
-    GlVertexArray emptyVao_;
-    GlBuffer nearBuffer_;
-    size_t nearCapacity_ = 0;
+    std::map<size_t, std::vector<Rgb>> radiance_;  // per slot: one per proxy position
+    std::unique_ptr<Gpu> gpu_;
     std::vector<NearTriangleGpu> nearTriangles_;
     std::vector<float> pixels_;
     GatherPhaseTimes phases_;

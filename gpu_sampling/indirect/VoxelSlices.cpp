@@ -1,6 +1,7 @@
 #include "VoxelSlices.h"
 
 #include "core/Error.h"
+#include "detail/VoxelSlicesGpu.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "meshlight_gpu_shaders.h"
 
@@ -19,7 +20,7 @@ struct FillVertex {
 
 VoxelSlices::VoxelSlices(GlContext& context, const RadianceProxy& proxy, const std::vector<Rgb>& radiance,
                          int supersample)
-    : grid_(proxy.grid()) {
+    : grid_(proxy.grid()), gpu_(std::make_unique<Gpu>()) {
     const auto t0 = std::chrono::steady_clock::now();
     const GlApi& gl = context.gl();
     ML_ASSERT(radiance.size() == proxy.positions().size(), "one radiance per proxy position");
@@ -187,9 +188,9 @@ VoxelSlices::VoxelSlices(GlContext& context, const RadianceProxy& proxy, const s
             gl.TextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
             return GlTexture(gl, id);
         };
-        faces_ = makeArray(GL_RGBA32F);
-        depths_ = makeArray(GL_R32F);
-        const GLuint keptId = faces_.id();
+        gpu_->faces = makeArray(GL_RGBA32F);
+        gpu_->depths = makeArray(GL_R32F);
+        const GLuint keptId = gpu_->faces.id();
         int layer = 0;
         for (int a = 0; a < 3; ++a) {
             const Axis& ax = axes_[size_t(a)];
@@ -200,14 +201,14 @@ VoxelSlices::VoxelSlices(GlContext& context, const RadianceProxy& proxy, const s
                     gl.CopyImageSubData(scratches[size_t(a)].id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, side * n + i, keptId,
                                         GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, ax.width, ax.height, 1);
                     gl.CopyImageSubData(scratchDepths[size_t(a)].id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, side * n + i,
-                                        depths_.id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, ax.width, ax.height, 1);
+                                        gpu_->depths.id(), GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, ax.width, ax.height, 1);
                     // An upper face lies on the slice's upper plane.
                     planes.emplace_back(float((i + (side == 0 ? 1 : 0)) * grid_.voxel), side == 0 ? 1.0f : -1.0f);
                     ++layer;
                 }
         }
     }
-    planes_ = makeBuffer(gl, std::max<size_t>(planes.size(), 1) * sizeof(glm::vec2), planes.data());
+    gpu_->planes = makeBuffer(gl, std::max<size_t>(planes.size(), 1) * sizeof(glm::vec2), planes.data());
     for (GlTexture& t : scratches) t.reset();
     for (GlTexture& t : scratchDepths) t.reset();
     std::vector<int32_t> table;
@@ -221,12 +222,14 @@ VoxelSlices::VoxelSlices(GlContext& context, const RadianceProxy& proxy, const s
             table.push_back(lower ? ax.firstLayer + ax.upperBefore[size_t(n)] + ax.lowerBefore[size_t(i)] : -1);
         }
     }
-    layerTable_ = makeBuffer(gl, table.size() * sizeof(int32_t), table.data());
+    gpu_->layerTable = makeBuffer(gl, table.size() * sizeof(int32_t), table.data());
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl.Finish();
     checkGl(gl, "building the voxel slices");
     buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+VoxelSlices::~VoxelSlices() = default;
 
 int VoxelSlices::facesKept() const { return axes_[0].layers() + axes_[1].layers() + axes_[2].layers(); }
 

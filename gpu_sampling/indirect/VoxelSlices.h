@@ -18,9 +18,9 @@
 
 #include "RadianceProxy.h"
 #include "VoxelGrid.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace ml {
@@ -32,9 +32,10 @@ public:
     // Renders every face from `radiance` (one value per proxy position) with
     // `supersample`² sub-texels per texel. `context` current on this thread.
     VoxelSlices(GlContext& context, const RadianceProxy& proxy, const std::vector<Rgb>& radiance, int supersample);
+    ~VoxelSlices();
 
     struct Axis {
-        int firstLayer = 0;              // this axis' faces start here in faces()
+        int firstLayer = 0;              // this axis' faces start here in Gpu::faces
         int width = 0, height = 0;       // texels: VoxelGrid::texels of axes (a+1)%3 and (a+2)%3
         // upperBefore[i]: non-empty upper faces of slices < i (i in 0..dims);
         // lowerBefore likewise; lower faces' layers start at upperBefore[dims].
@@ -42,20 +43,14 @@ public:
         int layers() const { return upperBefore.back() + lowerBefore.back(); }
     };
     const std::array<Axis, 3>& axes() const { return axes_; }
-    // GL_TEXTURE_2D_ARRAY, arrayWidth() × arrayHeight() × facesKept() (none if no face is kept).
-    const GlTexture& faces() const { return faces_; }
-    // The same layers (R32F): the mean coordinate, along the face's axis and
-    // relative to the grid's origin, of the surfaces that cover each texel,
-    // so a ray inside a slice can tell what lies ahead of it from what lies
-    // behind.
-    const GlTexture& depths() const { return depths_; }
+    // The faces' GL textures and buffers, defined in detail/VoxelSlicesGpu.h
+    // for the gathers that draw them, so that this header needs no GL.
+    struct Gpu;
+    const Gpu& gpu() const { return *gpu_; }
+    // Texels of a layer of Gpu::faces: the widest and highest face.
     int arrayWidth() const { return arrayWidth_; }
     int arrayHeight() const { return arrayHeight_; }
-    // Per layer: vec2(plane coordinate relative to the grid's origin, side ±1).
-    const GlBuffer& planes() const { return planes_; }
-    // For the face-loop gather: per axis a, slice i, [offset(a) + 2i] the
-    // layer of its upper face, [+1] of its lower face, −1 if empty.
-    const GlBuffer& layerTable() const { return layerTable_; }
+    // Where axis a's slices start in Gpu::layerTable.
     int layerTableOffset(int axis) const { return 2 * (axis > 0 ? grid_.dims[0] : 0) + 2 * (axis > 1 ? grid_.dims[1] : 0); }
     const VoxelGrid& grid() const { return grid_; }
     int facesTotal() const { return 2 * (grid_.dims[0] + grid_.dims[1] + grid_.dims[2]); }
@@ -66,10 +61,9 @@ public:
 private:
     VoxelGrid grid_;
     std::array<Axis, 3> axes_;
-    GlTexture faces_, depths_;
     int arrayWidth_ = 1, arrayHeight_ = 1;
-    GlBuffer planes_, layerTable_;
     double buildSeconds_ = 0;
+    std::unique_ptr<Gpu> gpu_;
 };
 
 }  // namespace ml

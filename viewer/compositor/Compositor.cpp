@@ -202,23 +202,6 @@ struct Compositor::Impl {
         checkGl(gl, "creating the compositor");
     }
 
-    GlFramebuffer framebuffer(std::initializer_list<GLuint> colors, GLuint depth, bool stencil = false) {
-        GLuint f = 0;
-        gl.CreateFramebuffers(1, &f);
-        GlFramebuffer fb(gl, f);
-        std::vector<GLenum> buffers;
-        for (GLuint c : colors) {
-            const GLenum att = GLenum(GL_COLOR_ATTACHMENT0 + buffers.size());
-            gl.NamedFramebufferTexture(f, att, c, 0);
-            buffers.push_back(att);
-        }
-        if (depth) gl.NamedFramebufferTexture(f, stencil ? GL_DEPTH_STENCIL_ATTACHMENT : GL_DEPTH_ATTACHMENT, depth, 0);
-        gl.NamedFramebufferDrawBuffers(f, GLsizei(buffers.size()), buffers.data());
-        if (gl.CheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("compositor: framebuffer incomplete");
-        return fb;
-    }
-
     void ensureTargets(int width, int height, int supersample) {
         if (t.width == width && t.height == height && t.supersample == supersample) return;
         t = Targets{};
@@ -229,15 +212,15 @@ struct Compositor::Impl {
         t.sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
         t.irradianceMesh = makeTexture2D(gl, GL_RGBA32F, w, h);
         t.cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        t.surfaceFb = framebuffer({t.surface.id()}, t.sceneDepth.id());
-        t.irradianceFb = framebuffer({t.irradianceSum.id()}, t.cacheDepth.id());
-        t.irradianceMeshFb = framebuffer({t.irradianceMesh.id()}, t.cacheDepth.id());
-        t.compositeFb = framebuffer({t.composite.id()}, 0);
+        t.surfaceFb = makeFramebuffer(gl, {t.surface.id()}, t.sceneDepth.id(), "compositor");
+        t.irradianceFb = makeFramebuffer(gl, {t.irradianceSum.id()}, t.cacheDepth.id(), "compositor");
+        t.irradianceMeshFb = makeFramebuffer(gl, {t.irradianceMesh.id()}, t.cacheDepth.id(), "compositor");
+        t.compositeFb = makeFramebuffer(gl, {t.composite.id()}, 0, "compositor");
         t.pixels = makeTexture2D(gl, GL_RGBA32F, width, height);
-        t.pixelsFb = framebuffer({t.pixels.id()}, 0);
+        t.pixelsFb = makeFramebuffer(gl, {t.pixels.id()}, 0, "compositor");
         t.forwardColour = makeTexture2D(gl, GL_RGBA8, width, height);
         t.forwardDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, width, height);
-        t.forwardFb = framebuffer({t.forwardColour.id()}, t.forwardDepth.id());
+        t.forwardFb = makeFramebuffer(gl, {t.forwardColour.id()}, t.forwardDepth.id(), "compositor");
         t.width = width;
         t.height = height;
         t.supersample = supersample;
@@ -297,7 +280,7 @@ struct Compositor::Impl {
         irradianceProgram.use();
         gl.UniformMatrix4fv(irradianceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
         gl.Uniform3f(irradianceProgram.uniform("uWeight"), float(weight.r), float(weight.g), float(weight.b));
-        gl.BindVertexArray(mesh.vao.id());
+        gl.BindVertexArray(mesh.vertexArray());
         drawnTriangles += drawTriangles(mesh);
         gl.Disable(GL_DEPTH_TEST);
         if (!first) {
@@ -534,7 +517,7 @@ struct Compositor::Impl {
             if (m.triangleCount == 0) continue;
             const Rgb& c = colours[i % colours.size()];
             gl.Uniform3f(wireframeProgram.uniform("uColor"), float(c.r), float(c.g), float(c.b));
-            gl.BindVertexArray(m.vao.id());
+            gl.BindVertexArray(m.vertexArray());
             drawTriangles(m);
         }
         gl.Disable(GL_BLEND);
@@ -633,9 +616,9 @@ void Compositor::compose(const Camera& camera, const GpuCacheMeshes& meshes, con
     impl_->compose(camera, meshes, weights, settings);
 }
 
-void Compositor::display(GLuint framebuffer, const DisplaySettings& display) { impl_->displayTo(framebuffer, display); }
+void Compositor::display(uint32_t framebuffer, const DisplaySettings& display) { impl_->displayTo(framebuffer, display); }
 
-void Compositor::drawWireframe(GLuint framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours) {
+void Compositor::drawWireframe(uint32_t framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours) {
     impl_->drawWireframe(framebuffer, meshes, colours);
 }
 

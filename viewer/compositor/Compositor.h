@@ -19,6 +19,7 @@
 #include "core/Scene.h"
 #include "core/image/Image.h"
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -98,14 +99,14 @@ public:
     void compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                  const CompositorSettings& settings);
     // Draws the last composite, box-filtered to pixels on the GPU, into
-    // `framebuffer` (0: the window's back buffer) over the viewport
-    // (0, 0, width, height), mapped as `display` says; leaves `framebuffer`
-    // bound.
-    void display(GLuint framebuffer, const DisplaySettings& display);
+    // `framebuffer` (a GL framebuffer name; 0: the window's back buffer)
+    // over the viewport (0, 0, width, height), mapped as `display` says;
+    // leaves `framebuffer` bound.
+    void display(uint32_t framebuffer, const DisplaySettings& display);
     // Draws the edges of every cache mesh over `framebuffer`, where that
     // mesh's surface is the one the last composite saw, mesh i in colour
     // colours[i % size] (alpha-blended, about a pixel wide).
-    void drawWireframe(GLuint framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours);
+    void drawWireframe(uint32_t framebuffer, const GpuCacheMeshes& meshes, const std::vector<Rgb>& colours);
     // The last composite box-filtered to pixels on the GPU, as display()
     // shows it (auto exposure, the illuminance range). Row 0 at the top.
     ImageRgb readPixels();

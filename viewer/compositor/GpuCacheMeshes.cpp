@@ -1,6 +1,7 @@
 #include "GpuCacheMeshes.h"
 
 #include "core/Error.h"
+#include "gpu_sampling/gl/GlObjects.h"
 
 #include <algorithm>
 #include <chrono>
@@ -47,7 +48,16 @@ void copyTriangles(const GlApi& gl, const IrradianceMeshCopy& view, GLuint buffe
 
 }  // namespace
 
+struct GpuCacheMeshes::Mesh::Gpu {
+    GlBuffer vertices, indices;
+    GlVertexArray vao;
+};
+
+uint32_t GpuCacheMeshes::Mesh::vertexArray() const { return gpu ? gpu->vao.id() : 0; }
+
 GpuCacheMeshes::GpuCacheMeshes(const GlApi& gl, const Vec3& origin) : gl_(&gl), origin_(origin) {}
+GpuCacheMeshes::GpuCacheMeshes(GpuCacheMeshes&&) = default;
+GpuCacheMeshes::~GpuCacheMeshes() = default;
 
 size_t GpuCacheMeshes::triangleCount() const {
     size_t n = 0;
@@ -64,27 +74,29 @@ void GpuCacheMeshes::reserve(const std::vector<const IrradianceMeshCopy*>& views
         ML_ASSERT(v.irradiance.size() == v.positions.size(), v.irradiance.size(), " irradiance values for ",
                   v.positions.size(), " vertices");
         Mesh& m = meshes_[i];
-        if (!m.vao) {
-            m.vertices = makeBuffer(gl, 0, nullptr, GL_DYNAMIC_DRAW);
-            m.indices = makeBuffer(gl, 0, nullptr, GL_DYNAMIC_DRAW);
-            m.vao = makeVertexArray(gl);
+        if (!m.gpu) {
+            m.gpu = std::make_unique<Mesh::Gpu>();
+            Mesh::Gpu& g = *m.gpu;
+            g.vertices = makeBuffer(gl, 0, nullptr, GL_DYNAMIC_DRAW);
+            g.indices = makeBuffer(gl, 0, nullptr, GL_DYNAMIC_DRAW);
+            g.vao = makeVertexArray(gl);
             for (GLuint a = 0; a < 2; ++a) {
-                gl.EnableVertexArrayAttrib(m.vao.id(), a);
-                gl.VertexArrayAttribFormat(m.vao.id(), a, 3, GL_FLOAT, GL_FALSE, GLuint(3 * a * sizeof(float)));
-                gl.VertexArrayAttribBinding(m.vao.id(), a, 0);
+                gl.EnableVertexArrayAttrib(g.vao.id(), a);
+                gl.VertexArrayAttribFormat(g.vao.id(), a, 3, GL_FLOAT, GL_FALSE, GLuint(3 * a * sizeof(float)));
+                gl.VertexArrayAttribBinding(g.vao.id(), a, 0);
             }
-            gl.VertexArrayVertexBuffer(m.vao.id(), 0, m.vertices.id(), 0, GLsizei(kFloatsPerVertex * sizeof(float)));
-            gl.VertexArrayElementBuffer(m.vao.id(), m.indices.id());
+            gl.VertexArrayVertexBuffer(g.vao.id(), 0, g.vertices.id(), 0, GLsizei(kFloatsPerVertex * sizeof(float)));
+            gl.VertexArrayElementBuffer(g.vao.id(), g.indices.id());
         }
         // Re-specifying a buffer keeps its name, so the vertex array stays valid.
         if (v.positions.size() > m.vertexCapacity) {
             m.vertexCapacity = v.positions.size() + v.positions.size() / 4;
-            gl.NamedBufferData(m.vertices.id(), GLsizeiptr(m.vertexCapacity * kFloatsPerVertex * sizeof(float)),
+            gl.NamedBufferData(m.gpu->vertices.id(), GLsizeiptr(m.vertexCapacity * kFloatsPerVertex * sizeof(float)),
                                nullptr, GL_DYNAMIC_DRAW);
         }
         if (v.triangles.size() > m.indexCapacity) {
             m.indexCapacity = v.triangles.size() + v.triangles.size() / 4;
-            gl.NamedBufferData(m.indices.id(), GLsizeiptr(m.indexCapacity * sizeof(glm::uvec3)), nullptr,
+            gl.NamedBufferData(m.gpu->indices.id(), GLsizeiptr(m.indexCapacity * sizeof(glm::uvec3)), nullptr,
                                GL_DYNAMIC_DRAW);
         }
         m.vertexCount = v.positions.size();
@@ -99,9 +111,9 @@ void GpuCacheMeshes::upload(const std::vector<IrradianceMeshCopy>& direct,
     std::vector<float> staging;
     for (size_t i = 0; i < views.size(); ++i) {
         if (!views[i]->positions.empty())
-            copyVertices(*gl_, origin_, *views[i], meshes_[i].vertices.id(), 0, views[i]->positions.size(), staging);
+            copyVertices(*gl_, origin_, *views[i], meshes_[i].gpu->vertices.id(), 0, views[i]->positions.size(), staging);
         if (!views[i]->triangles.empty())
-            copyTriangles(*gl_, *views[i], meshes_[i].indices.id(), 0, views[i]->triangles.size());
+            copyTriangles(*gl_, *views[i], meshes_[i].gpu->indices.id(), 0, views[i]->triangles.size());
         meshes_[i].cells.clear();
     }
 }
@@ -177,7 +189,7 @@ bool CacheMeshUploader::step(double seconds) {
         auto local = [&](uint32_t v) { return glm::vec3(view.positions[v] - origin); };
         switch (phase_) {
             case Phase::Vertices:
-                if (end > offset_) copyVertices(gl, origin, view, target.vertices.id(), offset_, end, staging_);
+                if (end > offset_) copyVertices(gl, origin, view, target.gpu->vertices.id(), offset_, end, staging_);
                 if (sorted)
                     for (size_t v = offset_; v < end; ++v) {
                         const glm::vec3 p(view.positions[v] - origin);
@@ -230,7 +242,7 @@ bool CacheMeshUploader::step(double seconds) {
                 break;
             case Phase::Indices:
                 if (end > offset_) {
-                    gl.NamedBufferSubData(target.indices.id(), GLintptr(offset_ * sizeof(glm::uvec3)),
+                    gl.NamedBufferSubData(target.gpu->indices.id(), GLintptr(offset_ * sizeof(glm::uvec3)),
                                           GLsizeiptr((end - offset_) * sizeof(glm::uvec3)),
                                           sorted ? &sorted_[offset_] : &view.triangles[offset_]);
                 }

@@ -11,12 +11,15 @@
 #pragma once
 
 #include "cache/IrradianceCache.h"
-#include "gpu_sampling/gl/GlObjects.h"
 
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ml {
+
+struct GlApi;
 
 class GpuCacheMeshes {
 public:
@@ -28,9 +31,15 @@ public:
         uint32_t first = 0, count = 0;
     };
     struct Mesh {
-        GlBuffer vertices;      // 6 floats per vertex: position − origin, irradiance (W·m⁻²)
-        GlBuffer indices;       // 3 uint32 per triangle, counter-clockwise = the sampled side
-        GlVertexArray vao;
+        // Its vertex buffer (6 floats per vertex: position − origin,
+        // irradiance in W·m⁻²), index buffer (3 uint32 per triangle,
+        // counter-clockwise = the sampled side) and the vertex array that
+        // reads them, defined in GpuCacheMeshes.cpp so that this header
+        // needs no GL.
+        struct Gpu;
+        std::unique_ptr<Gpu> gpu;
+        // The GL name of that vertex array, for the compositor's draws.
+        uint32_t vertexArray() const;
         size_t vertexCapacity = 0;  // vertices the buffer has room for
         size_t indexCapacity = 0;   // triangles the buffer has room for
         size_t vertexCount = 0;
@@ -50,7 +59,8 @@ public:
     // `origin` is subtracted from every position (the scene's centre): what
     // goes to the GPU as float stays precise far from the world's origin.
     GpuCacheMeshes(const GlApi& gl, const Vec3& origin);
-    GpuCacheMeshes(GpuCacheMeshes&&) = default;
+    GpuCacheMeshes(GpuCacheMeshes&&);
+    ~GpuCacheMeshes();
 
     // The direct meshes (one per light, in the scene's order), then the
     // indirect ones (one per bounce).

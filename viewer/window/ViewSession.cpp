@@ -576,9 +576,15 @@ struct ViewSession::Impl : ScriptHost {
         const GpuCacheMeshes& meshes = uploader->front();
         for (size_t i = 0; i < meshes.directCount() + meshes.indirectCount(); ++i)
             m.meshColours.emplace_back(
-                i < meshes.directCount() ? concat("light ", i, " '", scene.lights[i].name, "'")
-                                         : concat("indirect, bounce ", i - meshes.directCount() + 1),
+                i < scene.lights.size()     ? concat("light ", i, " '", scene.lights[i].name, "'")
+                : i < meshes.directCount() ? std::string("the lights' shared mesh")
+                                           : concat("indirect, bounce ", i - meshes.directCount() + 1),
                 meshColour(i));
+        if (session->cache().hasSharedMesh())
+            m.sharedLights = concat(
+                "Direct light: ", session->coverage().describe(),
+                ". Changing a light is exact where it has its own mesh; in the shared mesh the lights take their "
+                "power-weighted mean, like indirect light, and 'light N' alone does not show what it gives there.");
         m.cursorLux = cursorLux;
         m.error = workerError;
         if (now() < messageUntil) m.message = message;
