@@ -9,13 +9,7 @@ void IndirectEstimator::estimateBatch(size_t slot, const std::vector<SampleReque
     results.resize(requests.size());
     for (size_t i = 0; i < requests.size(); ++i) {
         const SampleRequest& r = requests[i];
-        try {
-            results[i] = estimate(slot, r.x, r.n, r.seed);
-        } catch (const InputError&) {
-            throw;
-        } catch (const std::exception& e) {
-            throw SampleBatchError(i, e.what());
-        }
+        asBatchRequest(i, [&] { results[i] = estimate(slot, r.x, r.n, r.seed); });
     }
 }
 

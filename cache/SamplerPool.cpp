@@ -152,20 +152,6 @@ struct SamplerPool::Impl {
 
 namespace {
 
-// A batch failure names the request; other failures pass as they are.
-template <class F>
-void rethrowAsBatchError(size_t i, F&& f) {
-    try {
-        f();
-    } catch (const InputError&) {
-        throw;
-    } catch (const SampleBatchError&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw SampleBatchError(i, e.what());
-    }
-}
-
 class PooledDirect final : public DirectSampler {
 public:
     explicit PooledDirect(SamplerPool::Impl& pool) : pool_(pool) {}
@@ -179,7 +165,7 @@ public:
         results.resize(requests.size());
         pool_.forEach(requests.size(), [&](WorkerSamplers& s, size_t i) {
             const SampleRequest& r = requests[i];
-            rethrowAsBatchError(i, [&] { results[i] = s.direct->sample(r.mesh, r.x, r.n, r.seed); });
+            asBatchRequest(i, [&] { results[i] = s.direct->sample(r.mesh, r.x, r.n, r.seed); });
         });
     }
     // Between batches every helper is idle: its sampler's totals are still.
@@ -210,7 +196,7 @@ public:
         results.resize(requests.size());
         pool_.forEach(requests.size(), [&](WorkerSamplers& s, size_t i) {
             const SampleRequest& r = requests[i];
-            rethrowAsBatchError(i, [&] { results[i] = s.indirect->estimate(slot, r.x, r.n, r.seed); });
+            asBatchRequest(i, [&] { results[i] = s.indirect->estimate(slot, r.x, r.n, r.seed); });
         });
     }
     // Memory and work of every thread's sources and gathers; build time as

@@ -4,19 +4,23 @@
 
 namespace ml {
 
+void asBatchRequest(size_t i, const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const InputError&) {
+        throw;
+    } catch (const SampleBatchError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw SampleBatchError(i, e.what());
+    }
+}
+
 void sampleEach(VertexSampler& sampler, const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
                 size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
         const SampleRequest& r = requests[i];
-        try {
-            results[i] = sampler.sample(r.mesh, r.x, r.n, r.seed);
-        } catch (const InputError&) {
-            throw;
-        } catch (const SampleBatchError&) {
-            throw;
-        } catch (const std::exception& e) {
-            throw SampleBatchError(i, e.what());
-        }
+        asBatchRequest(i, [&] { results[i] = sampler.sample(r.mesh, r.x, r.n, r.seed); });
     }
 }
 

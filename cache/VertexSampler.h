@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -55,6 +56,10 @@ public:
     // the first failing request; InputError passes through as it is.
     virtual void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results);
 };
+
+// Runs f() for request i of a batch: a failure other than an InputError (a
+// user's mistake, passed as it is) becomes a SampleBatchError naming i.
+void asBatchRequest(size_t i, const std::function<void()>& f);
 
 // The one-at-a-time loop behind sampleBatch, for implementations that
 // spread a batch: samples requests [begin, end) with `sampler.sample`.

@@ -2,6 +2,7 @@
 // pieces).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <numeric>
 #include <vector>
