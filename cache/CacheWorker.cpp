@@ -157,7 +157,6 @@ void CacheWorker::run() {
             // is at least half of indirect light's (and every eighth round
             // regardless, so it never stalls).
             const bool directTurn = !indirectStarted || lastDirectError >= 0.5 * lastIndirectError || ++rounds % 8 == 0;
-            double directError = lastDirectError;
             if (!directConverged && directTurn) {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
@@ -169,7 +168,7 @@ void CacheWorker::run() {
                     directRate = directRate > 0 ? 0.7 * directRate + 0.3 * double(report.estimates) / took
                                                 : double(report.estimates) / took;
                 directConverged = report.converged();
-                directError = lastDirectError = report.estimatedError;
+                lastDirectError = report.estimatedError;
             }
             bool indirectConverged = true;
             if (indirect_) {

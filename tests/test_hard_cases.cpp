@@ -35,6 +35,8 @@
 #include "gpu_sampling/gl/GlContext.h"
 
 #include "GlTestContext.h"
+#include "MeanAndError.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -44,10 +46,10 @@
 #include <vector>
 
 using namespace ml;
+using test::addQuad, test::floorMesh, test::quadMesh, test::unitLight;
+using test::kX, test::kY, test::kZ;
 
 namespace {
-
-const Vec3 kX(1, 0, 0), kY(0, 1, 0), kZ(0, 0, 1);
 
 // --- scenes built by hand ----------------------------------------------------
 
@@ -61,27 +63,6 @@ std::vector<Material> materials() {
     grey.name = "grey";
     grey.kd = Rgb(0.5);
     return {light, grey};
-}
-
-// The parallelogram corner + [0,1]·u + [0,1]·v as two triangles facing u × v.
-void addQuad(Mesh& mesh, uint32_t material, const Vec3& corner, const Vec3& u, const Vec3& v) {
-    const uint32_t base = uint32_t(mesh.positions.size());
-    const Vec3 normal = glm::normalize(glm::cross(u, v));
-    for (const Vec3& p : {corner, corner + u, corner + u + v, corner + v}) {
-        mesh.positions.push_back(p);
-        mesh.normals.push_back(normal);
-    }
-    mesh.triangles.push_back({base, base + 1, base + 2});
-    mesh.triangles.push_back({base, base + 2, base + 3});
-    mesh.materials.insert(mesh.materials.end(), 2, material);
-    mesh.sourceLines.insert(mesh.sourceLines.end(), 2, 0);
-}
-
-Mesh quadMesh(const std::string& name, uint32_t material, const Vec3& corner, const Vec3& u, const Vec3& v) {
-    Mesh mesh;
-    mesh.name = name;
-    addQuad(mesh, material, corner, u, v);
-    return mesh;
 }
 
 // A closed box, faces outwards.
@@ -99,19 +80,7 @@ Mesh boxMesh(const std::string& name, const Vec3& lo, const Vec3& hi) {
     return mesh;
 }
 
-Scene makeScene(std::vector<Mesh> meshes) {
-    Scene scene;
-    scene.name = "hard case";
-    scene.materials = materials();
-    scene.meshes = std::move(meshes);
-    scene.finalize();
-    return scene;
-}
-
-// The bench's light: 1 × 1 at y = 1, x, z ∈ [−0.5, 0.5], facing down.
-Mesh unitLight() { return quadMesh("light", 0, Vec3(-0.5, 1.0, -0.5), kX, kZ); }
-// The bench's floor: 3 × 3 at y = 0, facing up.
-Mesh floorMesh() { return quadMesh("floor", 1, Vec3(-1.5, 0.0, -1.5), 3.0 * kZ, 3.0 * kX); }
+Scene makeScene(std::vector<Mesh> meshes) { return test::sceneOf("hard case", materials(), std::move(meshes)); }
 
 // The bench scene scaled by `s` about the origin and moved by `t`.
 Scene transformedBench(double s, const Vec3& t) {
@@ -386,16 +355,12 @@ void expectMatchesExact(const Scene& scene, const std::vector<Receiver>& receive
             for (int k = 0; k < kPasses; ++k)
                 passes.push_back(sampler.sample(0, r.x, r.n, jitter::seedFor(caseSeed, uint32_t(i), 1, uint32_t(k)))
                                      .cosineSolidAngle);
-            double mean = 0, ss = 0;
-            for (double v : passes) mean += v;
-            mean /= kPasses;
-            for (double v : passes) ss += (v - mean) * (v - mean);
-            const double standardError = std::sqrt(ss / (kPasses - 1) / kPasses);
+            const test::MeanAndError m = test::meanOf(passes);
             // A floor for estimates without variance (the control variate
             // where nothing occludes is Lambert itself, to rounding).
-            EXPECT_LE(std::abs(mean - exact), 4 * standardError + lift + 1e-9 * exact + 1e-15)
-                << name << " at " << where(r) << ": mean of " << kPasses << " passes " << mean << " ± "
-                << standardError << ", exact " << exact;
+            EXPECT_LE(std::abs(m.mean - exact), 4 * m.standardError + lift + 1e-9 * exact + 1e-15)
+                << name << " at " << where(r) << ": mean of " << kPasses << " passes " << m.mean << " ± "
+                << m.standardError << ", exact " << exact;
         }
     }
 }

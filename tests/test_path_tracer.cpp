@@ -20,19 +20,18 @@
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
 
-#include <gtest/gtest.h>
+#include "CsvColumn.h"
+#include "RunCommand.h"
+#include "TempDirTest.h"
+#include "TestScenes.h"
 
-#include <sys/wait.h>
-#include <unistd.h>
+#include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <random>
-#include <sstream>
 
 using namespace ml;
 namespace fs = std::filesystem;
@@ -41,40 +40,8 @@ namespace {
 
 // --- furnaces ------------------------------------------------------------------
 
-// A closed cube, every face inward (counter-clockwise seen from inside),
-// albedo a, emitting Le: the radiance everywhere inside is
-// Le·(1 + a + … + a^D) for paths of depth D (PathTracer.h).
-Scene furnace(double albedo, double le, double scale, const Vec3& offset) {
-    Scene scene;
-    scene.name = "furnace";
-    Material wall;
-    wall.name = "wall";
-    wall.kd = Rgb(albedo);
-    wall.ke = Rgb(le);
-    scene.materials = {wall};
-    Mesh mesh;
-    mesh.name = "box";
-    auto corner = [&](int i) {
-        return offset + scale * Vec3(i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0);
-    };
-    const int faces[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
-    for (const auto& f : faces) {
-        std::array<Vec3, 4> q{corner(f[0]), corner(f[1]), corner(f[2]), corner(f[3])};
-        const Vec3 centre = 0.25 * (q[0] + q[1] + q[2] + q[3]);
-        if (glm::dot(glm::cross(q[1] - q[0], q[2] - q[0]), offset - centre) < 0) std::swap(q[1], q[3]);
-        const uint32_t base = uint32_t(mesh.positions.size());
-        mesh.positions.insert(mesh.positions.end(), q.begin(), q.end());
-        mesh.triangles.push_back({base, base + 1, base + 2});
-        mesh.triangles.push_back({base, base + 2, base + 3});
-    }
-    mesh.materials.assign(mesh.triangles.size(), 0);
-    mesh.sourceLines.assign(mesh.triangles.size(), 0);
-    computeShadingNormals(mesh, 0.0);
-    scene.meshes.push_back(mesh);
-    scene.finalize();
-    return scene;
-}
-
+// The radiance everywhere inside test::furnaceBox(albedo, le) for paths of
+// depth D (PathTracer.h): Le·(1 + a + … + a^D) = Le·(1 − a^(D+1))/(1 − a).
 double furnaceRadiance(double albedo, double le, int depth) {
     return le * (1.0 - std::pow(albedo, depth + 1)) / (1.0 - albedo);
 }
@@ -118,7 +85,7 @@ TEST(PathTracer, FurnaceRadianceAtEachDepth) {
     // D = 64 is the limit Le/(1 − a) to within a^65 < 1e-6 of it.
     // 16×16 pixels × 64 samples: the pooled mean is known to ~0.1 %.
     for (double albedo : {0.5, 0.8}) {
-        const Scene scene = furnace(albedo, 1.5, 1.0, Vec3(0.0));
+        const Scene scene = test::furnaceBox(albedo, 1.5);
         const EmbreeScene rays(scene);
         for (int depth : {1, 2, 3, 64}) {
             PathTracerSettings settings;
@@ -151,7 +118,7 @@ TEST(PathTracer, FurnaceHoldsAtEveryScaleAndFarFromTheOrigin) {
     const double truth = furnaceRadiance(albedo, le, 32);
     for (auto [scale, offset] : {std::pair{1e-3, Vec3(0.0)}, std::pair{1e5, Vec3(0.0)},
                                  std::pair{1.0, Vec3(3e5, -2e5, 1e5)}, std::pair{1e-3, Vec3(10.0, 0.0, -5.0)}}) {
-        const Scene scene = furnace(albedo, le, scale, offset);
+        const Scene scene = test::furnaceBox(albedo, le, scale, offset);
         const EmbreeScene rays(scene);
         PathTracerSettings settings;
         settings.maxDepth = 32;
@@ -166,7 +133,7 @@ TEST(PathTracer, FurnaceIrradianceSplitsIntoDirectAndIndirect) {
     // Le·(1 + … + a^(D−1)) from every direction: direct irradiance π·Le,
     // indirect π·Le·(a + … + a^(D−1)).
     const double albedo = 0.6, le = 1.0;
-    const Scene scene = furnace(albedo, le, 1.0, Vec3(0.0));
+    const Scene scene = test::furnaceBox(albedo, le);
     const EmbreeScene rays(scene);
     for (int depth : {1, 3}) {
         PathTracerSettings settings;
@@ -382,63 +349,10 @@ TEST(PhongBsdf, ImportanceSamplingIsUnbiasedAndThePdfIntegratesToAtMostOne) {
 
 // --- the commands ---------------------------------------------------------------
 
-namespace {
-
-struct CommandResult {
-    int status;
-    std::string output;
-};
-
-CommandResult run(const std::string& args) {
-    const std::string cmd = std::string(MESHLIGHT_BINARY) + " " + args + " 2>&1";
-    CommandResult r{-1, {}};
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int s = pclose(p);
-    r.status = WIFEXITED(s) ? WEXITSTATUS(s) : -1;
-    return r;
-}
-
-class Commands : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir = fs::temp_directory_path() / ("meshlight_pt_" + std::to_string(::getpid()) + "_" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    std::string path(const std::string& name) const { return (dir / name).string(); }
-    size_t files() const {
-        size_t n = 0;
-        for (auto& e : fs::directory_iterator(dir)) n += e.is_regular_file();
-        return n;
-    }
-    // Column `name` of data row `row` of a CSV file.
-    static double column(const std::string& file, int row, const std::string& name) {
-        std::ifstream in(file);
-        std::string header, line;
-        std::getline(in, header);
-        for (int i = 0; i <= row; ++i) std::getline(in, line);
-        auto split = [](const std::string& s) {
-            std::vector<std::string> v;
-            std::stringstream ss(s);
-            std::string c;
-            while (std::getline(ss, c, ',')) v.push_back(c);
-            return v;
-        };
-        const auto h = split(header), c = split(line);
-        for (size_t i = 0; i < h.size() && i < c.size(); ++i)
-            if (h[i] == name) return std::stod(c[i]);
-        ADD_FAILURE() << "no column " << name << " in " << file;
-        return 0;
-    }
-    fs::path dir;
-};
-
-}  // namespace
+using Commands = test::TempDirTest;
+using test::CommandResult;
+using test::csvColumn;
+using test::runMeshlight;
 
 TEST_F(Commands, ReferenceRejectsBadOptionsWithoutWritingAnything) {
     const std::string out = " --out " + path("ref.exr");
@@ -447,7 +361,7 @@ TEST_F(Commands, ReferenceRejectsBadOptionsWithoutWritingAnything) {
                                    "reference cornell --spp 4 --max-depth 0" + out,
                                    "reference cornell --spp 4 --out " + path("ref.png"),
                                    "reference cornell" + out, "reference nowhere.obj --spp 4" + out}) {
-        const CommandResult r = run(bad);
+        const CommandResult r = runMeshlight(bad);
         EXPECT_EQ(r.status, 2) << bad << "\n" << r.output;
         EXPECT_NE(r.output.find("error:"), std::string::npos) << r.output;
         EXPECT_EQ(files(), 0u) << bad;
@@ -455,8 +369,8 @@ TEST_F(Commands, ReferenceRejectsBadOptionsWithoutWritingAnything) {
 }
 
 TEST_F(Commands, ReferenceWritesTheImageAndItsNoise) {
-    const CommandResult r =
-        run("reference bench --width 24 --height 16 --spp 4 --max-depth 2 --threads 2 --out " + path("ref.exr"));
+    const CommandResult r = runMeshlight(
+        "reference bench --width 24 --height 16 --spp 4 --max-depth 2 --threads 2 --out " + path("ref.exr"));
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("paths/s"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("mean relative standard error"), std::string::npos) << r.output;
@@ -469,27 +383,27 @@ TEST_F(Commands, ReferenceWritesTheImageAndItsNoise) {
 }
 
 TEST_F(Commands, ProbePathAndRaytraceAgreeWithExact) {
-    std::ofstream(path("points.csv")) << "x,y,z,nx,ny,nz\n0,0,0,0,1,0\n1.2,0,1.2,0,1,0\n";
+    write("points.csv", "x,y,z,nx,ny,nz\n0,0,0,0,1,0\n1.2,0,1.2,0,1,0\n");
     const std::string common = "probe bench --points " + path("points.csv");
-    ASSERT_EQ(run(common + " --method exact --out " + path("exact.csv")).status, 0);
-    const CommandResult p = run(common + " --method path --spp 4096 --max-depth 1 --out " + path("path.csv"));
+    ASSERT_EQ(runMeshlight(common + " --method exact --out " + path("exact.csv")).status, 0);
+    const CommandResult p = runMeshlight(common + " --method path --spp 4096 --max-depth 1 --out " + path("path.csv"));
     ASSERT_EQ(p.status, 0) << p.output;
-    const CommandResult t = run(common + " --method raytrace --out " + path("rt.csv"));
+    const CommandResult t = runMeshlight(common + " --method raytrace --out " + path("rt.csv"));
     ASSERT_EQ(t.status, 0) << t.output;
     for (int row = 0; row < 2; ++row) {
-        const double e = column(path("exact.csv"), row, "E_g");
+        const double e = csvColumn(path("exact.csv"), row, "E_g");
         ASSERT_GT(e, 0);
-        EXPECT_NEAR(column(path("path.csv"), row, "E_g"), e, 4 * column(path("path.csv"), row, "E_se_g"));
-        EXPECT_EQ(column(path("path.csv"), row, "E_indirect_g"), 0.0);
+        EXPECT_NEAR(csvColumn(path("path.csv"), row, "E_g"), e, 4 * csvColumn(path("path.csv"), row, "E_se_g"));
+        EXPECT_EQ(csvColumn(path("path.csv"), row, "E_indirect_g"), 0.0);
         // (1.2, 1.2) sees the whole light: the control variate is Lambert's
         // value (1e-9: summation order); (0, 0) is in penumbra, within the
         // jittered sampler's one-pass error (well under 1 % there).
-        EXPECT_NEAR(column(path("rt.csv"), row, "E_g"), e, row == 1 ? 1e-9 * e : 0.01 * e);
+        EXPECT_NEAR(csvColumn(path("rt.csv"), row, "E_g"), e, row == 1 ? 1e-9 * e : 0.01 * e);
     }
     // Options of other methods are refused, not ignored.
-    const CommandResult bad = run(common + " --method path --bits 4 --out " + path("bad.csv"));
+    const CommandResult bad = runMeshlight(common + " --method path --bits 4 --out " + path("bad.csv"));
     EXPECT_EQ(bad.status, 2) << bad.output;
-    const CommandResult bad2 = run(common + " --spp 64 --out " + path("bad.csv"));
+    const CommandResult bad2 = runMeshlight(common + " --spp 64 --out " + path("bad.csv"));
     EXPECT_EQ(bad2.status, 2) << bad2.output;
     EXPECT_FALSE(fs::exists(path("bad.csv")));
 }

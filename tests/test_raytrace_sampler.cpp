@@ -19,7 +19,9 @@
 #include "gpu_sampling/direct/LightFrustum.h"
 #include "gpu_sampling/direct/RayTracedLightSampler.h"
 
+#include "BenchReference.h"
 #include "GlTestContext.h"
+#include "MeanAndError.h"
 
 #include <gtest/gtest.h>
 
@@ -29,20 +31,14 @@
 #include <set>
 
 using namespace ml;
+using test::benchScene, test::exactAt;
+using test::clearOfPenumbra, test::eyePoint, test::liftAllowance, test::penumbraReceivers;
 
 namespace {
 
-const Scene& bench() {
-    static const Scene scene = makeBenchScene();
-    return scene;
-}
 const EmbreeScene& benchRays() {
-    static const EmbreeScene rays(bench());
+    static const EmbreeScene rays(benchScene());
     return rays;
-}
-const ExactDirect& exact() {
-    static const ExactDirect reference(bench());
-    return reference;
 }
 
 DirectSamplerSettings settingsFor(DirectEstimator estimator, int size, int bits) {
@@ -52,47 +48,6 @@ DirectSamplerSettings settingsFor(DirectEstimator estimator, int size, int bits)
     s.imageSize = size;
     s.bits = bits;
     return s;
-}
-
-double exactAt(const Vec3& x, const Vec3& n) { return exact().cosineSolidAngle(0, x, n); }
-double lambertAt(const Vec3& x, const Vec3& n) { return exact().unoccludedCosineSolidAngle(0, x, n); }
-Vec3 eyePoint(const Vec3& x, const Vec3& n) {
-    return x + n * samplingEyeLift(bench().lights[0], x, DirectSamplerSettings{}.eyeOffset, bench().bounds.diagonal());
-}
-double liftAllowance(const Vec3& x, const Vec3& n) {
-    const Vec3 eye = eyePoint(x, n);
-    return std::abs(exactAt(eye, n) - exactAt(x, n)) + std::abs(lambertAt(eye, n) - lambertAt(x, n));
-}
-
-// The bench floor's shadow is all penumbra inside x ∈ [−0.9, 1.1],
-// z ∈ [−1.1, 0.9] (BenchScene.h).
-bool clearOfPenumbra(const Vec3& p, double margin) {
-    return p.x < -0.9 - margin || p.x > 1.1 + margin || p.z < -1.1 - margin || p.z > 0.9 + margin;
-}
-
-// Receivers of the 20×20 grid seeing 20 % to 80 % of the light, spread over the shadow.
-std::vector<ReceiverPoint> penumbraReceivers(size_t count) {
-    std::vector<ReceiverPoint> candidates;
-    for (const ReceiverPoint& r : makeBenchReceivers(20)) {
-        const double visible = exactAt(r.position, r.normal), all = lambertAt(r.position, r.normal);
-        if (visible > 0.2 * all && visible < 0.8 * all) candidates.push_back(r);
-    }
-    std::vector<ReceiverPoint> out;
-    for (size_t k = 0; k < count && !candidates.empty(); ++k) out.push_back(candidates[k * candidates.size() / count]);
-    return out;
-}
-
-struct MeanAndError {
-    double mean = 0, standardError = 0;
-};
-MeanAndError meanOf(const std::vector<double>& v) {
-    MeanAndError m;
-    for (double x : v) m.mean += x;
-    m.mean /= double(v.size());
-    double ss = 0;
-    for (double x : v) ss += (x - m.mean) * (x - m.mean);
-    m.standardError = std::sqrt(ss / double(v.size() - 1) / double(v.size()));
-    return m;
 }
 
 }  // namespace
@@ -107,7 +62,7 @@ TEST(RayTracedSampler, ControlVariateIsLambertWhereNothingOccludes) {
     for (const ReceiverPoint& r : makeBenchReceivers(20))
         if (clearOfPenumbra(r.position, 0.02)) receivers.push_back(r);
     ASSERT_GE(receivers.size(), 100u);
-    const AreaLight& light = bench().lights[0];
+    const AreaLight& light = benchScene().lights[0];
     const std::vector<Vec3> polygon = {light.geometry[0][0], light.geometry[0][1], light.geometry[0][2],
                                        light.geometry[1][2]};
     for (size_t i = 0; i < receivers.size(); ++i) {
@@ -142,12 +97,9 @@ TEST(RayTracedSampler, MeanOfManyPassesConvergesToExact) {
                 for (int k = 0; k < kPasses; ++k)
                     passes.push_back(
                         s.sample(0, r.position, r.normal, jitter::seedFor(3, uint32_t(i), 0, uint32_t(k))).cosineSolidAngle);
-                const MeanAndError m = meanOf(passes);
-                const double e = exactAt(r.position, r.normal);
-                EXPECT_GT(m.standardError, 0.0) << "passes did not differ: the seed is ignored";
-                EXPECT_LE(std::abs(m.mean - e), 4 * m.standardError + liftAllowance(r.position, r.normal))
-                    << directEstimatorName(estimator) << " × " << bits << " bits at (" << r.position.x << ", "
-                    << r.position.z << "): exact " << e << ", mean " << m.mean << " ± " << m.standardError;
+                test::expectUnbiased(passes, exactAt(r.position, r.normal), liftAllowance(r.position, r.normal),
+                                     concat(directEstimatorName(estimator), " × ", bits, " bits at (", r.position.x,
+                                            ", ", r.position.z, ")"));
             }
         }
 }
@@ -161,7 +113,7 @@ TEST(RayTracedSampler, TestsTheSamePointsAsTheRasterSampler) {
     // ~25,000 light samples per point we allow 2 differing samples, each
     // worth at most the largest weight of one sample (cv estimates differ by
     // the occluded weights only).
-    DirectLightSampler raster(test::glContext(), bench(), settingsFor(DirectEstimator::ControlVariate, 64, 8));
+    DirectLightSampler raster(test::glContext(), benchScene(), settingsFor(DirectEstimator::ControlVariate, 64, 8));
     const RayTracedLightSampler rays(benchRays(), settingsFor(DirectEstimator::ControlVariate, 64, 8));
     for (const ReceiverPoint& r : penumbraReceivers(12)) {
         for (uint32_t pass = 0; pass < 2; ++pass) {
@@ -175,8 +127,9 @@ TEST(RayTracedSampler, TestsTheSamePointsAsTheRasterSampler) {
             // The largest weight of one sample: cosθ·dω ≤ (pixel area at the
             // window's nearest point to the axis)/bits ≤ window area / (64²·8).
             const std::vector<SamplingFrustum> frusta =
-                fitFrusta(visibleLightPieces(bench().lights[0], eyePoint(r.position, r.normal), r.normal),
-                          eyePoint(r.position, r.normal), bench().lights[0].geometry[0][1] - bench().lights[0].geometry[0][0],
+                fitFrusta(visibleLightPieces(benchScene().lights[0], eyePoint(r.position, r.normal), r.normal),
+                          eyePoint(r.position, r.normal),
+                          benchScene().lights[0].geometry[0][1] - benchScene().lights[0].geometry[0][0],
                           DirectSamplerSettings{}.maxHalfAngleDegrees);
             ASSERT_EQ(frusta.size(), 1u);
             const double maxSample =
@@ -225,11 +178,8 @@ TEST(RayTracedSampler, NonPlanarLightIsUnbiasedWhereNothingOccludes) {
         }
         std::vector<double> passes;
         for (uint32_t k = 0; k < 48; ++k) passes.push_back(s.sample(0, x, n, jitter::seedFor(5, k)).cosineSolidAngle);
-        const MeanAndError m = meanOf(passes);
         // The eye's lift (1e-6 of the scene) moves Lambert's value by ~1e-6 of it.
-        EXPECT_LE(std::abs(m.mean - lambert), 4 * m.standardError + 1e-5 * lambert)
-            << "at (" << x.x << ", " << x.z << "): Lambert " << lambert << ", mean " << m.mean << " ± " << m.standardError;
-        EXPECT_GT(m.standardError, 0.0);
+        test::expectUnbiased(passes, lambert, 1e-5 * lambert, concat("Lambert at (", x.x, ", ", x.z, ")"));
         ++checked;
     }
     EXPECT_EQ(checked, 3);

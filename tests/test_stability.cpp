@@ -44,6 +44,7 @@
 #include "viewer/compositor/Compositor.h"
 
 #include "GlTestContext.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -56,10 +57,10 @@
 #include <vector>
 
 using namespace ml;
+using test::addQuad, test::floorMesh, test::quadMesh, test::unitLight;
+using test::kX, test::kY, test::kZ;
 
 namespace {
-
-const Vec3 kX(1, 0, 0), kY(0, 1, 0), kZ(0, 0, 1);
 
 std::string dataFile(const std::string& name) { return std::string(MESHLIGHT_TEST_DATA) + "/" + name; }
 
@@ -84,40 +85,10 @@ std::vector<Material> materials() {
 }
 constexpr uint32_t kLight = 0, kGrey = 1, kLight2 = 2;
 
-// The parallelogram corner + [0,1]·u + [0,1]·v as two triangles facing u × v.
-void addQuad(Mesh& mesh, uint32_t material, const Vec3& corner, const Vec3& u, const Vec3& v) {
-    const uint32_t base = uint32_t(mesh.positions.size());
-    const Vec3 n = glm::normalize(glm::cross(u, v));
-    for (const Vec3& p : {corner, corner + u, corner + u + v, corner + v}) {
-        mesh.positions.push_back(p);
-        mesh.normals.push_back(n);
-    }
-    mesh.triangles.push_back({base, base + 1, base + 2});
-    mesh.triangles.push_back({base, base + 2, base + 3});
-    mesh.materials.insert(mesh.materials.end(), 2, material);
-    mesh.sourceLines.insert(mesh.sourceLines.end(), 2, 0);
-}
+Scene makeScene(std::vector<Mesh> meshes) { return test::sceneOf("stability case", materials(), std::move(meshes)); }
 
-Mesh quadMesh(const std::string& name, uint32_t material, const Vec3& corner, const Vec3& u, const Vec3& v) {
-    Mesh mesh;
-    mesh.name = name;
-    addQuad(mesh, material, corner, u, v);
-    return mesh;
-}
-
-Scene makeScene(std::vector<Mesh> meshes) {
-    Scene scene;
-    scene.name = "stability case";
-    scene.materials = materials();
-    scene.meshes = std::move(meshes);
-    scene.finalize();
-    return scene;
-}
-
-// The bench's light (1 × 1 at y = 1, facing down), floor (3 × 3 at y = 0,
-// facing up) and occluder (0.5 × 0.5 at y = 0.5, facing up here).
-Mesh unitLight() { return quadMesh("light", kLight, Vec3(-0.5, 1.0, -0.5), kX, kZ); }
-Mesh floorMesh() { return quadMesh("floor", kGrey, Vec3(-1.5, 0.0, -1.5), 3.0 * kZ, 3.0 * kX); }
+// The bench's occluder (0.5 × 0.5 at y = 0.5, facing up here); its light
+// and floor are test::unitLight() and test::floorMesh().
 Mesh benchOccluder() { return quadMesh("occluder", kGrey, Vec3(-0.2, 0.5, -0.3), 0.5 * kZ, 0.5 * kX); }
 
 // Longest edge over the height onto it: 1.15 for an equilateral triangle,

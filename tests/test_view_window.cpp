@@ -18,66 +18,33 @@
 #include "core/image/Image.h"
 #include "core/image/ToneMap.h"
 
+#include "RunCommand.h"
+#include "TempDirTest.h"
+
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <array>
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <string>
 
 namespace fs = std::filesystem;
 using namespace ml;
+using test::CommandResult;
+using test::meshlightCommand;
+using test::runCommand;
+using test::runMeshlight;
 
 namespace {
 
-struct CommandResult {
-    int status;
-    std::string output;  // stdout and stderr
-};
+using ViewCli = test::TempDirTest;
 
-CommandResult run(const std::string& command) {
-    CommandResult r{-1, {}};
-    FILE* p = popen((command + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int s = pclose(p);
-    r.status = WIFEXITED(s) ? WEXITSTATUS(s) : -1;
-    return r;
-}
-
-std::string meshlight(const std::string& args) { return std::string(MESHLIGHT_BINARY) + " " + args; }
-
-class ViewTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir = fs::temp_directory_path() / ("meshlight_view_" + std::to_string(::getpid()) + "_" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    std::string path(const std::string& name) const { return (dir / name).string(); }
-    std::string script(const std::string& name, const std::string& text) const {
-        std::ofstream(path(name)) << text;
-        return path(name);
-    }
-    fs::path dir;
-};
-
-using ViewCli = ViewTest;
-
-class ViewWindow : public ViewTest {
+class ViewWindow : public test::TempDirTest {
 protected:
     void SetUp() override {
         if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no DISPLAY (ctest runs these under xvfb-run)";
-        ViewTest::SetUp();
+        TempDirTest::SetUp();
     }
 };
 
@@ -112,40 +79,41 @@ void expectLinear(const ImageRgb& x, const ImageRgb& expected, const char* what)
 // --- Refused before the window opens --------------------------------------------
 
 TEST_F(ViewCli, MalformedScriptsNameFileAndLine) {
-    const std::string bad = script("bad.txt", "wait 0.1\n# fine so far\njump 3\n");
-    CommandResult r = run(meshlight("view cornell --script " + bad));
+    const std::string bad = write("bad.txt", "wait 0.1\n# fine so far\njump 3\n");
+    CommandResult r = runMeshlight("view cornell --script " + bad);
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find(bad + ":3: unknown action 'jump'"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("OpenGL"), std::string::npos) << "no window may open: " << r.output;
 
-    const std::string light = script("light.txt", "wait-done\nlight 3 off\n");
-    r = run(meshlight("view cornell --script " + light));
+    const std::string light = write("light.txt", "wait-done\nlight 3 off\n");
+    r = runMeshlight("view cornell --script " + light);
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find(light + ":2: no light '3' in the scene (lights: 0 'light')"), std::string::npos)
         << r.output;
 
-    const std::string keys = script("keys.txt", "camera t=1 pos=0,0,1 target=0,0,0\ncamera t=0.5 pos=0,0,2 target=0,0,0\n");
-    r = run(meshlight("view cornell --script " + keys));
+    const std::string keys =
+        write("keys.txt", "camera t=1 pos=0,0,1 target=0,0,0\ncamera t=0.5 pos=0,0,2 target=0,0,0\n");
+    r = runMeshlight("view cornell --script " + keys);
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find(keys + ":2: camera t=0.5 comes before the keyframe at line 1"), std::string::npos)
         << r.output;
 }
 
 TEST_F(ViewCli, BadOptionsAndMissingFiles) {
-    CommandResult r = run(meshlight("view cornell --frobnicate 3"));
+    CommandResult r = runMeshlight("view cornell --frobnicate 3");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("unknown option '--frobnicate'"), std::string::npos) << r.output;
-    r = run(meshlight("view cornell --script-step 0.1"));
+    r = runMeshlight("view cornell --script-step 0.1");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("--script-step needs --script"), std::string::npos) << r.output;
-    r = run(meshlight("view cornell --units furlong"));
+    r = runMeshlight("view cornell --units furlong");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("unknown length unit 'furlong'"), std::string::npos) << r.output;
-    r = run(meshlight("view cornell --script " + path("missing.txt")));
+    r = runMeshlight("view cornell --script " + path("missing.txt"));
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find(path("missing.txt") + ": cannot read the script"), std::string::npos) << r.output;
     // Without a display: a clear message, not a crash.
-    r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + meshlight("view cornell"));
+    r = runCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + meshlightCommand("view cornell"));
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.output.find("there is no display"), std::string::npos) << r.output;
 }
@@ -156,17 +124,17 @@ TEST_F(ViewWindow, ScreenshotsEqualRenderOfTheSameViewAndSamples) {
     // One sample per pixel (the window's forward pass) and 2×2 (the fused pass).
     for (int supersample : {1, 2}) {
         SCOPED_TRACE("supersample " + std::to_string(supersample));
-        const std::string s = script("same.txt", concat("wait-done\n"
-                                                        "screenshot ", path("v.exr"), "\n"
-                                                        "ui off\n"
-                                                        "exposure auto\n"
-                                                        "screenshot ", path("v.png"), "\n"
-                                                        "quit\n"));
+        const std::string s = write("same.txt", concat("wait-done\n"
+                                                       "screenshot ", path("v.exr"), "\n"
+                                                       "ui off\n"
+                                                       "exposure auto\n"
+                                                       "screenshot ", path("v.png"), "\n"
+                                                       "quit\n"));
         const std::string common = concat(" --width 96 --height 72 --samples 4000 --direct-only --supersample ",
                                           supersample, " --seed 3");
-        CommandResult v = run(meshlight("view cornell --script " + s + common));
+        CommandResult v = runMeshlight("view cornell --script " + s + common);
         ASSERT_EQ(v.status, 0) << v.output;
-        CommandResult r = run(meshlight("render cornell --out " + path("r.exr") + common));
+        CommandResult r = runMeshlight("render cornell --out " + path("r.exr") + common);
         ASSERT_EQ(r.status, 0) << r.output;
         const ImageRgb viewed = readImageLinear(path("v.exr"));
         const ImageRgb rendered = readImageLinear(path("r.exr"));
@@ -194,27 +162,30 @@ TEST_F(ViewWindow, LightsSwitchDimAndShowAloneLinearly) {
     const std::string scene = std::string(MESHLIGHT_TEST_DATA) + "/view_two_lights.obj";
     // Each change and its screenshot fall in one frame: what the image shows
     // right after a change is already the changed light.
-    const std::string s = script("lights.txt", concat("wait-done\n"
-                                                      "screenshot ", path("all.exr"), "\n"
-                                                      "light lampB off\n"
-                                                      "screenshot ", path("offB.exr"), "\n"
-                                                      "light lampB on\n"
-                                                      "mode light 0\n"
-                                                      "screenshot ", path("a.exr"), "\n"
-                                                      "mode light lampB\n"
-                                                      "screenshot ", path("b.exr"), "\n"
-                                                      "mode final\n"
-                                                      "light 0 intensity 2\n"
-                                                      "light 1 color 0.5,1,0\n"
-                                                      "screenshot ", path("mixed.exr"), "\n"
-                                                      "mode reflectance\n"
-                                                      "screenshot ", path("kd.exr"), "\n"
-                                                      "mode lux\n"
-                                                      "screenshot ", path("lux.exr"), "\n"
-                                                      "screenshot ", path("lux.png"), "\n"
-                                                      "quit\n"));
-    CommandResult v = run(meshlight("view " + scene + " --script " + s +
-                                    " --width 80 --height 60 --samples 3000 --direct-only --supersample 2"));
+    const std::string s = write("lights.txt", concat("wait-done\n"
+                                                     "screenshot ", path("all.exr"), "\n"
+                                                     "light lampB off\n"
+                                                     "screenshot ", path("offB.exr"), "\n"
+                                                     "light lampB on\n"
+                                                     "mode light 0\n"
+                                                     "screenshot ", path("a.exr"), "\n"
+                                                     "mode light lampB\n"
+                                                     "screenshot ", path("b.exr"), "\n"
+                                                     "mode final\n"
+                                                     "light 0 intensity 2\n"
+                                                     "light 1 color 0.5,1,0\n"
+                                                     "screenshot ", path("mixed.exr"), "\n"
+                                                     "mode reflectance\n"
+                                                     "screenshot ", path("kd.exr"), "\n"
+                                                     "mode lux\n"
+                                                     "screenshot ", path("lux.exr"), "\n"
+                                                     "screenshot ", path("lux.png"), "\n"
+                                                     "quit\n"));
+    CommandResult v = runMeshlight("view " + scene + " --script " + s +
+                                   " --width 80 --height 60 --samples 3000 --direct-only --supersample 2"
+                                   // A mesh per light everywhere: relighting is then exact; where
+                                   // lights share a mesh it is their power-weighted mean there.
+                                   " --light-share 0");
     ASSERT_EQ(v.status, 0) << v.output;
     const ImageRgb all = readImageLinear(path("all.exr")), offB = readImageLinear(path("offB.exr")),
                    a = readImageLinear(path("a.exr")), b = readImageLinear(path("b.exr")),
@@ -253,8 +224,8 @@ TEST_F(ViewWindow, LightsSwitchDimAndShowAloneLinearly) {
 TEST_F(ViewWindow, CtrlCStopsTheWorkerCleanly) {
     // SIGINT after 4 s (timeout -s INT); a hang would be killed after 30 more.
     const auto start = std::chrono::steady_clock::now();
-    const CommandResult r =
-        run("timeout --preserve-status -s INT -k 30 4 " + meshlight("view cornell --width 320 --height 240"));
+    const CommandResult r = runCommand("timeout --preserve-status -s INT -k 30 4 " +
+                                       meshlightCommand("view cornell --width 320 --height 240"));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     EXPECT_EQ(r.status, 130) << r.output;
     EXPECT_NE(r.output.find("interrupted; stopping the worker"), std::string::npos) << r.output;
@@ -264,8 +235,8 @@ TEST_F(ViewWindow, CtrlCStopsTheWorkerCleanly) {
 TEST_F(ViewWindow, ScriptLineThatFailsWhilePlayingIsNamed) {
     // Parses (the up vector is not given), but the up inherited from the box's
     // camera is parallel to this keyframe's view straight down.
-    const std::string s = script("down.txt", "wait 0.1\ncamera t=0.2 pos=278,900,280 target=278,0,280\nquit\n");
-    const CommandResult r = run(meshlight("view cornell --width 160 --height 120 --script " + s));
+    const std::string s = write("down.txt", "wait 0.1\ncamera t=0.2 pos=278,900,280 target=278,0,280\nquit\n");
+    const CommandResult r = runMeshlight("view cornell --width 160 --height 120 --script " + s);
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find(s + ":2: camera up vector is parallel to the view direction"), std::string::npos)
         << r.output;
@@ -273,13 +244,13 @@ TEST_F(ViewWindow, ScriptLineThatFailsWhilePlayingIsNamed) {
 
 TEST_F(ViewWindow, SavesTheCacheAndResumesFromIt) {
     const std::string cache = path("view.cache");
-    const std::string s = script("save.txt", concat("wait-samples 1500\nsave-cache ", cache, "\nquit\n"));
-    CommandResult v = run(meshlight("view cornell --width 160 --height 120 --direct-only --script " + s));
+    const std::string s = write("save.txt", concat("wait-samples 1500\nsave-cache ", cache, "\nquit\n"));
+    CommandResult v = runMeshlight("view cornell --width 160 --height 120 --direct-only --script " + s);
     ASSERT_EQ(v.status, 0) << v.output;
     ASSERT_TRUE(fs::exists(cache)) << v.output;
     // render resumes from it: the same scene and settings.
-    CommandResult r = run(meshlight("render cornell --width 32 --height 32 --direct-only --samples 1 --cache " + cache +
-                                    " --out " + path("r.png")));
+    CommandResult r = runMeshlight("render cornell --width 32 --height 32 --direct-only --samples 1 --cache " + cache +
+                                   " --out " + path("r.png"));
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("cache: resumed from"), std::string::npos) << r.output;
 }
