@@ -2,6 +2,7 @@
 
 #include "core/Error.h"
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <functional>
@@ -161,11 +162,28 @@ public:
     VertexSample sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) override {
         return pool_.own.direct->sample(light, x, n, seed);
     }
+    // Blocks of requests, handed out in order, each a batch of its thread's
+    // sampler (which may draw several images before reading any back); a
+    // batch gives what sample() gives, so the blocks change no result.
     void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) override {
         results.resize(requests.size());
-        pool_.forEach(requests.size(), [&](WorkerSamplers& s, size_t i) {
-            const SampleRequest& r = requests[i];
-            asBatchRequest(i, [&] { results[i] = s.direct->sample(r.mesh, r.x, r.n, r.seed); });
+        if (pool_.size() == 1) {
+            pool_.own.direct->sampleBatch(requests, results);
+            return;
+        }
+        constexpr size_t kBlock = 16;
+        const size_t blocks = (requests.size() + kBlock - 1) / kBlock;
+        pool_.forEach(blocks, [&](WorkerSamplers& s, size_t b) {
+            const size_t begin = b * kBlock, end = std::min(requests.size(), begin + kBlock);
+            const std::vector<SampleRequest> block(requests.begin() + std::ptrdiff_t(begin),
+                                                   requests.begin() + std::ptrdiff_t(end));
+            std::vector<VertexSample> out;
+            try {
+                s.direct->sampleBatch(block, out);
+            } catch (const SampleBatchError& e) {
+                throw SampleBatchError(begin + e.index(), e.what());
+            }
+            std::copy(out.begin(), out.end(), results.begin() + std::ptrdiff_t(begin));
         });
     }
     // Between batches every helper is idle: its sampler's totals are still.

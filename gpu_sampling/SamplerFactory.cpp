@@ -73,20 +73,47 @@ std::string ConfiguredDirectSampler::name() const { return impl_->choice.describ
 DirectPhaseTimes ConfiguredDirectSampler::phaseTimes() const { return impl_->totals; }
 GlContext* ConfiguredDirectSampler::context() const { return impl_->context.get(); }
 
+namespace {
+
+// The visible fraction of the light's cosine-weighted solid angle: 1 where
+// the point sees none of the light (no shadow boundary passes there).
+double visibleFraction(double visible, double unoccluded) {
+    return unoccluded > 0 ? std::clamp(visible / unoccluded, 0.0, 1.0) : 1.0;
+}
+
+VertexSample vertexSample(const DirectSample& s) {
+    return {s.irradiance, visibleFraction(s.cosineSolidAngle, s.unoccluded), s.partiallyVisible()};
+}
+
+}  // namespace
+
 VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
-    auto fraction = [](double visible, double unoccluded) {
-        return unoccluded > 0 ? std::clamp(visible / unoccluded, 0.0, 1.0) : 1.0;
-    };
     if (impl_->exact) {
         const double unoccluded = impl_->exact->unoccludedCosineSolidAngle(light, x, n);
         const double visible = impl_->exact->cosineSolidAngle(light, x, n);
-        const double v = fraction(visible, unoccluded);
+        const double v = visibleFraction(visible, unoccluded);
         return {visible * impl_->scene.lights[light].radiance, v, v > 1e-9 && v < 1 - 1e-9};
     }
     impl_->context->use();
     const DirectSample s = impl_->sampler->sample(light, x, n, seed);
     impl_->totals += impl_->sampler->lastTimes();
-    return {s.irradiance, fraction(s.cosineSolidAngle, s.unoccluded), s.partiallyVisible()};
+    return vertexSample(s);
+}
+
+void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requests,
+                                          std::vector<VertexSample>& results) {
+    if (impl_->exact) {
+        DirectSampler::sampleBatch(requests, results);
+        return;
+    }
+    // The GPU sampler answers CPU and unlit pairs at once and draws the
+    // others' images several at a time (DirectLightSampler::sampleBatch).
+    impl_->context->use();
+    std::vector<DirectSample> samples;
+    impl_->sampler->sampleBatch(requests, samples);
+    impl_->totals += impl_->sampler->lastTimes();
+    results.resize(requests.size());
+    for (size_t i = 0; i < requests.size(); ++i) results[i] = vertexSample(samples[i]);
 }
 
 // --- The indirect gather -----------------------------------------------------------

@@ -75,6 +75,9 @@ public:
     // solid angle (1 where the point sees none of the light: no shadow
     // boundary passes there).
     VertexSample sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) override;
+    // Every request at once: CPU and unlit pairs answered at once, the
+    // others' images drawn several at a time (DirectLightSampler::sampleBatch).
+    void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) override;
     DirectPhaseTimes phaseTimes() const override;
     // The context it draws with; null for the exact method.
     GlContext* context() const;

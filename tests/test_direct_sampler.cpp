@@ -23,7 +23,9 @@
 #include "gpu_sampling/direct/OccluderBvh.h"
 #include "gpu_sampling/gl/GlContext.h"
 
+#include "BenchReference.h"
 #include "GlTestContext.h"
+#include "MeanAndError.h"
 
 #include <gtest/gtest.h>
 
@@ -39,23 +41,18 @@
 #include <tuple>
 
 using namespace ml;
+using test::benchExact, test::benchScene, test::exactAt, test::lambertAt;
+using test::clearOfPenumbra, test::eyePoint, test::liftAllowance, test::penumbraReceivers;
+using test::MeanAndError, test::meanOf;
 
 namespace {
 
-// --- shared state: one GL context, the bench, one sampler per setting ------
+// --- shared state: one GL context, one sampler per setting -----------------
 
 using SamplerKey = std::tuple<DirectMethod, DirectEstimator, int, int>;
 
 class GlEnvironment {
 public:
-    static const Scene& bench() {
-        static const Scene scene = makeBenchScene();
-        return scene;
-    }
-    static const ExactDirect& exact() {
-        static const ExactDirect reference(bench());
-        return reference;
-    }
     // Samplers compile a program per variant: keep one per setting.
     static DirectLightSampler& sampler(DirectMethod method, DirectEstimator estimator, int imageSize, int bits) {
         const SamplerKey key{method, estimator, imageSize, bits};
@@ -67,7 +64,7 @@ public:
             s.imageSize = imageSize;
             s.bits = bits;
             if (samplers_.empty()) test::GlTestEnvironment::beforeTearDown([] { samplers_.clear(); });
-            it = samplers_.emplace(key, std::make_unique<DirectLightSampler>(test::glContext(), bench(), s)).first;
+            it = samplers_.emplace(key, std::make_unique<DirectLightSampler>(test::glContext(), benchScene(), s)).first;
         }
         return *it->second;
     }
@@ -83,21 +80,6 @@ constexpr auto kCv = DirectEstimator::ControlVariate;
 
 const Vec3 kUp(0, 1, 0);
 
-Vec3 eyePoint(const Vec3& x, const Vec3& n) {
-    const Scene& bench = GlEnvironment::bench();
-    return x + glm::normalize(n) * samplingEyeLift(bench.lights[0], x, DirectSamplerSettings{}.eyeOffset,
-                                                   bench.bounds.diagonal());
-}
-// The exact visible cosine-weighted solid angle at the receiver, and
-// Lambert's value there (nothing occluding).
-double exactAt(const Vec3& x, const Vec3& n) { return GlEnvironment::exact().cosineSolidAngle(0, x, n); }
-double lambertAt(const Vec3& x, const Vec3& n) { return GlEnvironment::exact().unoccludedCosineSolidAngle(0, x, n); }
-// How far the eye's lift can move an estimator's expectation (see the top).
-double liftAllowance(const Vec3& x, const Vec3& n) {
-    const Vec3 eye = eyePoint(x, n);
-    return std::abs(exactAt(eye, n) - exactAt(x, n)) + std::abs(lambertAt(eye, n) - lambertAt(x, n));
-}
-
 double sampleValue(DirectLightSampler& s, const Vec3& x, const Vec3& n, uint32_t seed) {
     const double e = s.sample(0, x, n, seed).cosineSolidAngle;
     EXPECT_TRUE(std::isfinite(e)) << "at (" << x.x << ", " << x.y << ", " << x.z << ")";
@@ -106,15 +88,8 @@ double sampleValue(DirectLightSampler& s, const Vec3& x, const Vec3& n, uint32_t
 
 // The bench light as one convex polygon (its two triangles (a,b,c), (a,c,d)).
 std::vector<Vec3> benchLightPolygon() {
-    const AreaLight& light = GlEnvironment::bench().lights[0];
+    const AreaLight& light = benchScene().lights[0];
     return {light.geometry[0][0], light.geometry[0][1], light.geometry[0][2], light.geometry[1][2]};
-}
-
-// The shadow of the bench occluder on the floor is all penumbra and lies in
-// x ∈ [−0.9, 1.1], z ∈ [−1.1, 0.9] (BenchScene.h). Receivers further than
-// `margin` outside it see the whole light.
-bool clearOfPenumbra(const Vec3& p, double margin) {
-    return p.x < -0.9 - margin || p.x > 1.1 + margin || p.z < -1.1 - margin || p.z > 0.9 + margin;
 }
 
 std::vector<ReceiverPoint> unoccludedReceivers() {
@@ -122,37 +97,6 @@ std::vector<ReceiverPoint> unoccludedReceivers() {
     for (const ReceiverPoint& r : makeBenchReceivers(20))
         if (clearOfPenumbra(r.position, 0.02)) out.push_back(r);
     return out;
-}
-
-// Receivers of the 20×20 grid that see between 20% and 80% of the light:
-// penumbra, away from the umbra, where the control variate's clamp at 0 and
-// its "no visible sample gives 0" rule would bias it (on purpose: they trade
-// a tiny bias for never returning a negative irradiance).
-std::vector<ReceiverPoint> penumbraReceivers(size_t count) {
-    std::vector<ReceiverPoint> candidates;
-    for (const ReceiverPoint& r : makeBenchReceivers(20)) {
-        const double visible = exactAt(r.position, r.normal);
-        const double all = lambertAt(r.position, r.normal);
-        if (visible > 0.2 * all && visible < 0.8 * all) candidates.push_back(r);
-    }
-    std::vector<ReceiverPoint> out;
-    for (size_t k = 0; k < count && !candidates.empty(); ++k)
-        out.push_back(candidates[k * candidates.size() / count]);  // spread over the shadow
-    return out;
-}
-
-struct MeanAndError {
-    double mean = 0;
-    double standardError = 0;  // of the mean, from the samples' own spread
-};
-MeanAndError meanOf(const std::vector<double>& v) {
-    MeanAndError m;
-    for (double x : v) m.mean += x;
-    m.mean /= double(v.size());
-    double ss = 0;
-    for (double x : v) ss += (x - m.mean) * (x - m.mean);
-    m.standardError = std::sqrt(ss / double(v.size() - 1) / double(v.size()));
-    return m;
 }
 
 // --- a deterministic error bound for the plain estimator ------------------
@@ -246,7 +190,7 @@ void addFrustumBound(const SamplingFrustum& f, const std::vector<Vec3>& lightPol
 // The frusta the sampler uses at (x, n) for the bench light (same eye, same
 // alignment edge, same split angle), and the bound over all of them.
 std::vector<SamplingFrustum> benchFrusta(const Vec3& x, const Vec3& n) {
-    const AreaLight& light = GlEnvironment::bench().lights[0];
+    const AreaLight& light = benchScene().lights[0];
     const Vec3 eye = eyePoint(x, n);
     return fitFrusta(visibleLightPieces(light, eye, n), eye, light.geometry[0][1] - light.geometry[0][0],
                      DirectSamplerSettings{}.maxHalfAngleDegrees);
@@ -269,7 +213,7 @@ TEST(DirectSampler, EyeLiftCostsLessThanATenThousandth) {
     // edges by ~δ, a change of the same order; so over the whole grid the
     // lift allowance stays below 1e-4 of Lambert's value, far below every
     // sampling error measured here.
-    const double delta = DirectSamplerSettings{}.eyeOffset * GlEnvironment::bench().bounds.diagonal();
+    const double delta = DirectSamplerSettings{}.eyeOffset * benchScene().bounds.diagonal();
     for (const ReceiverPoint& r : unoccludedReceivers()) {
         const double atX = lambertAt(r.position, r.normal);
         const double atEye = lambertAt(eyePoint(r.position, r.normal), r.normal);
@@ -296,8 +240,8 @@ TEST(DirectSampler, ControlVariateIsLambertWhereNothingOccludes) {
         for (size_t i = 0; i < receivers.size(); ++i) {
             const ReceiverPoint& r = receivers[i];
             // The exact reference agrees that nothing occludes here.
-            ASSERT_EQ(GlEnvironment::exact().cosineSolidAngle(0, r.position, r.normal),
-                      GlEnvironment::exact().unoccludedCosineSolidAngle(0, r.position, r.normal));
+            ASSERT_EQ(benchExact().cosineSolidAngle(0, r.position, r.normal),
+                      benchExact().unoccludedCosineSolidAngle(0, r.position, r.normal));
             const DirectSample d = s.sample(0, r.position, r.normal, jitter::seedFor(1, uint32_t(i)));
             const double lambert = cosineSolidAngle(r.position, r.normal, benchLightPolygon());
             EXPECT_EQ(d.visibleSamples, d.lightSamples);
@@ -363,12 +307,9 @@ TEST(DirectSampler, JitteredMeanOfManyPassesConvergesToExact) {
                 for (int k = 0; k < kPasses; ++k)
                     passes.push_back(
                         sampleValue(s, r.position, r.normal, jitter::seedFor(3, uint32_t(i), 0, uint32_t(k))));
-                const MeanAndError m = meanOf(passes);
-                const double exact = exactAt(r.position, r.normal);
-                EXPECT_GT(m.standardError, 0.0) << "passes did not differ: the seed is ignored";
-                EXPECT_LE(std::abs(m.mean - exact), 4 * m.standardError + liftAllowance(r.position, r.normal))
-                    << directEstimatorName(estimator) << " × " << bits << " bits at (" << r.position.x << ", "
-                    << r.position.z << "): exact " << exact << ", mean " << m.mean << " ± " << m.standardError;
+                test::expectUnbiased(passes, exactAt(r.position, r.normal), liftAllowance(r.position, r.normal),
+                                     concat(directEstimatorName(estimator), " × ", bits, " bits at (", r.position.x,
+                                            ", ", r.position.z, ")"));
             }
         }
 }
@@ -602,7 +543,7 @@ TEST(DirectSampler, SameSeedRepeatsBitForBitAndDifferentSeedsDiffer) {
             EXPECT_EQ(a.visibleSamples, b.visibleSamples);
             // A second sampler with the same settings draws the same jitter.
             DirectSamplerSettings settings = s.settings();
-            DirectLightSampler other(test::glContext(), GlEnvironment::bench(), settings);
+            DirectLightSampler other(test::glContext(), benchScene(), settings);
             const DirectSample c = other.sample(0, r.position, r.normal, 1234);
             EXPECT_EQ(std::memcmp(&a.cosineSolidAngle, &c.cosineSolidAngle, sizeof(double)), 0);
             // In the penumbra, estimates are sums of hundreds of weights at
@@ -624,7 +565,7 @@ TEST(DirectSampler, SettingsAreValidated) {
     s = {};
     s.imageSize = 2;
     EXPECT_THROW(s.validate(), InputError);
-    EXPECT_THROW(DirectLightSampler(test::glContext(), GlEnvironment::bench(), s), InputError);
+    EXPECT_THROW(DirectLightSampler(test::glContext(), benchScene(), s), InputError);
     EXPECT_THROW(parseDirectMethod("stochastic"), InputError);
     EXPECT_THROW(parseDirectEstimator("mis"), InputError);
     for (auto m : {kQuery, kRegular, kJittered}) EXPECT_EQ(parseDirectMethod(directMethodName(m)), m);
@@ -703,7 +644,7 @@ TEST(DirectSampler, PairsWithNothingBetweenAreAnsweredOnTheCpuAsTheGpuWould) {
     // occluder's shadow must be rasterised. Regular sampling with the
     // control variate weighs the light the same way (at pixel centres), so
     // it takes the CPU path as well.
-    const Scene& bench = GlEnvironment::bench();
+    const Scene& bench = benchScene();
     std::vector<ReceiverPoint> receivers = makeBenchReceivers(20);
     receivers.push_back({Vec3(0.1, 1.0 - 1e-3, 0.05), kUp});  // under the light: split among cube faces
     for (auto [method, bits] : {std::pair{kJittered, 8}, std::pair{kJittered, 4}, std::pair{kRegular, 1}}) {
@@ -771,7 +712,7 @@ TEST(DirectSampler, PairsWithNothingBetweenAreAnsweredOnTheCpuAsTheGpuWould) {
 }
 
 TEST(DirectSampler, ALightBelowTheHorizonOrSeenFromBehindGivesZeroWithNoGlCall) {
-    const Scene& bench = GlEnvironment::bench();
+    const Scene& bench = benchScene();
     const std::vector<ReceiverPoint> receivers = {
         {Vec3(0.2, 0.0, 0.1), -kUp},                                  // on the floor, facing down
         {Vec3(0.0, 2.0, 0.0), kUp},                                   // above the light, facing up
@@ -801,7 +742,7 @@ TEST(DirectSampler, ALightBelowTheHorizonOrSeenFromBehindGivesZeroWithNoGlCall) 
                 EXPECT_EQ(d.trianglesDrawn, 0u) << where;
                 const DirectPhaseTimes& t = sampler.lastTimes();
                 EXPECT_EQ(t.draw + t.readback + t.weighting, 0.0) << where;
-                EXPECT_EQ(GlEnvironment::exact().unoccludedCosineSolidAngle(0, r.position, r.normal), 0.0) << where;
+                EXPECT_EQ(benchExact().unoccludedCosineSolidAngle(0, r.position, r.normal), 0.0) << where;
             }
         }
     EXPECT_STREQ(directPathName(DirectPath::Unlit), "unlit");
@@ -822,12 +763,11 @@ Mesh quad(const std::string& name, uint32_t material, const Vec3& corner, const 
     return m;
 }
 
-TEST(DirectSampler, ASplitLightRasterisesOnlyTheFacesWithAnOccluder) {
-    // 0.1 below the bench's light the receiver sees it split among five
-    // cube faces; a small square at y = 0.95, x ∈ [0.2, 0.3] (elevation 9°
-    // to 14° towards +x, in front of the light's part beyond x = 0.4) lies
-    // in the +x face only. That face is rasterised, the four others weighed
-    // on the CPU: the same estimate as rasterising all five, bit for bit.
+// The bench's light (1 × 1 at y = 1) over a small square at y = 0.95, x ∈
+// [0.2, 0.3]: 0.1 below the light a receiver sees it split among five cube
+// faces, and the square (elevation 9° to 14° towards +x, in front of the
+// light's part beyond x = 0.4) lies in the +x face only.
+Scene splitLightScene() {
     Scene scene;
     scene.name = "split";
     Material light, grey;
@@ -839,6 +779,13 @@ TEST(DirectSampler, ASplitLightRasterisesOnlyTheFacesWithAnOccluder) {
     scene.meshes = {quad("light", 0, Vec3(-0.5, 1.0, -0.5), Vec3(1, 0, 0), Vec3(0, 0, 1)),
                     quad("occluder", 1, Vec3(0.2, 0.95, -0.05), Vec3(0, 0, 0.1), Vec3(0.1, 0, 0))};
     scene.finalize();
+    return scene;
+}
+
+TEST(DirectSampler, ASplitLightRasterisesOnlyTheFacesWithAnOccluder) {
+    // The +x face is rasterised, the four others weighed on the CPU: the
+    // same estimate as rasterising all five, bit for bit.
+    const Scene scene = splitLightScene();
     DirectSamplerSettings forced;
     forced.cpuUnoccludedPairs = false;
     DirectLightSampler cheap(test::glContext(), scene, DirectSamplerSettings{});
@@ -857,16 +804,9 @@ TEST(DirectSampler, ASplitLightRasterisesOnlyTheFacesWithAnOccluder) {
     }
 }
 
-TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
-    // Cache-like points: a barycentric lattice of 15 points on each of the
-    // box's 30 non-emitting triangles (walls, floor, ceiling, blocks), with
-    // the face's normal. Every pair is sampled twice with the same seed,
-    // with and without the CPU path: the same jitter, so a CPU pair must
-    // give the rasterised value exactly and a rasterised pair is the same
-    // computation. The totals must then agree to rounding (1e-12 relative),
-    // far tighter than the sampler's noise (~1e-3 of a pass in the
-    // penumbra), which would hide a pair wrongly taken as unoccluded.
-    const Scene box = makeCornellBox();
+// Cache-like points: a barycentric lattice of 15 points on each of the
+// box's non-emitting triangles, with the face's normal.
+std::vector<ReceiverPoint> cornellPoints(const Scene& box) {
     std::vector<ReceiverPoint> points;
     for (const Mesh& m : box.meshes)
         for (size_t t = 0; t < m.triangles.size(); ++t) {
@@ -880,6 +820,20 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
                     points.push_back({p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]), n});
                 }
         }
+    return points;
+}
+
+TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
+    // Cache-like points: a barycentric lattice of 15 points on each of the
+    // box's 30 non-emitting triangles (walls, floor, ceiling, blocks), with
+    // the face's normal. Every pair is sampled twice with the same seed,
+    // with and without the CPU path: the same jitter, so a CPU pair must
+    // give the rasterised value exactly and a rasterised pair is the same
+    // computation. The totals must then agree to rounding (1e-12 relative),
+    // far tighter than the sampler's noise (~1e-3 of a pass in the
+    // penumbra), which would hide a pair wrongly taken as unoccluded.
+    const Scene box = makeCornellBox();
+    const std::vector<ReceiverPoint> points = cornellPoints(box);
     ASSERT_EQ(points.size(), 30u * 15u);
     DirectSamplerSettings forced;
     forced.cpuUnoccludedPairs = false;
@@ -930,6 +884,88 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
     // sees it past the blocks from most places.
     EXPECT_EQ(unlit, int(kPasses) * 150);
     EXPECT_GT(cpu, 2 * raster);
+}
+
+// === batches ================================================================
+
+TEST(DirectSampler, ABatchGivesWhatSampleGivesBitForBit) {
+    // A batch draws many sampling images (into several targets) before
+    // reading any back; each result must be sample()'s for the same request,
+    // bit for bit: unlit, CPU and rasterised pairs mixed, split lights,
+    // batches longer than the targets, every estimator and method. The
+    // batch runs first, then sample() on the same sampler: whatever state
+    // the batch leaves must not reach sample(), nor one image another.
+    const Scene box = makeCornellBox(), split = splitLightScene();
+    const Scene& bench = benchScene();
+    struct Case {
+        const char* name;
+        const Scene& scene;
+        std::vector<SampleRequest> requests;
+    };
+    auto requestsAt = [](const std::vector<ReceiverPoint>& points, uint32_t user) {
+        std::vector<SampleRequest> rs;
+        for (size_t i = 0; i < points.size(); ++i)
+            rs.push_back({0, points[i].position, points[i].normal, jitter::seedFor(user, uint32_t(i))});
+        return rs;
+    };
+    std::vector<ReceiverPoint> benchPoints = makeBenchReceivers(12);
+    benchPoints.push_back({Vec3(0.1, 1.0 - 1e-3, 0.05), kUp});  // under the light: cube faces
+    benchPoints.push_back({Vec3(0.2, 0.0, 0.1), -kUp});          // facing away: unlit
+    std::vector<ReceiverPoint> splitPoints;
+    for (int k = 0; k < 48; ++k)  // 0.1 under the light: five faces, one with the square in it
+        splitPoints.push_back({Vec3(-0.3 + 0.0125 * k, 0.9, 0.005 * k - 0.1), kUp});
+    std::vector<Case> cases;
+    cases.push_back({"Cornell box", box, requestsAt(cornellPoints(box), 21)});
+    cases.push_back({"bench", bench, requestsAt(benchPoints, 22)});
+    cases.push_back({"split light", split, requestsAt(splitPoints, 23)});
+
+    struct Variant {
+        DirectMethod method;
+        DirectEstimator estimator;
+        int bits;
+        bool cpuPairs;
+    };
+    const Variant variants[] = {{kJittered, kCv, 8, true},  {kJittered, kCv, 8, false}, {kJittered, kPlain, 8, true},
+                                {kJittered, kCv, 32, true}, {kRegular, kCv, 1, true},   {kQuery, kCv, 1, true}};
+    for (const Case& c : cases)
+        for (const Variant& v : variants) {
+            DirectSamplerSettings settings;
+            settings.method = v.method;
+            settings.estimator = v.estimator;
+            settings.bits = v.bits;
+            settings.cpuUnoccludedPairs = v.cpuPairs;
+            DirectLightSampler sampler(test::glContext(), c.scene, settings);
+            std::vector<DirectSample> batch;
+            sampler.sampleBatch(c.requests, batch);
+            ASSERT_EQ(batch.size(), c.requests.size());
+            int paths[3] = {0, 0, 0}, split5 = 0;
+            for (size_t i = 0; i < c.requests.size(); ++i) {
+                const SampleRequest& r = c.requests[i];
+                const std::string where = concat(c.name, ", ", directMethodName(v.method), " ",
+                                                 directEstimatorName(v.estimator), " × ", v.bits,
+                                                 v.cpuPairs ? "" : " (no CPU pairs)", ", request ", i, " ", at(r.x));
+                const DirectSample one = sampler.sample(r.mesh, r.x, r.n, r.seed);
+                expectSameSample(batch[i], one, where);
+                EXPECT_EQ(batch[i].path, one.path) << where;
+                EXPECT_EQ(batch[i].trianglesDrawn, one.trianglesDrawn) << where;
+                ++paths[int(one.path)];
+                split5 += one.frusta > 1 && one.path == DirectPath::Rasterised;
+            }
+            // Each case holds every kind of pair it is meant to.
+            const std::string what = concat(c.name, ", ", directMethodName(v.method), " ", directEstimatorName(v.estimator));
+            EXPECT_GT(paths[int(DirectPath::Rasterised)], 16) << what << ": too few images to fill the targets";
+            if (&c.scene != &split) EXPECT_GT(paths[int(DirectPath::Unlit)], 0) << what;
+            else EXPECT_GT(split5, 0) << what;
+        }
+}
+
+TEST(DirectSampler, ABatchPassesBadInputThroughAsItIs) {
+    const Scene& bench = benchScene();
+    DirectLightSampler sampler(test::glContext(), bench, DirectSamplerSettings{});
+    std::vector<SampleRequest> requests(3, SampleRequest{0, Vec3(0.1, 0.0, 0.1), kUp, 1});
+    requests[1].x = Vec3(std::nan(""), 0.0, 0.0);
+    std::vector<DirectSample> results;
+    EXPECT_THROW(sampler.sampleBatch(requests, results), InputError);
 }
 
 // === OccluderBvh ===========================================================
@@ -1077,7 +1113,7 @@ void expectOrthonormalBasis(const SamplingFrustum& f) {
 }
 
 TEST(LightFrustum, OneFittedWindowHoldsEveryLightCornerFromTheBench) {
-    const AreaLight& light = GlEnvironment::bench().lights[0];
+    const AreaLight& light = benchScene().lights[0];
     const Vec3 align = light.geometry[0][1] - light.geometry[0][0];
     for (const ReceiverPoint& r : makeBenchReceivers(20)) {
         const Vec3 eye = eyePoint(r.position, r.normal);
@@ -1116,7 +1152,7 @@ TEST(LightFrustum, AReceiverNextToABigLightGetsCubeFacesAndStillSumsToLambert) {
     // 1e-3 below the 1 × 1 light, off its centre: the light fills nearly the
     // whole upper hemisphere, beyond any single frustum's 60° half-angle.
     const Vec3 x(0.1, 1.0 - 1e-3, 0.05);
-    const AreaLight& light = GlEnvironment::bench().lights[0];
+    const AreaLight& light = benchScene().lights[0];
     const Vec3 eye = eyePoint(x, kUp);
     const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, kUp);
     const std::vector<SamplingFrustum> frusta = benchFrusta(x, kUp);

@@ -9,7 +9,9 @@
 #include "gpu_sampling/gl/GlObjects.h"
 #include "meshlight_gpu_shaders.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstring>
 
 namespace ml {
 
@@ -88,31 +90,67 @@ struct SampleGrid {
     double nx, ny, nz;            // receiver normal in camera coordinates
     uint32_t seed;
     int strataX, strataY;
+    int count;                    // samples per pixel: strataX × strataY
     bool jitter;
+    float cellX[32], cellY[32];   // each sample's stratum, as jitter::position has it
 
     SampleGrid(const SamplingFrustum& f, int size, const Vec3& n, uint32_t seed_, int bits, bool jitter_)
         : left(f.left), bottom(f.bottom), pw((f.rightEdge - f.left) / size), ph((f.top - f.bottom) / size),
           nx(glm::dot(n, f.right)), ny(glm::dot(n, f.up)), nz(glm::dot(n, f.forward)), seed(seed_),
           jitter(jitter_) {
         jitter::strata(bits, strataX, strataY);
+        count = strataX * strataY;
+        for (int k = 0; k < count; ++k) {
+            cellX[k] = float(uint32_t(k) % uint32_t(strataX));
+            cellY[k] = float(uint32_t(k) / uint32_t(strataX));
+        }
     }
-    // Window position of sample `bit` of pixel (i, j): the point the GPU tested.
-    void point(int i, int j, uint32_t pixel, uint32_t bit, double& u, double& v) const {
-        float ju, jv;
-        jitter::position(pixel, bit, seed, strataX, strataY, jitter, ju, jv);
-        u = left + (i + double(ju)) * pw;
-        v = bottom + (j + double(jv)) * ph;
+    // Window positions of the samples of pixel (i, j), in bit order: the
+    // points the GPU tested. jitter::position for every bit at once, with the
+    // same float operations, written without branches so that it vectorises
+    // (a sample at a time, the weighting was a third of a rasterised pair).
+    void points(int i, int j, uint32_t pixel, double* u, double* v) const {
+        const float sx = float(strataX), sy = float(strataY);
+        for (int k = 0; k < count; ++k) {
+            float rx = 0.5f, ry = 0.5f;
+            if (jitter) {
+                const uint32_t h = jitter::hash((pixel * 32u + uint32_t(k)) ^ seed);
+                rx = (float(h & 0xffffu) + 0.5f) * (1.0f / 65536.0f);
+                ry = (float(h >> 16) + 0.5f) * (1.0f / 65536.0f);
+            }
+            u[k] = left + (i + double((cellX[k] + rx) / sx)) * pw;
+            v[k] = bottom + (j + double((cellY[k] + ry) / sy)) * ph;
+        }
     }
-    // cosθ·dω per unit window area at (u, v) (eq. 3): the direction is
+    // cosθ·dω per unit window area at each (u, v) (eq. 3): the direction is
     // (u, v, 1) in camera coordinates, so cosθ / |s|⁴ with |s|² = 1 + u² + v².
     // Zero below the receiver's horizon.
-    double weight(double u, double v) const {
-        const double cosine = nx * u + ny * v + nz;
-        if (cosine <= 0) return 0;
-        const double r2 = 1.0 + u * u + v * v;
-        return cosine / (r2 * r2);
+    void weights(const double* u, const double* v, double* w) const {
+        for (int k = 0; k < count; ++k) {
+            const double cosine = nx * u[k] + ny * v[k] + nz;
+            const double r2 = 1.0 + u[k] * u[k] + v[k] * v[k];
+            // max, not a branch, so that the loop vectorises: 0 where the
+            // cosine is 0 or below (−0 where it is −0, which adds to a sum as +0 does).
+            w[k] = std::max(cosine / (r2 * r2), 0.0);
+        }
     }
 };
+
+// sum + the weights of the samples whose bit is set in `mask`, added in bit
+// order: bit for bit the sum of a loop over the set bits alone, as adding
+// +0 to a sum of non-negative weights (which starts at +0) changes nothing,
+// and without its unpredictable branches.
+inline double addMasked(double sum, const double* w, uint32_t mask, int count) {
+    for (int k = 0; k < count; ++k) {
+        uint64_t bits;
+        std::memcpy(&bits, &w[k], sizeof bits);
+        bits &= 0 - uint64_t(mask >> k & 1u);  // w[k] or +0
+        double x;
+        std::memcpy(&x, &bits, sizeof x);
+        sum += x;
+    }
+    return sum;
+}
 
 }  // namespace
 
@@ -133,10 +171,18 @@ struct DirectLightSampler::Impl {
     std::vector<uint32_t> leafLightId;
 
     GlProgram coverage;
-    GlBuffer occluderBuffer, lightBuffer;
+    GlBuffer occluderBuffer;
     GlVertexArray emptyVao;  // vertices are pulled from the buffers
-    GlTexture visibleBits, lightBits, depth;
-    GlFramebuffer fbo;
+    // Where one sampling image is drawn. sample() uses the first; a batch
+    // draws into several before reading any back, each with a light buffer
+    // of its own so that no upload waits for an earlier image's draw. All
+    // alike, so an image's bits do not depend on which one it went to.
+    struct Target {
+        GlTexture visibleBits, lightBits, depth;
+        GlFramebuffer fbo;
+        GlBuffer lightBuffer;
+    };
+    std::vector<Target> targets;
     GlQuery queryLight, queryVisible;
     struct {
         GLint clipFromLocal, lightPlane, nearPlane, pixelNdc, cullBackFaces, skipLightId, clipToLightPlane,
@@ -151,12 +197,13 @@ struct DirectLightSampler::Impl {
     };
 
     // Scratch, reused between samples.
-    std::vector<FrustumCull> culls;
     std::vector<OccluderBvh::Plane> planes;  // of the volume being culled
     std::vector<GLint> firsts;
     std::vector<GLsizei> counts;
     std::vector<uint32_t> visiblePixels, lightPixels;
-    std::vector<Corner> lightCorners;
+    std::vector<uint8_t> pixelClass;   // weighAnalytic's, per pixel of a row
+    std::vector<Corner> lightCorners;  // of the image being drawn, in its target's light buffer
+    GLuint lightBufferDrawn = 0;
 
     Impl(GlContext& ctx, const Scene& s, const DirectSamplerSettings& set)
         : Impl(ctx, s, set, allTriangles(s)) {}
@@ -185,7 +232,7 @@ struct DirectLightSampler::Impl {
                p.uniform("uPixelNdc"),      p.uniform("uCullBackFaces"),  p.uniform("uSkipLightId"),
                p.uniform("uClipToLightPlane"), p.uniform("uPlaneTolerance"), p.uniform("uSeed"),
                p.uniform("uImageSize"),     p.uniform("uHorizonPlane")};
-        buildFramebuffer();
+        addTargets(1);
         queryLight = makeQuery(gl, GL_SAMPLES_PASSED);
         queryVisible = makeQuery(gl, GL_SAMPLES_PASSED);
         checkGl(gl, "creating the direct-light sampler");
@@ -225,26 +272,22 @@ struct DirectLightSampler::Impl {
             leafLightId.push_back(lightOf[index]);
         }
         occluderBuffer = makeBuffer(gl, std::max<size_t>(corners.size(), 1) * sizeof(Corner), corners.data());
-        lightBuffer = makeBuffer(gl, std::max<size_t>(maxLightTriangles * 3, 1) * sizeof(Corner), nullptr,
-                                 GL_STREAM_DRAW);
         emptyVao = makeVertexArray(gl);
     }
 
-    void buildFramebuffer() {
+    // Targets up to `count` (their textures are made once, then kept).
+    void addTargets(size_t count) {
         const int n = settings.imageSize;
-        visibleBits = makeTexture2D(gl, GL_R32UI, n, n);
-        lightBits = makeTexture2D(gl, GL_R32UI, n, n);
-        depth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, n, n);
-        GLuint f = 0;
-        gl.CreateFramebuffers(1, &f);
-        fbo = GlFramebuffer(gl, f);
-        gl.NamedFramebufferTexture(f, GL_COLOR_ATTACHMENT0, visibleBits.id(), 0);
-        gl.NamedFramebufferTexture(f, GL_COLOR_ATTACHMENT1, lightBits.id(), 0);
-        gl.NamedFramebufferTexture(f, GL_DEPTH_ATTACHMENT, depth.id(), 0);
-        const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-        gl.NamedFramebufferDrawBuffers(f, 2, buffers);
-        if (gl.CheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("direct-light sampler: framebuffer incomplete");
+        while (targets.size() < count) {
+            Target t;
+            t.visibleBits = makeTexture2D(gl, GL_R32UI, n, n);
+            t.lightBits = makeTexture2D(gl, GL_R32UI, n, n);
+            t.depth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, n, n);
+            t.fbo = makeFramebuffer(gl, {t.visibleBits.id(), t.lightBits.id()}, t.depth.id(), "direct-light sampler");
+            t.lightBuffer = makeBuffer(gl, std::max<size_t>(maxLightTriangles * 3, 1) * sizeof(Corner), nullptr,
+                                       GL_STREAM_DRAW);
+            targets.push_back(std::move(t));
+        }
         visiblePixels.resize(size_t(n) * n);
         lightPixels.resize(size_t(n) * n);
     }
@@ -412,17 +455,40 @@ struct DirectLightSampler::Impl {
         return out;
     }
 
-    ImageResult renderImage(const AreaLight& light, size_t lightIndex, const SamplingFrustum& f,
-                            const std::vector<Polygon3>& pieces, const Vec3& n, double nearDistance,
-                            uint32_t seed, const FrustumCull& cull, Clock::time_point& t0) {
+    // --- one pair -----------------------------------------------------------
+
+    // A pair (receiver, light) on its way through the sampler: what setup
+    // found, then each frustum's image. A batch keeps its pairs whole until
+    // every image is drawn, read back and weighed.
+    struct Pair {
+        size_t request = 0;  // its index in a batch
+        size_t lightIndex = 0;
+        Vec3 x{0.0}, n{0.0};  // receiver and unit normal
+        uint32_t seed = 0;
+        std::vector<Polygon3> pieces;
+        std::vector<SamplingFrustum> frusta;
+        std::vector<FrustumCull> culls;   // per frustum
+        std::vector<ImageResult> images;  // per frustum, summed in frustum order by finishPair
+        double exactUnoccluded = 0, nearDistance = 0;
+        bool cpuFrusta = false;  // frusta with no occluder are weighed on the CPU
+        DirectSample result;
+
+        uint32_t frustumSeed(size_t k) const { return jitter::hash(seed + uint32_t(k) * 0x9e3779b9u); }
+    };
+
+    // Draws frustum `k` of `p` into target `slot`: its light (unless
+    // analytic) and its occluders, with no wait for the GPU.
+    void drawImage(Pair& p, size_t k, size_t slot, Clock::time_point& t0) {
+        const AreaLight& light = scene.lights[p.lightIndex];
+        const SamplingFrustum& f = p.frusta[k];
+        const FrustumCull& cull = p.culls[k];
+        const Target& target = targets[slot];
         const int size = settings.imageSize;
         const bool planar = light.planar;
-        const bool query = settings.method == DirectMethod::OcclusionQuery;
         const bool analytic = analyticLight(light);
-        const int bits = bitsPerPixel();
         const double tol = settings.planeTolerance * sceneSize;
 
-        trianglesDrawn += cull.drawn;
+        p.result.trianglesDrawn += cull.drawn;
         firsts.clear();
         counts.clear();
         for (const auto& r : cull.ranges) {  // six vertices (a quad) per triangle
@@ -438,23 +504,24 @@ struct DirectLightSampler::Impl {
         // moved the edges of a light 1e-5 wide by up to 1 % of its width:
         // the plain estimator's mean was 0.2 % off.)
         lightCorners.clear();
+        lightBufferDrawn = target.lightBuffer.id();
         if (!analytic) {
             for (const Triangle3& t : light.geometry)
-                for (const Vec3& p : t) {
-                    const glm::vec3 r(f.toCamera(p));
+                for (const Vec3& c : t) {
+                    const glm::vec3 r(f.toCamera(c));
                     lightCorners.push_back({r.x, r.y, r.z, 0});
                 }
-            gl.NamedBufferSubData(lightBuffer.id(), 0, GLsizeiptr(lightCorners.size() * sizeof(Corner)),
+            gl.NamedBufferSubData(target.lightBuffer.id(), 0, GLsizeiptr(lightCorners.size() * sizeof(Corner)),
                                   lightCorners.data());
         }
 
-        const Mat4 proj = projection(f, nearDistance);
+        const Mat4 proj = projection(f, p.nearDistance);
         const glm::mat4 clipFromCamera = toFloat(proj);
         const glm::mat4 clipFromOrigin = toFloat(proj * viewFrom(f, origin));
         // Light plane in origin-relative coordinates, positive on the eye's side.
         const glm::vec4 plane(glm::vec3(light.normal), float(glm::dot(light.normal, origin - light.centroid)));
 
-        gl.BindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+        gl.BindFramebuffer(GL_FRAMEBUFFER, target.fbo.id());
         gl.Viewport(0, 0, size, size);
         // Reversed depth in [0, 1]: float depth keeps its precision at every
         // distance, so occluders 1e-4 in front of a light still win. Set per
@@ -476,55 +543,57 @@ struct DirectLightSampler::Impl {
 
         coverage.use();
         gl.BindVertexArray(emptyVao.id());
-        gl.Uniform1f(loc.nearPlane, float(nearDistance));
+        gl.Uniform1f(loc.nearPlane, float(p.nearDistance));
         gl.Uniform1f(loc.pixelNdc, 2.0f / float(size));
         gl.Uniform1f(loc.planeTolerance, float(tol));
-        gl.Uniform1ui(loc.seed, seed);
+        gl.Uniform1ui(loc.seed, p.frustumSeed(k));
         gl.Uniform1i(loc.imageSize, size);
         gl.Uniform4f(loc.lightPlane, plane.x, plane.y, plane.z, plane.w);
-        const glm::vec4 horizon(glm::vec3(n), float(glm::dot(n, origin - f.eye)));
+        const glm::vec4 horizon(glm::vec3(p.n), float(glm::dot(p.n, origin - f.eye)));
         gl.Uniform4f(loc.horizonPlane, horizon.x, horizon.y, horizon.z, horizon.w);
         const Clock::time_point t1 = Clock::now();
         times.setup += seconds(t0, t1);
 
-        ImageResult out;
-        if (query) {
-            renderQuery(lightIndex, clipFromCamera, clipFromOrigin, planar, out);
-        } else {
-            renderBits(lightIndex, clipFromCamera, clipFromOrigin, planar, analytic);
-        }
-        Clock::time_point t2 = Clock::now();
-        if (phaseTiming && !query) {
+        if (settings.method == DirectMethod::OcclusionQuery)
+            renderQuery(p.lightIndex, clipFromCamera, clipFromOrigin, planar, p.images[k]);
+        else
+            renderBits(p.lightIndex, clipFromCamera, clipFromOrigin, planar, analytic);
+        t0 = Clock::now();
+        if (phaseTiming && settings.method != DirectMethod::OcclusionQuery) {
             gl.Finish();
-            t2 = Clock::now();
+            t0 = Clock::now();
         }
-        times.draw += seconds(t1, t2);
-        if (query) {
-            t0 = t2;
-            return out;
-        }
+        times.draw += seconds(t1, t0);
+    }
 
-        gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT0);
+    // Reads target `slot` back and weighs it as frustum `k` of `p`.
+    void readAndWeigh(Pair& p, size_t k, size_t slot, Clock::time_point& t0) {
+        const AreaLight& light = scene.lights[p.lightIndex];
+        const int size = settings.imageSize;
+        const bool analytic = analyticLight(light);
+        const GLuint fbo = targets[slot].fbo.id();
+        gl.NamedFramebufferReadBuffer(fbo, GL_COLOR_ATTACHMENT0);
+        gl.BindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
         gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, visiblePixels.data());
         if (!analytic) {
-            gl.NamedFramebufferReadBuffer(fbo.id(), GL_COLOR_ATTACHMENT1);
+            gl.NamedFramebufferReadBuffer(fbo, GL_COLOR_ATTACHMENT1);
             gl.ReadPixels(0, 0, size, size, GL_RED_INTEGER, GL_UNSIGNED_INT, lightPixels.data());
         }
-        const Clock::time_point t3 = Clock::now();
-        times.readback += seconds(t2, t3);
+        const Clock::time_point t1 = Clock::now();
+        times.readback += seconds(t0, t1);
 
-        const SampleGrid grid = gridFor(f, n, seed);
+        const SampleGrid grid = gridFor(p.frusta[k], p.n, p.frustumSeed(k));
+        ImageResult& out = p.images[k];
         if (analytic)
-            weighAnalytic(f, pieces, grid, bits, visiblePixels.data(), out);
+            weighAnalytic(p.frusta[k], p.pieces, grid, bitsPerPixel(), visiblePixels.data(), out);
         else
-            weigh(grid, bits, planar, out);
+            weigh(grid, bitsPerPixel(), light.planar, visiblePixels.data(), lightPixels.data(), out);
         t0 = Clock::now();
-        times.weighting += seconds(t3, t0);
-        return out;
+        times.weighting += seconds(t1, t0);
     }
 
     void setPassState(bool lightPass, bool planar, size_t lightIndex, const glm::mat4& clipFrom) {
-        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightPass ? lightBuffer.id() : occluderBuffer.id());
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightPass ? lightBufferDrawn : occluderBuffer.id());
         gl.UniformMatrix4fv(loc.clipFromLocal, 1, GL_FALSE, &clipFrom[0][0]);
         gl.Uniform1i(loc.cullBackFaces, lightPass ? 1 : 0);
         gl.Uniform1ui(loc.skipLightId, lightPass ? 0u : uint32_t(lightIndex + 1));
@@ -618,29 +687,28 @@ struct DirectLightSampler::Impl {
     // Σ over samples of cosθ·dω, evaluated at each sample's own jittered
     // point. In camera coordinates the direction through window point (u, v)
     // is (u, v, 1), so cosθ·dω/dA = (n·s)/|s|⁴ with |s|² = 1 + u² + v² (eq. 3).
-    void weigh(const SampleGrid& grid, int bits, bool planar, ImageResult& out) {
+    void weigh(const SampleGrid& grid, int bits, bool planar, const uint32_t* visiblePx, const uint32_t* lightPx,
+               ImageResult& out) const {
         const int size = settings.imageSize;
         // The control variate needs only the occluded samples' weights; the
         // plain estimator needs every light sample's.
         const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate && planar;
         double lightSum = 0, occludedSum = 0;
+        double u[32], v[32], w[32];
         for (int j = 0; j < size; ++j) {
             for (int i = 0; i < size; ++i) {
                 const uint32_t pixel = uint32_t(j * size + i);
-                const uint32_t onLight = lightPixels[pixel];
+                const uint32_t onLight = lightPx[pixel];
                 if (!onLight) continue;
-                const uint32_t visible = visiblePixels[pixel] & onLight;
+                const uint32_t visible = visiblePx[pixel] & onLight;
                 out.lightSamples += bitCount(onLight);
                 out.visibleSamples += bitCount(visible);
                 const uint32_t toWeigh = onlyOccluded ? (onLight & ~visible) : onLight;
-                for (uint32_t m = toWeigh; m; m &= m - 1) {
-                    const uint32_t bit = uint32_t(__builtin_ctz(m));
-                    double u, v;
-                    grid.point(i, j, pixel, bit, u, v);
-                    const double w = grid.weight(u, v);
-                    lightSum += w;
-                    if (!(visible >> bit & 1u)) occludedSum += w;
-                }
+                if (!toWeigh) continue;
+                grid.points(i, j, pixel, u, v);
+                grid.weights(u, v, w);
+                lightSum = addMasked(lightSum, w, toWeigh, grid.count);
+                occludedSum = addMasked(occludedSum, w, toWeigh & ~visible, grid.count);
             }
         }
         const double sampleArea = grid.pw * grid.ph / bits;
@@ -683,7 +751,9 @@ struct DirectLightSampler::Impl {
             int fullLo, fullHi, anyLo, anyHi;
         };
         std::vector<Span> spans(light.size());
+        pixelClass.resize(size_t(size));
         double occludedSum = 0;
+        double u[32], v[32], w[32];
         for (int j = 0; j < size; ++j) {
             const double vc = f.bottom + (j + 0.5) * ph;
             int rowLo = size, rowHi = -1;
@@ -701,63 +771,74 @@ struct DirectLightSampler::Impl {
                     rowHi = std::max(rowHi, sp.anyHi);
                 }
             }
+            // Per pixel of the row: 0 off the light, 1 on its outline, 2 wholly on it.
+            if (rowLo > rowHi) continue;
+            std::fill(pixelClass.begin() + rowLo, pixelClass.begin() + rowHi + 1, uint8_t(0));
+            for (const Span& sp : spans) {
+                for (int i = sp.anyLo; i <= sp.anyHi; ++i) pixelClass[i] = std::max<uint8_t>(pixelClass[i], 1);
+                for (int i = sp.fullLo; i <= sp.fullHi; ++i) pixelClass[i] = 2;
+            }
+            const uint32_t* visibleRow = visible ? visible + size_t(j) * size : nullptr;
             for (int i = rowLo; i <= rowHi; ++i) {
-                bool full = false, partial = false;
-                for (const Span& sp : spans) {
-                    full = full || (i >= sp.fullLo && i <= sp.fullHi);
-                    partial = partial || (i >= sp.anyLo && i <= sp.anyHi);
-                }
-                if (!partial) continue;
                 const uint32_t pixel = uint32_t(j * size + i);
                 uint32_t onLight = allBits;
-                if (!full) {
-                    onLight = 0;
-                    for (int k = 0; k < bits; ++k) {
-                        double u, v;
-                        grid.point(i, j, pixel, uint32_t(k), u, v);
-                        for (const WindowPiece& wp : light)
-                            if (wp.contains(u, v)) {
-                                onLight |= 1u << k;
-                                break;
-                            }
-                    }
+                if (pixelClass[i] == 2) {
+                    // Wholly on the light (most pixels): no test, and most of
+                    // them have no occluded sample either.
+                    const uint32_t occluded = visibleRow ? allBits & ~visibleRow[i] : 0u;
+                    out.lightSamples += uint32_t(bits);
+                    out.visibleSamples += uint32_t(bits) - bitCount(occluded);
+                    if (!occluded) continue;
+                    grid.points(i, j, pixel, u, v);
+                    grid.weights(u, v, w);
+                    occludedSum = addMasked(occludedSum, w, occluded, bits);
+                    continue;
                 }
-                const uint32_t occluded = visible ? onLight & ~visible[pixel] : 0u;
+                if (pixelClass[i] == 0) continue;
+                grid.points(i, j, pixel, u, v);
+                onLight = 0;
+                for (int k = 0; k < bits; ++k)
+                    for (const WindowPiece& wp : light)
+                        if (wp.contains(u[k], v[k])) {
+                            onLight |= 1u << k;
+                            break;
+                        }
+                const uint32_t occluded = visibleRow ? onLight & ~visibleRow[i] : 0u;
                 out.lightSamples += bitCount(onLight);
                 out.visibleSamples += bitCount(onLight & ~occluded);
-                for (uint32_t m = occluded; m; m &= m - 1) {
-                    double u, v;
-                    grid.point(i, j, pixel, uint32_t(__builtin_ctz(m)), u, v);
-                    occludedSum += grid.weight(u, v);
-                }
+                if (!occluded) continue;
+                grid.weights(u, v, w);
+                occludedSum = addMasked(occludedSum, w, occluded, bits);
             }
         }
         out.occludedWeight = occludedSum * pw * ph / bits;
     }
 
-    uint32_t trianglesDrawn = 0;
-
-    DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& nIn, uint32_t seed) {
+    // Setup of one pair: its frusta and their culls, or, where it needs no
+    // GL (unlit, or no occluder in any frustum), its answer. True when
+    // answered; `p.result` then holds it.
+    bool planPair(Pair& p, size_t lightIndex, const Vec3& x, const Vec3& nIn, uint32_t seed) {
         ML_ASSERT(lightIndex < scene.lights.size(), "light ", lightIndex);
-        times = {};
-        trianglesDrawn = 0;
         const Clock::time_point start = Clock::now();
-        DirectSample result;
+        p.lightIndex = lightIndex;
+        p.x = x;
+        p.seed = seed;
+        p.result = DirectSample();
         const AreaLight& light = scene.lights[lightIndex];
         const Vec3 n = glm::normalize(nIn);
+        p.n = n;
         if (!isFinite(x) || !isFinite(n)) throw InputError(concat("non-finite receiver point or normal"));
         const double lift = samplingEyeLift(light, x, settings.eyeOffset, sceneSize);
         const Vec3 eye = x + n * lift;
         // Below the horizon or seen from behind: nothing, before any
         // frustum, culling or GL call.
-        const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, n);
-        const std::vector<SamplingFrustum> frusta =
-            pieces.empty() ? std::vector<SamplingFrustum>{}
-                           : samplingFrusta(light, pieces, eye, settings.maxHalfAngleDegrees);
-        if (frusta.empty()) {  // (no frustum: a sliver seen edge-on, no sample on it)
-            result.path = DirectPath::Unlit;
-            times.setup = seconds(start, Clock::now());
-            return result;
+        p.pieces = visibleLightPieces(light, eye, n);
+        p.frusta.clear();
+        if (!p.pieces.empty()) p.frusta = samplingFrusta(light, p.pieces, eye, settings.maxHalfAngleDegrees);
+        if (p.frusta.empty()) {  // (no frustum: a sliver seen edge-on, no sample on it)
+            p.result.path = DirectPath::Unlit;
+            times.setup += seconds(start, Clock::now());
+            return true;
         }
         // Lambert at the receiver itself, not the lifted eye: where nothing
         // occludes, the control variate is then exact, with no bias from the lift.
@@ -765,23 +846,23 @@ struct DirectLightSampler::Impl {
         for (const Triangle3& t : light.geometry)
             if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0)
                 exactUnoccluded += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
-        result.frusta = uint32_t(frusta.size());
+        p.exactUnoccluded = exactUnoccluded;
+        p.result.frusta = uint32_t(p.frusta.size());
 
         // Occluders nearer than this to the eye are not drawn: half the eye's
         // lift, so only geometry touching the receiver there is lost.
-        const double nearDistance = std::max(0.5 * lift, 1e-12 * sceneSize);
+        p.nearDistance = std::max(0.5 * lift, 1e-12 * sceneSize);
         // Culling first, for every frustum: where the light needs no
         // rasterising (analytic) a frustum with no occluder needs no GL.
-        const bool cpuFrusta = analyticLight(light) && settings.cpuUnoccludedPairs && settings.cullOccluders;
-        culls.resize(frusta.size());
+        p.cpuFrusta = analyticLight(light) && settings.cpuUnoccludedPairs && settings.cullOccluders;
+        p.culls.resize(p.frusta.size());
         bool anyOccluders = false;
-        for (size_t k = 0; k < frusta.size(); ++k) {
-            cullFrustum(light, lightIndex, frusta[k], pieces, n, nearDistance, cpuFrusta, culls[k]);
-            anyOccluders = anyOccluders || culls[k].occluders;
+        for (size_t k = 0; k < p.frusta.size(); ++k) {
+            cullFrustum(light, lightIndex, p.frusta[k], p.pieces, n, p.nearDistance, p.cpuFrusta, p.culls[k]);
+            anyOccluders = anyOccluders || p.culls[k].occluders;
         }
-        auto frustumSeed = [seed](size_t k) { return jitter::hash(seed + uint32_t(k) * 0x9e3779b9u); };
 
-        if (cpuFrusta && !anyOccluders) {
+        if (p.cpuFrusta && !anyOccluders) {
             // Nothing between the receiver and the light: the control
             // variate subtracts nothing, so the estimate is Lambert's closed
             // form, exactly what the GPU would return. Unlike the GPU path,
@@ -791,48 +872,54 @@ struct DirectLightSampler::Impl {
             // No sample is tested, so lightSamples = visibleSamples = 0:
             // counting them (weighUnoccluded) would cost ~20× the rest of
             // the pair (55 us against 3 us on the Cornell box).
-            result.unoccluded = exactUnoccluded;
-            result.cosineSolidAngle = exactUnoccluded;
-            result.irradiance = light.radiance * exactUnoccluded;
-            result.path = DirectPath::Unoccluded;
-            times.setup = seconds(start, Clock::now());  // all of a CPU pair's time
-            return result;
+            p.result.unoccluded = exactUnoccluded;
+            p.result.cosineSolidAngle = exactUnoccluded;
+            p.result.irradiance = light.radiance * exactUnoccluded;
+            p.result.path = DirectPath::Unoccluded;
+            times.setup += seconds(start, Clock::now());  // all of a CPU pair's time
+            return true;
         }
+        p.result.path = DirectPath::Rasterised;
+        p.images.assign(p.frusta.size(), ImageResult());
+        times.setup += seconds(start, Clock::now());
+        return false;
+    }
 
-        result.path = DirectPath::Rasterised;
-        Clock::time_point t0 = start;
+    // Whether frustum `k` of a planned pair is weighed on the CPU alone: a
+    // face of a split light with no occluder in it. Its samples are still
+    // counted (weighUnoccluded), as the pair's visibleSamples (the
+    // estimate's "no visible sample gives 0" rule and partiallyVisible)
+    // must include them.
+    static bool onCpu(const Pair& p, size_t k) { return p.cpuFrusta && !p.culls[k].occluders; }
+
+    void weighOnCpu(Pair& p, size_t k, Clock::time_point& t0) {
+        p.images[k] = weighUnoccluded(p.frusta[k], p.pieces, p.n, p.frustumSeed(k));
+        const Clock::time_point t = Clock::now();
+        times.weighting += seconds(t0, t);
+        t0 = t;
+    }
+
+    // The estimate of a rasterised pair from its images, summed in frustum order.
+    void finishPair(Pair& p) {
+        const Clock::time_point tw = Clock::now();
+        const AreaLight& light = scene.lights[p.lightIndex];
+        DirectSample& result = p.result;
         double lightWeight = 0, occludedWeight = 0;
-        for (size_t k = 0; k < frusta.size(); ++k) {
-            ImageResult r;
-            if (cpuFrusta && !culls[k].occluders) {
-                // A face of a split light with no occluder in it: no GL, but
-                // its samples are counted, as the pair's visibleSamples
-                // (the estimate's "no visible sample gives 0" rule and
-                // partiallyVisible) must include them.
-                r = weighUnoccluded(frusta[k], pieces, n, frustumSeed(k));
-                const Clock::time_point t = Clock::now();
-                times.weighting += seconds(t0, t);
-                t0 = t;
-            } else {
-                r = renderImage(light, lightIndex, frusta[k], pieces, n, nearDistance, frustumSeed(k), culls[k], t0);
-            }
+        for (const ImageResult& r : p.images) {
             lightWeight += r.lightWeight;
             occludedWeight += r.occludedWeight;
             result.lightSamples += r.lightSamples;
             result.visibleSamples += r.visibleSamples;
         }
-        result.trianglesDrawn = trianglesDrawn;
-
-        const Clock::time_point tw = Clock::now();
         double e = 0;
         if (settings.method == DirectMethod::OcclusionQuery) {
-            result.unoccluded = exactUnoccluded;
-            e = result.lightSamples ? exactUnoccluded * result.visibleSamples / result.lightSamples : 0.0;
+            result.unoccluded = p.exactUnoccluded;
+            e = result.lightSamples ? p.exactUnoccluded * result.visibleSamples / result.lightSamples : 0.0;
         } else if (settings.estimator == DirectEstimator::ControlVariate && light.planar) {
-            result.unoccluded = exactUnoccluded;
+            result.unoccluded = p.exactUnoccluded;
             // Unbiased difference; clamped at 0 where the sampled occluded
             // part exceeds the exact total (a point nearly in umbra).
-            e = result.visibleSamples == 0 ? 0.0 : std::max(0.0, exactUnoccluded - occludedWeight);
+            e = result.visibleSamples == 0 ? 0.0 : std::max(0.0, p.exactUnoccluded - occludedWeight);
         } else {
             result.unoccluded = lightWeight;
             e = lightWeight - occludedWeight;
@@ -840,8 +927,98 @@ struct DirectLightSampler::Impl {
         result.cosineSolidAngle = e;
         result.irradiance = light.radiance * e;
         times.weighting += seconds(tw, Clock::now());
+    }
+
+    Pair single;  // sample()'s, reused
+
+    DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed) {
+        times = {};
+        Pair& p = single;
+        if (planPair(p, lightIndex, x, n, seed)) return p.result;
+        Clock::time_point t0 = Clock::now();
+        for (size_t k = 0; k < p.frusta.size(); ++k) {
+            if (onCpu(p, k)) {
+                weighOnCpu(p, k, t0);
+                continue;
+            }
+            drawImage(p, k, 0, t0);
+            if (settings.method != DirectMethod::OcclusionQuery) readAndWeigh(p, k, 0, t0);
+        }
+        finishPair(p);
         checkGl(gl, "direct-light sampling");
-        return result;
+        return p.result;
+    }
+
+    // --- batches --------------------------------------------------------------
+
+    // Images drawn before the first is read back: as many targets as fit in
+    // 8 MiB (two 32-bit colour images and a depth image each), at most 16.
+    size_t batchTargets() const {
+        const size_t bytes = size_t(settings.imageSize) * size_t(settings.imageSize) * 12;
+        return std::clamp<size_t>((size_t(8) << 20) / bytes, 1, 16);
+    }
+
+    std::vector<Pair> batchPairs;  // reused: their vectors keep their capacity
+    struct Image {
+        size_t pair, frustum;  // frustum `frustum` of batchPairs[pair]
+    };
+    std::vector<Image> drawn;  // in targets 0, 1, ... and not yet read back
+
+    // Reads back and weighs every image in `drawn`, in the order drawn.
+    void readDrawn(Clock::time_point& t0) {
+        for (size_t slot = 0; slot < drawn.size(); ++slot)
+            readAndWeigh(batchPairs[drawn[slot].pair], drawn[slot].frustum, slot, t0);
+        drawn.clear();
+    }
+
+    void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results) {
+        results.assign(requests.size(), DirectSample());
+        times = {};
+        // Occlusion queries answer at once; reading them later would need a
+        // query object per image.
+        if (settings.method == DirectMethod::OcclusionQuery) {
+            DirectPhaseTimes total;
+            for (size_t i = 0; i < requests.size(); ++i) {
+                const SampleRequest& r = requests[i];
+                asBatchRequest(i, [&] { results[i] = sample(r.mesh, r.x, r.n, r.seed); });
+                total += times;
+            }
+            times = total;
+            return;
+        }
+        addTargets(batchTargets());
+        drawn.clear();
+        size_t pairs = 0;  // batchPairs[0, pairs) wait for images
+        Clock::time_point t0 = Clock::now();
+        for (size_t i = 0; i < requests.size(); ++i) {
+            const SampleRequest& r = requests[i];
+            if (batchPairs.size() == pairs) batchPairs.emplace_back();
+            Pair& p = batchPairs[pairs];
+            bool answered = false;
+            asBatchRequest(i, [&] { answered = planPair(p, r.mesh, r.x, r.n, r.seed); });
+            if (answered) {
+                results[i] = p.result;
+                continue;
+            }
+            p.request = i;
+            ++pairs;
+            t0 = Clock::now();
+            for (size_t k = 0; k < p.frusta.size(); ++k) {
+                if (onCpu(p, k)) {
+                    weighOnCpu(p, k, t0);
+                    continue;
+                }
+                if (drawn.size() == targets.size()) asBatchRequest(batchPairs[drawn[0].pair].request, [&] { readDrawn(t0); });
+                drawImage(p, k, drawn.size(), t0);
+                drawn.push_back({pairs - 1, k});
+            }
+        }
+        if (!drawn.empty()) asBatchRequest(batchPairs[drawn[0].pair].request, [&] { readDrawn(t0); });
+        for (size_t q = 0; q < pairs; ++q) {
+            finishPair(batchPairs[q]);
+            results[batchPairs[q].request] = batchPairs[q].result;
+        }
+        if (pairs) asBatchRequest(batchPairs[0].request, [&] { checkGl(gl, "direct-light sampling"); });
     }
 };
 
@@ -860,6 +1037,10 @@ DirectLightSampler::~DirectLightSampler() = default;
 
 DirectSample DirectLightSampler::sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed) {
     return impl_->sample(lightIndex, x, n, seed);
+}
+
+void DirectLightSampler::sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results) {
+    impl_->sampleBatch(requests, results);
 }
 
 const DirectSamplerSettings& DirectLightSampler::settings() const { return impl_->settings; }

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace ml {
 
@@ -126,12 +127,22 @@ public:
     // `seed` selects the jitter: derive it from (user seed, vertex, light,
     // pass) with jitter::seedFor so runs repeat bit for bit.
     DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed);
+    // sample() for every request (`mesh` is the light's index), results[i]
+    // for requests[i], bit for bit what sample() returns for it. Pairs that
+    // need GL have their sampling images drawn into up to 16 targets before
+    // the first is read back: a driver that queues draws is waited for once
+    // per 16 images. (llvmpipe in Mesa 22.3 rasterises each target when the
+    // next is bound, so there the wait only moves from readback to draw:
+    // about the same time per pair.) A failure throws SampleBatchError naming the
+    // request (the first of those drawn, for a failure in reading back);
+    // InputError passes through. lastTimes() then holds the whole batch's.
+    void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results);
 
     const DirectSamplerSettings& settings() const;
     // With phase timing on, the sampler waits for the GPU between phases
     // (glFinish) so each phase is timed alone; slightly slower overall.
     void setPhaseTiming(bool on);
-    // The last sample's phases; an Unlit or Unoccluded pair's whole time is
+    // The last sample's (or batch's) phases; an Unlit or Unoccluded pair's whole time is
     // setup (it has no draw, readback or weighting).
     const DirectPhaseTimes& lastTimes() const;
 
