@@ -35,7 +35,7 @@ namespace ml {
 
 class LightCoverage {
 public:
-    // `share`: τ in (0, 1]; typical 0.05. 0 keeps every light's mesh over
+    // `share`: τ in (0, 1]; typical 0.05..0.2 (CacheSettings::lightShare: 0.1). 0 keeps every light's mesh over
     // the whole scene (w = 1 everywhere, no shared mesh).
     LightCoverage(const Scene& scene, double share, int resolution = 32);
 

@@ -1,7 +1,7 @@
 // Linear RGB images and their files.
 //
 // Renders are kept as linear float RGB (ImageRgb) until the very end: written
-// as-is to EXR/HDR, or tone mapped (viewer/ToneMap.h) to 8-bit sRGB for PNG.
+// as-is to EXR/HDR, or tone mapped (core/image/ToneMap.h) to 8-bit sRGB for PNG.
 // File I/O goes through OpenImageIO, which stays inside Image.cpp.
 #pragma once
 

@@ -14,7 +14,7 @@ namespace ml {
 //
 // The basis is left-handed (right × up = −forward, OpenGL's camera
 // convention), which makes a triangle that is counter-clockwise seen from the
-// eye have a positive clip-space determinant in direct_coverage.geom.
+// eye have a positive clip-space determinant in direct_coverage.vert.
 struct SamplingFrustum {
     Vec3 eye{0.0};
     Vec3 forward{0.0, 0.0, 1.0};

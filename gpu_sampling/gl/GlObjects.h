@@ -67,7 +67,7 @@ class GlProgram {
 public:
     struct Stage {
         GLenum type;         // GL_VERTEX_SHADER, ...
-        const char* name;    // for messages, e.g. "direct_coverage.geom"
+        const char* name;    // for messages, e.g. "direct_coverage.vert"
         std::string source;  // full GLSL source including #version
     };
     GlProgram() = default;

@@ -33,7 +33,7 @@ int runView(const std::vector<std::string>& args) {
     o.value("width", "W", "window width, pixels", std::string("1280"));
     o.value("height", "H", "window height, pixels", std::string("720"));
     declareCameraOptions(o);
-    o.value("script", "FILE", "play camera keyframes and actions from FILE (see README: view), then keep the "
+    o.value("script", "FILE", "play camera keyframes and actions from FILE (see viewer/README.md, Scripts), then keep the "
                               "window open unless it says quit");
     o.value("script-step", "S", "script time advances S seconds per frame instead of with the clock (repeatable "
                                 "timing for recordings)");

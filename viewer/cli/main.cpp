@@ -11,9 +11,9 @@ namespace {
 const char* kUsage =
     "usage: meshlight <command> [options]\n"
     "commands:\n"
-    "  render SCENE   render an image (SCENE: cornell, bench or an OBJ file)\n"
+    "  render SCENE   render an image (SCENE: cornell, office[:KEY=VALUE,...], bench or an OBJ file)\n"
     "  plan SCENE     what a render of SCENE would simulate, and why\n"
-    "  probe SCENE    direct irradiance at sensor points from a CSV\n"
+    "  probe SCENE    direct and indirect irradiance at sensor points from a CSV\n"
     "  reference SCENE --spp N --out REF.exr\n"
     "                 path-traced reference image (and REF.noise.exr, its standard error)\n"
     "  view SCENE     walk through SCENE in a window while its lighting converges\n"
@@ -21,6 +21,8 @@ const char* kUsage =
     "  bench scaling  how cost grows with triangles and with lights\n"
     "  bench convergence\n"
     "                 progressive image against the exact one and the path tracer, in time\n"
+    "  bench indirect the hemispherical gathers: time and error against the path tracer\n"
+    "  bench lights   the office with 3 to 192 panels: time to 10, 5 and 2% against the path tracer\n"
     "  bench view     frame rate, first frame and light-change latency of the viewer\n"
     "  bench report   run the benches and write one HTML page of their results\n"
     "Run 'meshlight <command> --help' for its options.\n";

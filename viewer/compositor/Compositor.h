@@ -47,7 +47,7 @@ struct CompositorSettings {
     int supersample = 4;
     CompositeQuantity quantity = CompositeQuantity::Radiance;
     // Lumens per watt of irradiance, CompositeQuantity::Illuminance only;
-    // typical 179 (RADIANCE's equal-energy white, see viewer/Illuminance.h).
+    // typical 179 (RADIANCE's equal-energy white, see core/image/Illuminance.h).
     double efficacy = 179.0;
     void validate() const;
 };

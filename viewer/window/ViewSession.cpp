@@ -4,7 +4,8 @@
 #include "core/Error.h"
 #include "core/image/Image.h"
 #include "GlfwWindow.h"
-#include "cache/ProgressiveSession.h"
+#include "InterruptGuard.h"
+#include "ViewRefinement.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
 #include "core/image/ToneMap.h"
@@ -12,15 +13,11 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <csignal>
-#include <ctime>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -35,60 +32,8 @@ using Clock = std::chrono::steady_clock;
 
 double secondsBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
-// Ctrl-C: the first asks the frame loop to end cleanly; a second one, a
-// second or more later, ends the process at once. (Not sooner: `timeout`
-// and some shells send one interrupt to the process and again to its group,
-// which would otherwise count as two.) Only async-signal-safe calls here.
-std::atomic<bool> gInterrupted{false};
-std::atomic<long long> gFirstInterruptNs{0};
-
-long long monotonicNs() {
-    timespec t{};
-    ::clock_gettime(CLOCK_MONOTONIC, &t);
-    return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
-}
-
-extern "C" void onSigint(int) {
-    const long long now = monotonicNs();
-    if (!gInterrupted.exchange(true)) {
-        gFirstInterruptNs.store(now);
-        return;
-    }
-    if (now - gFirstInterruptNs.load() > 1000000000LL) ::_exit(130);
-}
-
-class SigintGuard {
-public:
-    SigintGuard() {
-        static_assert(std::atomic<long long>::is_always_lock_free, "the handler needs lock-free atomics");
-        gInterrupted.store(false);
-        struct sigaction sa {};
-        sa.sa_handler = onSigint;
-        sigemptyset(&sa.sa_mask);
-        sa.sa_flags = 0;
-        sigaction(SIGINT, &sa, &previous_);
-    }
-    ~SigintGuard() { sigaction(SIGINT, &previous_, nullptr); }
-
-private:
-    struct sigaction previous_ {};
-};
-
-// How long the camera must rest between two views sent to the worker: a
-// new view restarts its scoring, so sending one every frame would waste it.
-constexpr double kViewInterval = 0.1;
-// The share of a frame spent copying a newer snapshot to the GPU.
-constexpr double kUploadBudget = 0.004;
 // Frames drawn after the last activity, so ImGui settles (hover, fades).
 constexpr int kSettleFrames = 3;
-// The worker thread's niceness: below the window's, so a frame never waits
-// for a round; a failure to set it (not permitted) leaves it as it was.
-constexpr int kWorkerNice = 10;
-
-bool sameCamera(const Camera& a, const Camera& b) {
-    return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
-}
-
 // Distinct colours for the meshes' wireframes: hues a golden angle apart.
 Rgb meshColour(size_t i) {
     const double h = std::fmod(0.08 + 0.6180339887 * double(i), 1.0) * 6.0;
@@ -137,26 +82,6 @@ std::unique_ptr<GlfwWindow> openWindow(const WindowOptions& options) {
 }  // namespace
 
 struct ViewSession::Impl : ScriptHost {
-    // What the frame shows of a snapshot, kept after the snapshot itself is gone.
-    struct Shown {
-        bool any = false;
-        uint64_t generation = 0, version = 0;
-        double seconds = 0;
-        size_t vertices = 0, triangles = 0, indirectMeshes = 0;
-        uint64_t samples = 0, rounds = 0, cameraSerial = 0;
-        double estimatedError = 1;
-        bool converged = false;
-    };
-    // A cache being saved: the worker is stopped and the file written on
-    // this helper thread, so frames go on meanwhile; a new worker then
-    // continues from the saved state (a resumed cache refines exactly like
-    // one never saved).
-    struct SaveJob {
-        std::string path;
-        std::thread thread;
-        std::atomic<bool> done{false};
-        std::string error;
-    };
 
     const Scene& scene;
     ViewSettings settings;
@@ -167,13 +92,11 @@ struct ViewSession::Impl : ScriptHost {
     std::vector<UiLightInfo> lightInfo;
     DisplayState state;
 
-    // The cache, its indirect solver and the worker refining them; a
-    // worker made again after a save continues the same cache and solver.
-    std::unique_ptr<ProgressiveSession> session;
-    bool workerStarted = false;
     std::unique_ptr<GlfwWindow> window;
     std::unique_ptr<Compositor> compositor;
     std::unique_ptr<CacheMeshUploader> uploader;
+    // The cache, its solver and worker, the snapshots shown, saves.
+    std::unique_ptr<ViewRefinement> refinement;
     std::unique_ptr<Ui> ui;
     WalkCamera walk;
     std::optional<ScriptPlayer> player;
@@ -181,18 +104,6 @@ struct ViewSession::Impl : ScriptHost {
     uint64_t frameIndex = 0;
 
     std::vector<IrradianceMeshCopy> emptyMeshes;
-    mutable CacheWorker::Reader reader;
-    const CacheSnapshot* uploading = nullptr;  // pinned by `reader` while it is copied
-    uint64_t generation = 0;                   // workers started so far
-    Shown shown;
-    bool paused = false;
-
-    // The view the worker serves.
-    Camera sentCamera;
-    int sentWidth = 0, sentHeight = 0;
-    uint64_t sentSerial = 0;
-    double sentAt = -1e30;
-    bool viewDirty = false;
 
     // Requests for the frame being made.
     bool quitRequested = false;
@@ -201,8 +112,7 @@ struct ViewSession::Impl : ScriptHost {
     bool meteredOnce = false;
     std::vector<std::string> screenshots;
     std::optional<Clock::time_point> lightChangedAt;
-    std::unique_ptr<SaveJob> save;
-    std::string workerError, message;
+    std::string message;
     double messageUntil = 0;
     int exitCode = 0;
 
@@ -236,25 +146,6 @@ struct ViewSession::Impl : ScriptHost {
             lightPowers.push_back(power);
             lightInfo.push_back({l.name, l.radiance, area, power, illuminanceLux(power, settings.efficacy)});
         }
-        SessionSettings ss;
-        ss.cache = settings.cache;
-        ss.worker = settings.worker;
-        if (settings.indirect.active()) ss.indirect = settings.indirect.solver;
-        ss.cachePath = settings.cachePath;
-        StopRule budget;
-        budget.samples = settings.worker.maxSamples;
-        session = std::make_unique<ProgressiveSession>(
-            scene, ss, samplerFactory(scene, settings.direct, settings.indirect), budget);
-        // The worker's thread lowers its own priority before its samplers
-        // (and their GL threads) exist. Frames then take the processor when
-        // they need it and refinement the rest: the frame rate does not
-        // depend on refinement even where the two share too few cores
-        // (llvmpipe renders both on the CPU).
-        session->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
-        if (session->resumed())
-            std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
-                        session->cache().totalVertices(),
-                        static_cast<unsigned long long>(session->cache().totalSamples()));
         if (settings.script) player.emplace(*settings.script);
 
         WindowOptions wo;
@@ -295,14 +186,13 @@ struct ViewSession::Impl : ScriptHost {
         emptyMeshes.resize(scene.lights.size());
         uploader->start(emptyMeshes, {});
         uploader->step(1e9);
+        refinement = std::make_unique<ViewRefinement>(scene, settings, *uploader);
         ui = std::make_unique<Ui>(w, settings.screenshotPath,
                                   settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
     }
 
     ~Impl() override {
-        // The worker may still be saving (its helper stops it): finish that first.
-        if (save && save->thread.joinable()) save->thread.join();
-        destroyWorker();
+        refinement.reset();  // finishes a save, stops the worker
         glfwSetWindowUserPointer(window->handle(), nullptr);
     }
 
@@ -310,49 +200,9 @@ struct ViewSession::Impl : ScriptHost {
 
     // --- The worker ---------------------------------------------------------------
 
-    void startWorker(const Camera& camera, int width, int height) {
-        ++generation;
-        sentSerial = session->start(RefinementCamera{camera, width, height}, paused);
-        noteSentView(camera, width, height);
-        reader = session->reader();
-        workerStarted = true;
-    }
-
-    // Ends the worker (joining it); the next start frees it.
-    void destroyWorker() {
-        reader = CacheWorker::Reader();
-        uploading = nullptr;
-        session->stop();
-        workerStarted = false;
-    }
-
-    void noteSentView(const Camera& camera, int width, int height) {
-        sentCamera = camera;
-        sentWidth = width;
-        sentHeight = height;
-        sentAt = now();
-        viewDirty = false;
-    }
-
-    void sendView(const Camera& camera, int width, int height) {
-        sentSerial = session->setCamera(RefinementCamera{camera, width, height});
-        noteSentView(camera, width, height);
-    }
-
-    // The camera the user sees is the one refined first.
-    void followView(int width, int height) {
-        const Camera c = walk.camera();
-        if (!sameCamera(c, sentCamera) || width != sentWidth || height != sentHeight) viewDirty = true;
-        if (viewDirty && !save && now() - sentAt >= kViewInterval) sendView(c, width, height);
-    }
-
     void checkWorker() {
-        if (!workerStarted || !workerError.empty()) return;
-        try {
-            session->rethrowIfFailed();
-        } catch (const std::exception& e) {
-            workerError = e.what();
-            std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", e.what());
+        if (const std::optional<std::string> failure = refinement->newFailure()) {
+            std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", failure->c_str());
             if (player) {
                 exitCode = 1;
                 quitRequested = true;
@@ -360,59 +210,19 @@ struct ViewSession::Impl : ScriptHost {
         }
     }
 
-    // Ends a save once its file is written and no snapshot of the old worker is being copied.
+    // Ends a save once its file is written (ViewRefinement::finishSave).
     void finishSave(int width, int height) {
-        if (!save || !save->done.load() || uploader->busy()) return;
-        save->thread.join();
-        if (save->error.empty()) {
-            showMessage(concat("saved the cache to ", save->path, " (", session->cache().totalVertices(), " vertices)"));
-            std::printf("saved the cache to %s\n", save->path.c_str());
+        const std::optional<ViewRefinement::SaveOutcome> saved = refinement->finishSave(walk.camera(), width, height);
+        if (!saved) return;
+        if (saved->error.empty()) {
+            showMessage(concat("saved the cache to ", saved->path, " (", saved->vertices, " vertices)"));
+            std::printf("saved the cache to %s\n", saved->path.c_str());
         } else {
-            showMessage("could not save the cache: " + save->error);
-            std::fprintf(stderr, "meshlight: could not save the cache: %s\n", save->error.c_str());
+            showMessage("could not save the cache: " + saved->error);
+            std::fprintf(stderr, "meshlight: could not save the cache: %s\n", saved->error.c_str());
             if (player) exitCode = 1, quitRequested = true;
         }
-        save.reset();
         checkWorker();  // a failure before the stop is still reported
-        destroyWorker();
-        if (workerError.empty()) startWorker(walk.camera(), width, height);
-    }
-
-    // Takes the latest snapshot and copies it to the GPU, a slice per frame.
-    // Returns true when a newer snapshot became the one shown.
-    bool pumpSnapshots(double& uploadMs) {
-        if (!workerStarted) return false;
-        const auto start = Clock::now();
-        if (!uploader->busy()) {
-            const CacheSnapshot* s = reader.acquire();
-            if (s && (!shown.any || shown.generation != generation || s->version != shown.version)) {
-                uploading = s;
-                uploader->start(s->direct, s->indirect);
-            }
-        }
-        bool swapped = false;
-        if (uploader->busy()) {
-            // The first snapshot is copied whole: there is nothing to show before it.
-            swapped = uploader->step(shown.any ? kUploadBudget : 1e9);
-            if (swapped) {
-                const CacheSnapshot& s = *uploading;
-                shown.any = true;
-                shown.generation = generation;
-                shown.version = s.version;
-                shown.seconds = s.seconds;
-                shown.vertices = s.vertices;
-                shown.triangles = uploader->front().triangleCount();
-                shown.indirectMeshes = s.indirect.size();
-                shown.samples = s.samples;
-                shown.rounds = s.rounds;
-                shown.cameraSerial = s.cameraSerial;
-                shown.estimatedError = s.estimatedError;
-                shown.converged = s.converged;
-                uploading = nullptr;
-            }
-        }
-        uploadMs = 1e3 * secondsBetween(start, Clock::now());
-        return swapped;
     }
 
     // --- ScriptHost -----------------------------------------------------------------
@@ -427,41 +237,17 @@ struct ViewSession::Impl : ScriptHost {
     }
     void meterExposure() override { meterExposurePending = true; }
     void meterLuxRange() override { meterLuxPending = true; }
-    void setPaused(bool p) override {
-        paused = p;
-        if (workerStarted) p ? session->pause() : session->resume();
+    void setPaused(bool p) override { refinement->setPaused(p); }
+    uint64_t shownSamples() const override { return refinement->shown().any ? refinement->shown().samples : 0; }
+    double shownError() const override {
+        return refinement->shown().any ? refinement->shown().estimatedError : 1.0;
     }
-    uint64_t shownSamples() const override { return shown.any ? shown.samples : 0; }
-    double shownError() const override { return shown.any ? shown.estimatedError : 1.0; }
-    bool refinementDone() const override {
-        if (!workerStarted || save || !shown.any || shown.generation != generation || uploader->busy()) return false;
-        if (!workerError.empty() || paused) return true;
-        // Nothing newer published since the snapshot shown (safe to acquire:
-        // no copy is in progress).
-        const CacheSnapshot* latest = reader.acquire();
-        const bool newest = latest && latest->version == shown.version;
-        if (session->finished()) return newest;
-        return newest && shown.converged && shown.cameraSerial >= sentSerial && !viewDirty;
-    }
+    bool refinementDone() const override { return refinement->done(); }
     void screenshot(const std::string& path) override { screenshots.push_back(path); }
     void saveCache(const std::string& path) override {
-        if (save || !workerStarted) return;
-        save = std::make_unique<SaveJob>();
-        save->path = path;
-        SaveJob* job = save.get();
-        ProgressiveSession* refining = session.get();
-        showMessage("saving the cache to " + path + "...");
-        job->thread = std::thread([job, refining] {
-            try {
-                refining->stop();  // the round in progress ends first; the cache is ours after the join
-                refining->save(job->path);
-            } catch (const std::exception& e) {
-                job->error = e.what();
-            }
-            job->done.store(true);
-        });
+        if (refinement->beginSave(path)) showMessage("saving the cache to " + path + "...");
     }
-    bool busySaving() const override { return save != nullptr; }
+    bool busySaving() const override { return refinement->saving(); }
     void quit() override { quitRequested = true; }
 
     void showMessage(const std::string& m) {
@@ -479,7 +265,7 @@ struct ViewSession::Impl : ScriptHost {
         for (int key : keysPressed) {
             if (!keyboard) break;
             if (key == GLFW_KEY_R || key == GLFW_KEY_HOME) walk.reset();
-            if (key == GLFW_KEY_P) setPaused(!paused);
+            if (key == GLFW_KEY_P) setPaused(!refinement->paused());
             if (key == GLFW_KEY_TAB) state.showUi = !state.showUi;
             if (key == GLFW_KEY_F12) screenshots.push_back(ui->screenshotPath());
         }
@@ -533,7 +319,7 @@ struct ViewSession::Impl : ScriptHost {
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
         bool active = newSnapshot || events != eventsDrawn || dragging ||
                       (player && !player->finished()) || !screenshots.empty() || meterExposurePending ||
-                      meterLuxPending || lightChangedAt || save || quitRequested || firstFrame < 0;
+                      meterLuxPending || lightChangedAt || refinement->saving() || quitRequested || firstFrame < 0;
         if (!active && glfwGetWindowAttrib(w, GLFW_FOCUSED)) {
             for (int k : {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E, GLFW_KEY_UP,
                           GLFW_KEY_DOWN, GLFW_KEY_LEFT, GLFW_KEY_RIGHT, GLFW_KEY_PAGE_UP, GLFW_KEY_PAGE_DOWN})
@@ -551,19 +337,19 @@ struct ViewSession::Impl : ScriptHost {
         m.indirectWeight = indirectWeight(lightControls, lightPowers);
         UiStats& s = m.stats;
         s.elapsed = now();
-        s.snapshot = shown.any;
-        s.workerSeconds = shown.seconds;
-        s.vertices = shown.vertices;
-        s.triangles = shown.triangles;
+        s.snapshot = refinement->shown().any;
+        s.workerSeconds = refinement->shown().seconds;
+        s.vertices = refinement->shown().vertices;
+        s.triangles = refinement->shown().triangles;
         s.drawnTriangles = drawnTriangles;
-        s.indirectMeshes = shown.indirectMeshes;
-        s.samples = shown.samples;
-        s.rounds = shown.rounds;
-        s.estimatedError = shown.estimatedError;
-        s.converged = shown.converged;
-        s.finished = workerStarted && session->finished() && !save;
-        s.paused = paused;
-        s.saving = save != nullptr;
+        s.indirectMeshes = refinement->shown().indirectMeshes;
+        s.samples = refinement->shown().samples;
+        s.rounds = refinement->shown().rounds;
+        s.estimatedError = refinement->shown().estimatedError;
+        s.converged = refinement->shown().converged;
+        s.finished = refinement->finished();
+        s.paused = refinement->paused();
+        s.saving = refinement->saving();
         s.uploadProgress = uploader->busy() ? uploader->progress() : 1.0;
         s.frameMs = frameMsAverage;
         s.fps = frameMsAverage > 0 ? 1e3 / frameMsAverage : 0;
@@ -580,13 +366,13 @@ struct ViewSession::Impl : ScriptHost {
                 : i < meshes.directCount() ? std::string("the lights' shared mesh")
                                            : concat("indirect, bounce ", i - meshes.directCount() + 1),
                 meshColour(i));
-        if (session->cache().hasSharedMesh())
+        if (refinement->session().cache().hasSharedMesh())
             m.sharedLights = concat(
-                "Direct light: ", session->coverage().describe(),
+                "Direct light: ", refinement->session().coverage().describe(),
                 ". Changing a light is exact where it has its own mesh; in the shared mesh the lights take their "
                 "power-weighted mean, like indirect light, and 'light N' alone does not show what it gives there.");
         m.cursorLux = cursorLux;
-        m.error = workerError;
+        m.error = refinement->error();
         if (now() < messageUntil) m.message = message;
         return m;
     }
@@ -680,12 +466,12 @@ struct ViewSession::Impl : ScriptHost {
     }
 
     void printStatus() {
-        if (!settings.printProgress || !shown.any || now() - lastStatus < 1.0) return;
+        if (!settings.printProgress || !refinement->shown().any || now() - lastStatus < 1.0) return;
         static const bool terminal = ::isatty(STDERR_FILENO) != 0;
         lastStatus = now();
         std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s%s",
-                     terminal ? "\r" : "", lastStatus, shown.vertices, static_cast<unsigned long long>(shown.samples),
-                     100 * shown.estimatedError, frameMsAverage > 0 ? 1e3 / frameMsAverage : 0.0,
+                     terminal ? "\r" : "", lastStatus, refinement->shown().vertices, static_cast<unsigned long long>(refinement->shown().samples),
+                     100 * refinement->shown().estimatedError, frameMsAverage > 0 ? 1e3 / frameMsAverage : 0.0,
                      terminal ? "   " : "\n");
         std::fflush(stderr);
     }
@@ -699,7 +485,7 @@ struct ViewSession::Impl : ScriptHost {
         if (fbWidth <= 0 || fbHeight <= 0) return;  // minimised
         finishSave(fbWidth, fbHeight);
         double uploadMs = 0;
-        const bool newSnapshot = pumpSnapshots(uploadMs);
+        const bool newSnapshot = refinement->pump(uploadMs);
         if (!wantsFrame(newSnapshot)) return;
         const auto frameStart = Clock::now();
         const double dt = std::min(secondsBetween(lastFrame, frameStart), 0.25);
@@ -724,11 +510,11 @@ struct ViewSession::Impl : ScriptHost {
             meterLuxPending = true;
         shownMode = state.mode;
         // The worker starts once the first frame's camera is known (a
-        // script's first keyframe), so its first view is the one shown.
-        if (!workerStarted && !save)
-            startWorker(walk.camera(), fbWidth, fbHeight);
+        // script's first keyframe), so its first view is the one refinement->shown().
+        if (!refinement->started() && !refinement->saving())
+            refinement->start(walk.camera(), fbWidth, fbHeight);
         else
-            followView(fbWidth, fbHeight);
+            refinement->follow(walk.camera(), fbWidth, fbHeight);
         if (newSnapshot && !meteredOnce) {
             meteredOnce = true;
             meterExposurePending = true;  // the first light seen sets the exposure
@@ -769,11 +555,11 @@ struct ViewSession::Impl : ScriptHost {
         const auto frameEnd = Clock::now();
         const double frameSeconds = secondsBetween(frameStart, frameEnd);
         if (firstFrame < 0) firstFrame = secondsBetween(t0, frameEnd);
-        if (firstSnapshotFrame < 0 && shown.any) firstSnapshotFrame = secondsBetween(t0, frameEnd);
+        if (firstSnapshotFrame < 0 && refinement->shown().any) firstSnapshotFrame = secondsBetween(t0, frameEnd);
         frameMsAverage = frameMsAverage > 0 ? 0.9 * frameMsAverage + 0.1 * frameSeconds * 1e3 : frameSeconds * 1e3;
         composeMsAverage = composeMsAverage > 0 ? 0.9 * composeMsAverage + 0.1 * composeMs : composeMs;
-        frames.push_back({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, shown.samples,
-                          shown.triangles, drawnTriangles, shown.any});
+        frames.push_back({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, refinement->shown().samples,
+                          refinement->shown().triangles, drawnTriangles, refinement->shown().any});
         ++frameIndex;
         printStatus();
         if (settings.maxFps > 0) {
@@ -783,7 +569,7 @@ struct ViewSession::Impl : ScriptHost {
     }
 
     int run() {
-        SigintGuard guard;
+        InterruptGuard guard;
         bool interrupted = false;
         for (;;) {
             // Wait for events only when the last pass drew nothing (idle).
@@ -791,7 +577,7 @@ struct ViewSession::Impl : ScriptHost {
                 glfwPollEvents();
             else
                 glfwWaitEventsTimeout(0.05);
-            if (gInterrupted.load()) {
+            if (guard.interrupted()) {
                 interrupted = true;
                 break;
             }
@@ -806,7 +592,7 @@ struct ViewSession::Impl : ScriptHost {
                 break;
             }
         }
-        if (settings.printProgress && shown.any) {
+        if (settings.printProgress && refinement->shown().any) {
             lastStatus = -1e30;
             printStatus();
         }
@@ -820,19 +606,10 @@ struct ViewSession::Impl : ScriptHost {
                         ms.size(), ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 95 / 100)], firstFrame,
                         firstSnapshotFrame);
         }
-        if (save && save->thread.joinable()) save->thread.join();
-        save.reset();
-        reader = CacheWorker::Reader();
-        uploading = nullptr;
-        if (workerStarted) {
-            session->stop();
-            checkWorker();
-        }
-        if (!settings.cachePath.empty() && workerStarted && workerError.empty()) {
-            session->save(settings.cachePath);
-            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(),
-                        session->cache().totalVertices());
-        }
+        refinement->stop();
+        checkWorker();
+        if (const size_t saved = refinement->saveAtExit())
+            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(), saved);
         if (player && !player->finished() && exitCode == 0 && !interrupted)
             std::printf("script: the window was closed at %s\n", player->where().c_str());
         return interrupted && exitCode == 0 ? 130 : exitCode;

@@ -1,0 +1,201 @@
+#include "ViewRefinement.h"
+
+#include "gpu_sampling/SamplerFactory.h"
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace ml {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// How long the camera must rest between two views sent to the worker: a
+// new view restarts its scoring, so sending one every frame would waste it.
+constexpr double kViewInterval = 0.1;
+// The share of a frame spent copying a newer snapshot to the GPU.
+constexpr double kUploadBudget = 0.004;
+// The worker threads' niceness: below the window's, so a frame never waits
+// for a round; a failure to set it (not permitted) leaves it as it was.
+constexpr int kWorkerNice = 10;
+
+bool sameCamera(const Camera& a, const Camera& b) {
+    return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
+}
+
+}  // namespace
+
+ViewRefinement::ViewRefinement(const Scene& scene, const ViewSettings& settings, CacheMeshUploader& uploader)
+    : scene_(scene), settings_(settings), uploader_(uploader) {
+    SessionSettings ss;
+    ss.cache = settings.cache;
+    ss.worker = settings.worker;
+    if (settings.indirect.active()) ss.indirect = settings.indirect.solver;
+    ss.cachePath = settings.cachePath;
+    StopRule budget;
+    budget.samples = settings.worker.maxSamples;
+    session_ = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, settings.direct, settings.indirect),
+                                                    budget);
+    // Each sampling thread lowers its own priority before its samplers (and
+    // their GL threads) exist. Frames then take the processor when they need
+    // it and refinement the rest: the frame rate does not depend on
+    // refinement even where the two share too few cores (llvmpipe renders
+    // both on the CPU).
+    session_->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
+    if (session_->resumed())
+        std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
+                    session_->cache().totalVertices(), static_cast<unsigned long long>(session_->cache().totalSamples()));
+}
+
+ViewRefinement::~ViewRefinement() {
+    // The worker may still be saving (its helper stops it): finish that first.
+    if (save_ && save_->thread.joinable()) save_->thread.join();
+    stopWorker();
+}
+
+double ViewRefinement::now() const { return std::chrono::duration<double>(Clock::now() - t0_).count(); }
+
+void ViewRefinement::start(const Camera& camera, int width, int height) {
+    ++generation_;
+    sentSerial_ = session_->start(RefinementCamera{camera, width, height}, paused_);
+    noteSent(camera, width, height);
+    reader_ = session_->reader();
+    started_ = true;
+}
+
+// Ends the worker (joining it); the next start frees it.
+void ViewRefinement::stopWorker() {
+    reader_ = CacheWorker::Reader();
+    uploading_ = nullptr;
+    session_->stop();
+    started_ = false;
+}
+
+void ViewRefinement::noteSent(const Camera& camera, int width, int height) {
+    sentCamera_ = camera;
+    sentWidth_ = width;
+    sentHeight_ = height;
+    sentAt_ = now();
+    viewDirty_ = false;
+}
+
+void ViewRefinement::follow(const Camera& camera, int width, int height) {
+    if (!started_) return;
+    if (!sameCamera(camera, sentCamera_) || width != sentWidth_ || height != sentHeight_) viewDirty_ = true;
+    if (viewDirty_ && !save_ && now() - sentAt_ >= kViewInterval) {
+        sentSerial_ = session_->setCamera(RefinementCamera{camera, width, height});
+        noteSent(camera, width, height);
+    }
+}
+
+std::optional<std::string> ViewRefinement::newFailure() {
+    if (!started_ || !error_.empty()) return std::nullopt;
+    try {
+        session_->rethrowIfFailed();
+    } catch (const std::exception& e) {
+        error_ = e.what();
+        return error_;
+    }
+    return std::nullopt;
+}
+
+bool ViewRefinement::pump(double& uploadMs) {
+    uploadMs = 0;
+    if (!started_) return false;
+    const auto start = Clock::now();
+    if (!uploader_.busy()) {
+        const CacheSnapshot* s = reader_.acquire();
+        if (s && (!shown_.any || shown_.generation != generation_ || s->version != shown_.version)) {
+            uploading_ = s;
+            uploader_.start(s->direct, s->indirect);
+        }
+    }
+    bool swapped = false;
+    if (uploader_.busy()) {
+        // The first snapshot is copied whole: there is nothing to show before it.
+        swapped = uploader_.step(shown_.any ? kUploadBudget : 1e9);
+        if (swapped) {
+            const CacheSnapshot& s = *uploading_;
+            shown_.any = true;
+            shown_.generation = generation_;
+            shown_.version = s.version;
+            shown_.seconds = s.seconds;
+            shown_.vertices = s.vertices;
+            shown_.triangles = uploader_.front().triangleCount();
+            shown_.indirectMeshes = s.indirect.size();
+            shown_.samples = s.samples;
+            shown_.rounds = s.rounds;
+            shown_.cameraSerial = s.cameraSerial;
+            shown_.estimatedError = s.estimatedError;
+            shown_.converged = s.converged;
+            uploading_ = nullptr;
+        }
+    }
+    uploadMs = 1e3 * std::chrono::duration<double>(Clock::now() - start).count();
+    return swapped;
+}
+
+void ViewRefinement::setPaused(bool paused) {
+    paused_ = paused;
+    if (started_) paused ? session_->pause() : session_->resume();
+}
+
+bool ViewRefinement::done() const {
+    if (!started_ || save_ || !shown_.any || shown_.generation != generation_ || uploader_.busy()) return false;
+    if (!error_.empty() || paused_) return true;
+    // Nothing newer published since the snapshot shown (safe to acquire: no
+    // copy is in progress).
+    const CacheSnapshot* latest = reader_.acquire();
+    const bool newest = latest && latest->version == shown_.version;
+    if (session_->finished()) return newest;
+    return newest && shown_.converged && shown_.cameraSerial >= sentSerial_ && !viewDirty_;
+}
+
+bool ViewRefinement::beginSave(const std::string& path) {
+    if (save_ || !started_) return false;
+    save_ = std::make_unique<SaveJob>();
+    save_->path = path;
+    SaveJob* job = save_.get();
+    ProgressiveSession* refining = session_.get();
+    job->thread = std::thread([job, refining] {
+        try {
+            refining->stop();  // the round in progress ends first; the cache is ours after the join
+            refining->save(job->path);
+        } catch (const std::exception& e) {
+            job->error = e.what();
+        }
+        job->done.store(true);
+    });
+    return true;
+}
+
+std::optional<ViewRefinement::SaveOutcome> ViewRefinement::finishSave(const Camera& camera, int width, int height) {
+    if (!save_ || !save_->done.load() || uploader_.busy()) return std::nullopt;
+    save_->thread.join();
+    SaveOutcome outcome{save_->path, save_->error, session_->cache().totalVertices()};
+    save_.reset();
+    newFailure();  // a failure before the stop is still reported (error())
+    stopWorker();
+    if (error_.empty()) start(camera, width, height);
+    return outcome;
+}
+
+void ViewRefinement::stop() {
+    if (save_ && save_->thread.joinable()) save_->thread.join();
+    save_.reset();
+    reader_ = CacheWorker::Reader();
+    uploading_ = nullptr;
+    if (started_) session_->stop();
+}
+
+size_t ViewRefinement::saveAtExit() {
+    if (settings_.cachePath.empty() || !started_ || !error_.empty()) return 0;
+    session_->save(settings_.cachePath);
+    return session_->cache().totalVertices();
+}
+
+}  // namespace ml

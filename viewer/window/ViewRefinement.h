@@ -1,0 +1,117 @@
+// The viewer's side of refinement: the progressive session (cache, solver,
+// worker) it drives, the camera it sends the worker, the snapshots it
+// copies to the GPU a slice per frame, pausing, failures, and saving the
+// cache on a helper thread while frames go on. The frame loop (ViewSession)
+// asks it each frame what to show; it draws nothing itself.
+#pragma once
+
+#include "ViewSession.h"
+#include "cache/ProgressiveSession.h"
+#include "viewer/compositor/GpuCacheMeshes.h"
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace ml {
+
+class ViewRefinement {
+public:
+    // What the frame shows of a snapshot, kept after the snapshot itself is gone.
+    struct Shown {
+        bool any = false;
+        uint64_t generation = 0, version = 0;
+        double seconds = 0;
+        size_t vertices = 0, triangles = 0, indirectMeshes = 0;
+        uint64_t samples = 0, rounds = 0, cameraSerial = 0;
+        double estimatedError = 1;
+        bool converged = false;
+    };
+    // How a save ended, once it has (finishSave).
+    struct SaveOutcome {
+        std::string path;
+        std::string error;  // empty: saved
+        size_t vertices = 0;
+    };
+
+    // Makes the session (resuming settings.cachePath if it exists); the
+    // worker starts with start(). `uploader` copies snapshots to the GPU.
+    ViewRefinement(const Scene& scene, const ViewSettings& settings, CacheMeshUploader& uploader);
+    ~ViewRefinement();  // finishes a save in progress, then stops the worker
+
+    const ProgressiveSession& session() const { return *session_; }
+    bool started() const { return started_; }
+    // The worker, serving this camera first.
+    void start(const Camera& camera, int width, int height);
+    // The camera the user sees is the one refined first: sent when it
+    // changed, at most every `kViewInterval`, never during a save.
+    void follow(const Camera& camera, int width, int height);
+    // The worker's failure, the first time it is seen; then error() keeps it.
+    std::optional<std::string> newFailure();
+    const std::string& error() const { return error_; }
+    // Takes the latest snapshot and copies it to the GPU, a slice per frame
+    // (all of the first). True when a newer snapshot became the one shown.
+    bool pump(double& uploadMs);
+    const Shown& shown() const { return shown_; }
+
+    void setPaused(bool paused);
+    bool paused() const { return paused_; }
+    // A script's wait-done: the snapshot shown is the worker's last for the
+    // view sent (or the worker has ended, failed or is paused).
+    bool done() const;
+    // Worker ended (out of samples, failed or stopped) and no save is running.
+    bool finished() const { return started_ && session_->finished() && !save_; }
+
+    // Stops the worker and writes the cache on a helper thread; false when
+    // a save runs already or no worker was started.
+    bool beginSave(const std::string& path);
+    bool saving() const { return save_ != nullptr; }
+    // Once the file is written and no snapshot of the old worker is being
+    // copied: ends the save and starts a new worker on the same cache (a
+    // resumed cache refines exactly as if never saved) at this camera.
+    std::optional<SaveOutcome> finishSave(const Camera& camera, int width, int height);
+
+    // At the end of the frame loop: joins a save and stops the worker (then
+    // look at newFailure()).
+    void stop();
+    // Saves settings.cachePath, if given, when a worker ran and nothing
+    // failed; returns the vertices saved (0: nothing saved).
+    size_t saveAtExit();
+
+private:
+    struct SaveJob {
+        std::string path;
+        std::thread thread;
+        std::atomic<bool> done{false};
+        std::string error;
+    };
+    double now() const;
+    void stopWorker();
+    void noteSent(const Camera& camera, int width, int height);
+
+    const Scene& scene_;
+    const ViewSettings& settings_;
+    CacheMeshUploader& uploader_;
+    std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+    std::unique_ptr<ProgressiveSession> session_;
+    bool started_ = false;
+    mutable CacheWorker::Reader reader_;
+    const CacheSnapshot* uploading_ = nullptr;  // pinned by reader_ while it is copied
+    uint64_t generation_ = 0;                   // workers started so far
+    Shown shown_;
+    bool paused_ = false;
+    std::string error_;
+    std::unique_ptr<SaveJob> save_;
+
+    // The view the worker serves.
+    Camera sentCamera_;
+    int sentWidth_ = 0, sentHeight_ = 0;
+    uint64_t sentSerial_ = 0;
+    double sentAt_ = -1e30;
+    bool viewDirty_ = false;
+};
+
+}  // namespace ml
