@@ -4,6 +4,7 @@
 #include "core/Error.h"
 #include "core/image/Image.h"
 #include "GlfwWindow.h"
+#include "FrameStatistics.h"
 #include "InterruptGuard.h"
 #include "ViewRefinement.h"
 #include "viewer/compositor/Compositor.h"
@@ -124,16 +125,12 @@ struct ViewSession::Impl : ScriptHost {
     double dragX = 0, dragY = 0;
     int settleFrames = kSettleFrames;
     Clock::time_point lastFrame = Clock::now();
-    double frameMsAverage = 0, composeMsAverage = 0;
-    double lastStatus = -1e30;
     std::optional<double> cursorLux;
     size_t drawnTriangles = 0;  // by the last frame
     DisplayMode shownMode = DisplayMode::Final;  // the last frame's
 
     // Measurements.
-    std::vector<FrameRecord> frames;
-    double firstFrame = -1, firstSnapshotFrame = -1;
-    std::vector<double> lightLatencies;
+    FrameStatistics stats;
 
     Impl(const Scene& s, const ViewSettings& vs)
         : scene(s), settings(vs), state(vs.display),
@@ -319,7 +316,7 @@ struct ViewSession::Impl : ScriptHost {
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
         bool active = newSnapshot || events != eventsDrawn || dragging ||
                       (player && !player->finished()) || !screenshots.empty() || meterExposurePending ||
-                      meterLuxPending || lightChangedAt || refinement->saving() || quitRequested || firstFrame < 0;
+                      meterLuxPending || lightChangedAt || refinement->saving() || quitRequested || stats.firstFrame() < 0;
         if (!active && glfwGetWindowAttrib(w, GLFW_FOCUSED)) {
             for (int k : {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E, GLFW_KEY_UP,
                           GLFW_KEY_DOWN, GLFW_KEY_LEFT, GLFW_KEY_RIGHT, GLFW_KEY_PAGE_UP, GLFW_KEY_PAGE_DOWN})
@@ -351,9 +348,9 @@ struct ViewSession::Impl : ScriptHost {
         s.paused = refinement->paused();
         s.saving = refinement->saving();
         s.uploadProgress = uploader->busy() ? uploader->progress() : 1.0;
-        s.frameMs = frameMsAverage;
-        s.fps = frameMsAverage > 0 ? 1e3 / frameMsAverage : 0;
-        s.composeMs = composeMsAverage;
+        s.frameMs = stats.frameMsAverage();
+        s.fps = stats.frameMsAverage() > 0 ? 1e3 / stats.frameMsAverage() : 0;
+        s.composeMs = stats.composeMsAverage();
         m.camera = walk.camera();
         m.speed = walk.speed();
         m.unit = settings.unit;
@@ -465,15 +462,10 @@ struct ViewSession::Impl : ScriptHost {
         screenshots.clear();
     }
 
-    void printStatus() {
-        if (!settings.printProgress || !refinement->shown().any || now() - lastStatus < 1.0) return;
-        static const bool terminal = ::isatty(STDERR_FILENO) != 0;
-        lastStatus = now();
-        std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s%s",
-                     terminal ? "\r" : "", lastStatus, refinement->shown().vertices, static_cast<unsigned long long>(refinement->shown().samples),
-                     100 * refinement->shown().estimatedError, frameMsAverage > 0 ? 1e3 / frameMsAverage : 0.0,
-                     terminal ? "   " : "\n");
-        std::fflush(stderr);
+    void printStatus(bool now = false) {
+        const ViewRefinement::Shown& shown = refinement->shown();
+        if (settings.printProgress && shown.any)
+            stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError, now);
     }
 
     // One pass of the loop: checks the worker and snapshots, then draws a
@@ -549,17 +541,14 @@ struct ViewSession::Impl : ScriptHost {
         glfwSwapBuffers(window->handle());
         if (lightChangedAt) {
             window->gl().Finish();  // the frame showing the change is on screen
-            lightLatencies.push_back(secondsBetween(*lightChangedAt, Clock::now()));
+            stats.addLightLatency(secondsBetween(*lightChangedAt, Clock::now()));
             lightChangedAt.reset();
         }
         const auto frameEnd = Clock::now();
         const double frameSeconds = secondsBetween(frameStart, frameEnd);
-        if (firstFrame < 0) firstFrame = secondsBetween(t0, frameEnd);
-        if (firstSnapshotFrame < 0 && refinement->shown().any) firstSnapshotFrame = secondsBetween(t0, frameEnd);
-        frameMsAverage = frameMsAverage > 0 ? 0.9 * frameMsAverage + 0.1 * frameSeconds * 1e3 : frameSeconds * 1e3;
-        composeMsAverage = composeMsAverage > 0 ? 0.9 * composeMsAverage + 0.1 * composeMs : composeMs;
-        frames.push_back({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, refinement->shown().samples,
-                          refinement->shown().triangles, drawnTriangles, refinement->shown().any});
+        stats.add({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, refinement->shown().samples,
+                   refinement->shown().triangles, drawnTriangles, refinement->shown().any},
+                  secondsBetween(t0, frameEnd));
         ++frameIndex;
         printStatus();
         if (settings.maxFps > 0) {
@@ -592,20 +581,9 @@ struct ViewSession::Impl : ScriptHost {
                 break;
             }
         }
-        if (settings.printProgress && refinement->shown().any) {
-            lastStatus = -1e30;
-            printStatus();
-        }
+        printStatus(true);
         if (interrupted) std::fprintf(stderr, "\nmeshlight: interrupted; stopping the worker\n");
-        if (!frames.empty()) {
-            std::vector<double> ms;
-            for (const FrameRecord& f : frames) ms.push_back(1e3 * f.seconds);
-            std::sort(ms.begin(), ms.end());
-            std::printf("view: %zu frames drawn, median %.1f ms, 95th percentile %.1f ms; first frame after %.2f s, "
-                        "first lit frame after %.2f s\n",
-                        ms.size(), ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 95 / 100)], firstFrame,
-                        firstSnapshotFrame);
-        }
+        stats.printSummary();
         refinement->stop();
         checkWorker();
         if (const size_t saved = refinement->saveAtExit())
@@ -621,10 +599,10 @@ ViewSession::ViewSession(const Scene& scene, const ViewSettings& settings)
 ViewSession::~ViewSession() = default;
 
 int ViewSession::run() { return impl_->run(); }
-const std::vector<FrameRecord>& ViewSession::frames() const { return impl_->frames; }
-double ViewSession::firstFrameSeconds() const { return impl_->firstFrame; }
-double ViewSession::firstSnapshotFrameSeconds() const { return impl_->firstSnapshotFrame; }
-const std::vector<double>& ViewSession::lightChangeLatencies() const { return impl_->lightLatencies; }
+const std::vector<FrameRecord>& ViewSession::frames() const { return impl_->stats.frames(); }
+double ViewSession::firstFrameSeconds() const { return impl_->stats.firstFrame(); }
+double ViewSession::firstSnapshotFrameSeconds() const { return impl_->stats.firstLitFrame(); }
+const std::vector<double>& ViewSession::lightChangeLatencies() const { return impl_->stats.lightLatencies(); }
 std::string ViewSession::glDescription() const { return impl_->window->describe(); }
 
 }  // namespace ml
