@@ -5,7 +5,9 @@
 #include "core/image/Image.h"
 #include "GlfwWindow.h"
 #include "FrameStatistics.h"
+#include "FrameMeter.h"
 #include "InterruptGuard.h"
+#include "Screenshot.h"
 #include "ViewRefinement.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
@@ -108,8 +110,7 @@ struct ViewSession::Impl : ScriptHost {
 
     // Requests for the frame being made.
     bool quitRequested = false;
-    bool meterExposurePending = false, meterLuxPending = false;
-    double meteredScale = 1;  // autoExposureScale of the metered image
+    FrameMeter meter;  // auto exposure and lux range
     bool meteredOnce = false;
     std::vector<std::string> screenshots;
     std::optional<Clock::time_point> lightChangedAt;
@@ -230,10 +231,10 @@ struct ViewSession::Impl : ScriptHost {
     std::vector<LightControl>& lights() override { return lightControls; }
     void lightsChanged() override {
         if (!lightChangedAt) lightChangedAt = Clock::now();
-        if (state.mode == DisplayMode::Illuminance && state.luxAuto) meterLuxPending = true;
+        if (state.mode == DisplayMode::Illuminance && state.luxAuto) meter.requestLuxRange();
     }
-    void meterExposure() override { meterExposurePending = true; }
-    void meterLuxRange() override { meterLuxPending = true; }
+    void meterExposure() override { meter.requestExposure(); }
+    void meterLuxRange() override { meter.requestLuxRange(); }
     void setPaused(bool p) override { refinement->setPaused(p); }
     uint64_t shownSamples() const override { return refinement->shown().any ? refinement->shown().samples : 0; }
     double shownError() const override {
@@ -315,8 +316,8 @@ struct ViewSession::Impl : ScriptHost {
         GLFWwindow* w = window->handle();
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
         bool active = newSnapshot || events != eventsDrawn || dragging ||
-                      (player && !player->finished()) || !screenshots.empty() || meterExposurePending ||
-                      meterLuxPending || lightChangedAt || refinement->saving() || quitRequested || stats.firstFrame() < 0;
+                      (player && !player->finished()) || !screenshots.empty() || meter.pending() || lightChangedAt ||
+                      refinement->saving() || quitRequested || stats.firstFrame() < 0;
         if (!active && glfwGetWindowAttrib(w, GLFW_FOCUSED)) {
             for (int k : {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E, GLFW_KEY_UP,
                           GLFW_KEY_DOWN, GLFW_KEY_LEFT, GLFW_KEY_RIGHT, GLFW_KEY_PAGE_UP, GLFW_KEY_PAGE_DOWN})
@@ -376,8 +377,8 @@ struct ViewSession::Impl : ScriptHost {
 
     void applyRequests(const UiRequests& r) {
         if (r.resetCamera) walk.reset();
-        if (r.meterExposure) meterExposurePending = true;
-        if (r.meterLux) meterLuxPending = true;
+        if (r.meterExposure) meter.requestExposure();
+        if (r.meterLux) meter.requestLuxRange();
         if (r.lightsChanged) lightsChanged();
         if (r.pause) setPaused(*r.pause);
         if (r.screenshot) screenshots.push_back(*r.screenshot);
@@ -396,60 +397,10 @@ struct ViewSession::Impl : ScriptHost {
         return cs;
     }
 
-    // Auto exposure and the lux range, from this frame's image (composited
-    // once more in the quantity they need when the mode shows another).
-    void meter(int fbWidth, int fbHeight, const LightWeights& weights) {
-        if (!meterExposurePending && !meterLuxPending) return;
-        const Camera c = walk.camera();
-        const CompositeQuantity shownQuantity = compositeQuantity(state.mode);
-        auto pixelsOf = [&](CompositeQuantity q, const LightWeights& w) {
-            if (q != shownQuantity) compositor->compose(c, uploader->front(), w, compositeSettings(fbWidth, fbHeight, q));
-            ImageRgb image = compositor->readPixels();
-            if (q != shownQuantity)
-                compositor->compose(c, uploader->front(), weights, compositeSettings(fbWidth, fbHeight, shownQuantity));
-            return image;
-        };
-        if (meterExposurePending) {
-            DisplayState final = state;
-            if (shownQuantity != CompositeQuantity::Radiance) final.mode = DisplayMode::Final;
-            meteredScale = autoExposureScale(
-                pixelsOf(CompositeQuantity::Radiance, compositeWeights(final, lightControls, lightPowers)));
-            meterExposurePending = false;
-        }
-        if (meterLuxPending) {
-            const ImageRgb lux = pixelsOf(CompositeQuantity::Illuminance, weights);
-            // A few tens of thousands of pixels give the percentiles to a pixel's worth.
-            const int step = std::max(1, int(std::sqrt(double(lux.pixelCount()) / 65536.0)));
-            std::vector<double> values;
-            for (int y = 0; y < lux.height; y += step)
-                for (int x = 0; x < lux.width; x += step) values.push_back(lux.at(x, y).r);
-            const auto [lo, hi] = autoLuxRange(std::move(values));
-            state.luxMin = lo;
-            state.luxMax = hi;
-            meterLuxPending = false;
-        }
-    }
-
     void writeScreenshots(int fbWidth, int fbHeight) {
         for (const std::string& path : screenshots) {
             try {
-                checkOutputPath(path);
-                if (outputFormat(path) == ImageFormat::Png) {
-                    // What the window shows, read from the back buffer before the swap.
-                    const GlApi& gl = window->gl();
-                    std::vector<uint8_t> rgb(size_t(fbWidth) * fbHeight * 3), rows(rgb.size());
-                    gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-                    gl.ReadBuffer(GL_BACK);
-                    gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-                    gl.ReadPixels(0, 0, fbWidth, fbHeight, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
-                    checkGl(gl, "reading the window for a screenshot");
-                    const size_t row = size_t(fbWidth) * 3;
-                    for (int y = 0; y < fbHeight; ++y)  // GL rows start at the bottom
-                        std::copy_n(&rgb[size_t(fbHeight - 1 - y) * row], row, &rows[size_t(y) * row]);
-                    writeImage8(path, rows, fbWidth, fbHeight);
-                } else {
-                    writeImageLinear(path, compositor->readImage());
-                }
+                writeScreenshot(path, *window, *compositor, fbWidth, fbHeight);
                 std::printf("screenshot: wrote %s (%dx%d, %s, %llu samples)\n", path.c_str(), fbWidth, fbHeight,
                             displayModeName(state.mode), static_cast<unsigned long long>(shownSamples()));
                 showMessage("wrote " + path);
@@ -499,7 +450,7 @@ struct ViewSession::Impl : ScriptHost {
         applyRequests(ui->build(model));
         // Entering lux mode with an automatic range: take it from this frame.
         if (state.mode == DisplayMode::Illuminance && shownMode != DisplayMode::Illuminance && state.luxAuto)
-            meterLuxPending = true;
+            meter.requestLuxRange();
         shownMode = state.mode;
         // The worker starts once the first frame's camera is known (a
         // script's first keyframe), so its first view is the one refinement->shown().
@@ -509,8 +460,8 @@ struct ViewSession::Impl : ScriptHost {
             refinement->follow(walk.camera(), fbWidth, fbHeight);
         if (newSnapshot && !meteredOnce) {
             meteredOnce = true;
-            meterExposurePending = true;  // the first light seen sets the exposure
-            if (state.luxAuto) meterLuxPending = true;
+            meter.requestExposure();  // the first light seen sets the exposure
+            if (state.luxAuto) meter.requestLuxRange();
         }
 
         // The image.
@@ -520,9 +471,10 @@ struct ViewSession::Impl : ScriptHost {
         compositor->compose(walk.camera(), uploader->front(), weights,
                             compositeSettings(fbWidth, fbHeight, quantity));
         drawnTriangles = compositor->drawnTriangles();
-        meter(fbWidth, fbHeight, weights);
+        meter.meter(*compositor, uploader->front(), walk.camera(), state, lightControls, lightPowers, weights,
+                    compositeSettings(fbWidth, fbHeight, quantity));
         DisplaySettings ds;
-        ds.exposure = meteredScale * std::exp2(state.exposureEV);
+        ds.exposure = meter.exposureScale() * std::exp2(state.exposureEV);
         ds.op = state.op;
         ds.luxMin = state.luxMin;
         ds.luxMax = state.luxMax;
