@@ -8,6 +8,7 @@
 #include "FrameMeter.h"
 #include "InterruptGuard.h"
 #include "Screenshot.h"
+#include "WindowInput.h"
 #include "ViewRefinement.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
@@ -96,6 +97,7 @@ struct ViewSession::Impl : ScriptHost {
     DisplayState state;
 
     std::unique_ptr<GlfwWindow> window;
+    std::unique_ptr<WindowInput> input;  // destroyed before the window
     std::unique_ptr<Compositor> compositor;
     std::unique_ptr<CacheMeshUploader> uploader;
     // The cache, its solver and worker, the snapshots shown, saves.
@@ -119,11 +121,6 @@ struct ViewSession::Impl : ScriptHost {
     int exitCode = 0;
 
     // Input between frames (GLFW callbacks) and the mouse drag.
-    uint64_t events = 0, eventsDrawn = ~uint64_t(0);
-    double scroll = 0;
-    std::vector<int> keysPressed;
-    bool dragging = false;
-    double dragX = 0, dragY = 0;
     int settleFrames = kSettleFrames;
     Clock::time_point lastFrame = Clock::now();
     std::optional<double> cursorLux;
@@ -153,30 +150,7 @@ struct ViewSession::Impl : ScriptHost {
         window = openWindow(wo);
         GLFWwindow* w = window->handle();
         glfwSwapInterval(0);  // frames are paced by maxFps, not by the display
-        glfwSetWindowUserPointer(w, this);
-        // Installed before ImGui's, which chain to them.
-        glfwSetKeyCallback(w, [](GLFWwindow* win, int key, int, int action, int) {
-            Impl* self = static_cast<Impl*>(glfwGetWindowUserPointer(win));
-            ++self->events;
-            if (action == GLFW_PRESS) self->keysPressed.push_back(key);
-        });
-        glfwSetScrollCallback(w, [](GLFWwindow* win, double, double dy) {
-            Impl* self = static_cast<Impl*>(glfwGetWindowUserPointer(win));
-            ++self->events;
-            self->scroll += dy;
-        });
-        glfwSetCursorPosCallback(w, [](GLFWwindow* win, double, double) {
-            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
-        });
-        glfwSetMouseButtonCallback(w, [](GLFWwindow* win, int, int, int) {
-            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
-        });
-        glfwSetFramebufferSizeCallback(w, [](GLFWwindow* win, int, int) {
-            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
-        });
-        glfwSetWindowRefreshCallback(w, [](GLFWwindow* win) {
-            ++static_cast<Impl*>(glfwGetWindowUserPointer(win))->events;
-        });
+        input = std::make_unique<WindowInput>(*window);
         compositor = std::make_unique<Compositor>(*window, scene);
         uploader = std::make_unique<CacheMeshUploader>(window->gl(), scene.bounds.center());
         // Until the first snapshot, every light has an empty mesh: the
@@ -191,7 +165,6 @@ struct ViewSession::Impl : ScriptHost {
 
     ~Impl() override {
         refinement.reset();  // finishes a save, stops the worker
-        glfwSetWindowUserPointer(window->handle(), nullptr);
     }
 
     double now() const { return secondsBetween(t0, Clock::now()); }
@@ -257,72 +230,30 @@ struct ViewSession::Impl : ScriptHost {
 
     // Keys and the mouse, unless the controls have them.
     void handleInput(double dt, int fbWidth, int fbHeight) {
-        GLFWwindow* w = window->handle();
-        const bool keyboard = !ui->wantsKeyboard();
-        const bool mouse = !ui->wantsMouse();
-        for (int key : keysPressed) {
-            if (!keyboard) break;
+        const WindowInput::Frame in =
+            input->take(!ui->wantsKeyboard(), !ui->wantsMouse(), walk.camera().fovYDegrees, fbWidth, fbHeight);
+        for (int key : in.keysPressed) {
             if (key == GLFW_KEY_R || key == GLFW_KEY_HOME) walk.reset();
             if (key == GLFW_KEY_P) setPaused(!refinement->paused());
             if (key == GLFW_KEY_TAB) state.showUi = !state.showUi;
             if (key == GLFW_KEY_F12) screenshots.push_back(ui->screenshotPath());
         }
-        keysPressed.clear();
-        if (mouse && scroll != 0) walk.setSpeed(walk.speed() * std::pow(1.25, scroll));
-        scroll = 0;
-
-        WalkInput in;
-        if (keyboard) {
-            auto down = [&](int k) { return glfwGetKey(w, k) == GLFW_PRESS ? 1.0 : 0.0; };
-            in.forward = down(GLFW_KEY_W) + down(GLFW_KEY_UP) - down(GLFW_KEY_S) - down(GLFW_KEY_DOWN);
-            in.right = down(GLFW_KEY_D) + down(GLFW_KEY_RIGHT) - down(GLFW_KEY_A) - down(GLFW_KEY_LEFT);
-            in.up = down(GLFW_KEY_E) + down(GLFW_KEY_PAGE_UP) - down(GLFW_KEY_Q) - down(GLFW_KEY_PAGE_DOWN);
-            if (down(GLFW_KEY_LEFT_SHIFT) || down(GLFW_KEY_RIGHT_SHIFT)) in.speedFactor = 4;
-            if (down(GLFW_KEY_LEFT_CONTROL) || down(GLFW_KEY_RIGHT_CONTROL)) in.speedFactor = 0.25;
-        }
-        const bool pressed = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS ||
-                             glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
-        double x, y;
-        glfwGetCursorPos(w, &x, &y);
-        if (pressed && (dragging || mouse)) {
-            if (dragging) {
-                in.lookRight = x - dragX;
-                in.lookDown = y - dragY;
-            }
-            dragging = true;
-            dragX = x, dragY = y;
-        } else {
-            dragging = false;
-        }
-        int winWidth, winHeight;
-        glfwGetWindowSize(w, &winWidth, &winHeight);
-        const double radiansPerPixel = glm::radians(walk.camera().fovYDegrees) / std::max(winHeight, 1);
-        walk.update(in, dt, radiansPerPixel);
-
-        // Illuminance under the mouse (framebuffer pixels can differ from window units).
+        if (in.scroll != 0) walk.setSpeed(walk.speed() * std::pow(1.25, in.scroll));
+        walk.update(in.walk, dt, in.radiansPerPixel);
+        // Illuminance under the mouse, in lux mode.
         cursorLux.reset();
-        if (state.mode == DisplayMode::Illuminance && mouse && x >= 0 && y >= 0 && x < winWidth && y < winHeight &&
-            glfwGetWindowAttrib(w, GLFW_HOVERED)) {
-            cursorPixel = {int(x * fbWidth / std::max(winWidth, 1)), int(y * fbHeight / std::max(winHeight, 1))};
-        } else {
-            cursorPixel.reset();
-        }
+        cursorPixel = state.mode == DisplayMode::Illuminance ? in.cursorPixel : std::nullopt;
     }
+
     std::optional<std::pair<int, int>> cursorPixel;
 
     // Does this iteration need a frame? Idle frames are skipped, so the
     // worker has the processor while nothing on screen would change.
     bool wantsFrame(bool newSnapshot) {
-        GLFWwindow* w = window->handle();
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
-        bool active = newSnapshot || events != eventsDrawn || dragging ||
+        const bool active = newSnapshot || input->active() ||
                       (player && !player->finished()) || !screenshots.empty() || meter.pending() || lightChangedAt ||
                       refinement->saving() || quitRequested || stats.firstFrame() < 0;
-        if (!active && glfwGetWindowAttrib(w, GLFW_FOCUSED)) {
-            for (int k : {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E, GLFW_KEY_UP,
-                          GLFW_KEY_DOWN, GLFW_KEY_LEFT, GLFW_KEY_RIGHT, GLFW_KEY_PAGE_UP, GLFW_KEY_PAGE_DOWN})
-                active = active || glfwGetKey(w, k) == GLFW_PRESS;
-        }
         if (active) settleFrames = kSettleFrames;
         return active || settleFrames > 0;
     }
@@ -433,7 +364,7 @@ struct ViewSession::Impl : ScriptHost {
         const auto frameStart = Clock::now();
         const double dt = std::min(secondsBetween(lastFrame, frameStart), 0.25);
         lastFrame = frameStart;
-        eventsDrawn = events;
+        input->markDrawn();
         --settleFrames;
 
         // Input, the script and the controls, in that order, before the
