@@ -91,7 +91,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->rounds = cache_.rounds();
     snap->directError = cache_.estimatedError(view);
     if (indirect_) {
-        snap->indirect = indirect_->copyMeshes();
+        snap->indirect = indirect_->displayMeshes();
         snap->bounces = indirect_->bounces();
         snap->bouncesFinished = indirect_->finished();
         snap->indirectVertices = indirect_->totalVertices();

@@ -133,6 +133,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // Each bounce draws its own jitter. While vertices have no sample, a
     // round only samples them (IrradianceCache::refine).
     RefineReport report = caches_[slot]->refine(gather, budget, seedFor(seed, 0x1d1ec7u, uint32_t(bounce)), view);
+    if (bounce == 1 && caches_[0]->unsampledCount() == 0) regathering_ = false;
     if (first) {
         report.candidates = std::max<size_t>(report.candidates, 1);  // the first pass goes on
         return report;
@@ -163,6 +164,7 @@ int IndirectSolver::firstPassBounce() const {
 void IndirectSolver::restart(IndirectEstimator& estimator) {
     if (caches_.empty()) return;
     caches_.front()->resetSamples();
+    regathering_ = true;
     finished_ = 0;
     directRefreshed_ = true;  // the source about to be built is direct light as it is now
     if (!sourceBuilt_.empty() && sourceBuilt_[0]) {
@@ -218,6 +220,26 @@ IrradianceMeshCopy IndirectSolver::copyMesh(int bounce) const {
 std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
     std::vector<IrradianceMeshCopy> v;
     for (int b = 1; b <= started(); ++b) v.push_back(copyMesh(b));
+    return v;
+}
+
+std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
+    // The bounces whose first pass is complete; a bounce 1 being gathered
+    // again (restart) counts, its copies showing old values until new ones.
+    int complete = 0;
+    while (complete < started() && (caches_[size_t(complete)]->unsampledCount() == 0 || (complete == 0 && regathering_)))
+        ++complete;
+    std::vector<IrradianceMeshCopy> v;
+    for (int b = 1; b <= complete; ++b) v.push_back(copyMesh(b));
+    if (complete == 0 || complete >= settings_.bounces) return v;
+    // The bounces still to come, each ā times the one before: Σ_{j=1..N−k} ā^j
+    // times the last complete bounce k.
+    const double a = std::clamp(settings_.albedo, 0.0, 0.999);
+    double tail = 0, term = 1;
+    for (int j = 1; j <= settings_.bounces - complete; ++j) tail += term *= a;
+    IrradianceMeshCopy rest = v.back();
+    for (Rgb& e : rest.irradiance) e *= tail;
+    v.push_back(std::move(rest));
     return v;
 }
 

@@ -97,6 +97,13 @@ public:
     // One mesh per started bounce, bounce 1 first, hidden vertices filled
     // (fillHiddenVertices): what is shown and what the next bounce reflects.
     std::vector<IrradianceMeshCopy> copyMeshes() const;
+    // What the image shows while bounces are missing: the bounces whose
+    // first pass is complete and, for the ones still to come, one more mesh,
+    // the last complete bounce k times Σ_{j=1..N−k} ā^j (each bounce carries
+    // about ā of the one before): all the light is in the image from the
+    // first bounce on, its distribution approximate until the bounces are
+    // gathered. A bounce being gathered is not shown until it is complete.
+    std::vector<IrradianceMeshCopy> displayMeshes() const;
     IrradianceMeshCopy copyMesh(int bounce) const;
     size_t totalVertices() const;
     uint64_t totalSamples() const;
@@ -120,6 +127,7 @@ private:
     int finished_ = 0;
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
+    bool regathering_ = false;       // bounce 1 gathered again since restart()
 };
 
 }  // namespace ml
