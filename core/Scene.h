@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ml {
@@ -22,6 +23,14 @@ struct Material {
     Rgb ke{0.0};   // emitted radiance, W·sr⁻¹·m⁻², leaving the front (CCW) face only
 
     bool emissive() const { return ke.r > 0 || ke.g > 0 || ke.b > 0; }
+    // A Lambertian material (no Ks) emitting `ke` from its front face.
+    static Material diffuse(std::string name, const Rgb& kd, const Rgb& ke = Rgb(0.0)) {
+        Material m;
+        m.name = std::move(name);
+        m.kd = kd;
+        m.ke = ke;
+        return m;
+    }
     bool glossy() const { return ks.r > 0 || ks.g > 0 || ks.b > 0; }
 };
 

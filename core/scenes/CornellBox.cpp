@@ -14,14 +14,6 @@ using Quad = std::array<Vec3, 4>;
 // Materials, in Scene::materials order.
 enum : uint32_t { kWhite, kRed, kGreen, kLight };
 
-Material diffuse(const char* name, const Rgb& kd, const Rgb& ke = Rgb(0.0)) {
-    Material m;
-    m.name = name;
-    m.kd = kd;
-    m.ke = ke;
-    return m;
-}
-
 Vec3 centroid(const Quad& q) { return 0.25 * (q[0] + q[1] + q[2] + q[3]); }
 
 // Appends a quad as two triangles, wound so that its front (counter-
@@ -78,10 +70,10 @@ Scene makeCornellBox() {
     Scene scene;
     scene.name = "cornell";
     scene.materials = {
-        diffuse("white", Rgb(0.725, 0.71, 0.68)),
-        diffuse("red", Rgb(0.63, 0.065, 0.05)),
-        diffuse("green", Rgb(0.14, 0.45, 0.091)),
-        diffuse("light", Rgb(0.78), Rgb(17.0, 12.0, 4.0)),
+        Material::diffuse("white", Rgb(0.725, 0.71, 0.68)),
+        Material::diffuse("red", Rgb(0.63, 0.065, 0.05)),
+        Material::diffuse("green", Rgb(0.14, 0.45, 0.091)),
+        Material::diffuse("light", Rgb(0.78), Rgb(17.0, 12.0, 4.0)),
     };
 
     // The measured corners. The block sides are the top corners dropped to

@@ -38,14 +38,6 @@ constexpr double kReferencePanelSize = 0.6;
 // The depth of the desk cluster along z: back row, partition with its gaps, front row.
 constexpr double kClusterDepth = 2 * kDeskDepth + 2 * kPartitionGap + kPartitionThickness;
 
-Material diffuse(const char* name, const Rgb& kd, const Rgb& ke = Rgb(0.0)) {
-    Material m;
-    m.name = name;
-    m.kd = kd;
-    m.ke = ke;
-    return m;
-}
-
 // The length of a row of `n` items of `size` with `gap` between neighbours.
 double rowLength(int n, double size, double gap) { return n * size + (n - 1) * gap; }
 
@@ -246,13 +238,13 @@ Scene makeOfficeScene(const OfficeSettings& s) {
     const double powerScale = (kReferencePanels * (kReferencePanelSize * kReferencePanelSize)) /
                               (panels * (s.panelSize * s.panelSize));
     scene.materials = {
-        diffuse("floor", Rgb(0.28, 0.30, 0.32)),   // grey carpet
-        diffuse("wall", Rgb(0.72, 0.70, 0.67)),    // off-white paint
-        diffuse("ceiling", Rgb(0.8)),
-        diffuse("desk", Rgb(0.60, 0.48, 0.35)),    // light wood
-        diffuse("partition", Rgb(0.30, 0.40, 0.50)),  // blue-grey fabric
-        diffuse("cabinet", Rgb(0.6)),
-        diffuse("panel", Rgb(0.8), s.panelRadiance * powerScale),  // white housing
+        Material::diffuse("floor", Rgb(0.28, 0.30, 0.32)),   // grey carpet
+        Material::diffuse("wall", Rgb(0.72, 0.70, 0.67)),    // off-white paint
+        Material::diffuse("ceiling", Rgb(0.8)),
+        Material::diffuse("desk", Rgb(0.60, 0.48, 0.35)),    // light wood
+        Material::diffuse("partition", Rgb(0.30, 0.40, 0.50)),  // blue-grey fabric
+        Material::diffuse("cabinet", Rgb(0.6)),
+        Material::diffuse("panel", Rgb(0.8), s.panelRadiance * powerScale),  // white housing
     };
 
     const double w = s.width, d = s.depth, h = s.height;
