@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <utility>
 
 namespace ml {
 
@@ -29,8 +30,7 @@ bool sameCamera(const Camera& a, const Camera& b) {
 
 }  // namespace
 
-ViewRefinement::ViewRefinement(const Scene& scene, const ViewSettings& settings, CacheMeshUploader& uploader)
-    : scene_(scene), settings_(settings), uploader_(uploader) {
+std::unique_ptr<ProgressiveSession> ViewRefinement::makeSession(const Scene& scene, const ViewSettings& settings) {
     SessionSettings ss;
     ss.cache = settings.cache;
     ss.worker = settings.worker;
@@ -38,18 +38,23 @@ ViewRefinement::ViewRefinement(const Scene& scene, const ViewSettings& settings,
     ss.cachePath = settings.cachePath;
     StopRule budget;
     budget.samples = settings.worker.maxSamples;
-    session_ = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, settings.direct, settings.indirect),
-                                                    budget);
+    auto session = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, settings.direct, settings.indirect),
+                                                        budget);
     // Each sampling thread lowers its own priority before its samplers (and
     // their GL threads) exist. Frames then take the processor when they need
     // it and refinement the rest: the frame rate does not depend on
     // refinement even where the two share too few cores (llvmpipe renders
     // both on the CPU).
-    session_->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
-    if (session_->resumed())
+    session->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
+    if (session->resumed())
         std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
-                    session_->cache().totalVertices(), static_cast<unsigned long long>(session_->cache().totalSamples()));
+                    session->cache().totalVertices(), static_cast<unsigned long long>(session->cache().totalSamples()));
+    return session;
 }
+
+ViewRefinement::ViewRefinement(std::unique_ptr<ProgressiveSession> session, const ViewSettings& settings,
+                               CacheMeshUploader& uploader)
+    : settings_(settings), uploader_(uploader), session_(std::move(session)) {}
 
 ViewRefinement::~ViewRefinement() {
     // The worker may still be saving (its helper stops it): finish that first.
@@ -176,9 +181,9 @@ bool ViewRefinement::beginSave(const std::string& path) {
 std::optional<ViewRefinement::SaveOutcome> ViewRefinement::finishSave(const Camera& camera, int width, int height) {
     if (!save_ || !save_->done.load() || uploader_.busy()) return std::nullopt;
     save_->thread.join();
-    SaveOutcome outcome{save_->path, save_->error, session_->cache().totalVertices()};
+    SaveOutcome outcome{save_->path, save_->error, session_->cache().totalVertices(), std::nullopt};
     save_.reset();
-    newFailure();  // a failure before the stop is still reported (error())
+    outcome.failure = newFailure();  // a failure before the stop is still reported
     stopWorker();
     if (error_.empty()) start(camera, width, height);
     return outcome;
@@ -192,8 +197,8 @@ void ViewRefinement::stop() {
     if (started_) session_->stop();
 }
 
-size_t ViewRefinement::saveAtExit() {
-    if (settings_.cachePath.empty() || !started_ || !error_.empty()) return 0;
+std::optional<size_t> ViewRefinement::saveAtExit() {
+    if (settings_.cachePath.empty() || !started_ || !error_.empty()) return std::nullopt;
     session_->save(settings_.cachePath);
     return session_->cache().totalVertices();
 }

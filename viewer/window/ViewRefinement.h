@@ -35,11 +35,19 @@ public:
         std::string path;
         std::string error;  // empty: saved
         size_t vertices = 0;
+        // The worker's failure before the save stopped it, seen here first
+        // (as newFailure() would have said it): the caller reports it.
+        std::optional<std::string> failure;
     };
 
-    // Makes the session (resuming settings.cachePath if it exists); the
-    // worker starts with start(). `uploader` copies snapshots to the GPU.
-    ViewRefinement(const Scene& scene, const ViewSettings& settings, CacheMeshUploader& uploader);
+    // The session for these settings, resuming settings.cachePath if it
+    // exists (a cache that cannot be resumed throws InputError). Made before
+    // the window opens, so that such an error comes first.
+    static std::unique_ptr<ProgressiveSession> makeSession(const Scene& scene, const ViewSettings& settings);
+    // Drives `session`; the worker starts with start(). `uploader` copies
+    // snapshots to the GPU.
+    ViewRefinement(std::unique_ptr<ProgressiveSession> session, const ViewSettings& settings,
+                   CacheMeshUploader& uploader);
     ~ViewRefinement();  // finishes a save in progress, then stops the worker
 
     const ProgressiveSession& session() const { return *session_; }
@@ -70,18 +78,21 @@ public:
     bool beginSave(const std::string& path);
     bool saving() const { return save_ != nullptr; }
     // Once the file is written and no snapshot of the old worker is being
-    // copied: ends the save and starts a new worker on the same cache (a
-    // resumed cache refines exactly as if never saved) at this camera.
+    // copied: ends the save and, unless the old worker failed, starts a new
+    // one on the same cache (a resumed cache refines exactly as if never
+    // saved) at this camera.
     std::optional<SaveOutcome> finishSave(const Camera& camera, int width, int height);
 
     // At the end of the frame loop: joins a save and stops the worker (then
     // look at newFailure()).
     void stop();
     // Saves settings.cachePath, if given, when a worker ran and nothing
-    // failed; returns the vertices saved (0: nothing saved).
-    size_t saveAtExit();
+    // failed; returns the vertices saved (none: nothing saved).
+    std::optional<size_t> saveAtExit();
 
 private:
+    // A cache being saved: the worker is stopped and the file written on
+    // this helper thread, so frames go on meanwhile.
     struct SaveJob {
         std::string path;
         std::thread thread;
@@ -92,10 +103,11 @@ private:
     void stopWorker();
     void noteSent(const Camera& camera, int width, int height);
 
-    const Scene& scene_;
     const ViewSettings& settings_;
     CacheMeshUploader& uploader_;
     std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+    // The cache, its indirect solver and the worker refining them; a
+    // worker made again after a save continues the same cache and solver.
     std::unique_ptr<ProgressiveSession> session_;
     bool started_ = false;
     mutable CacheWorker::Reader reader_;

@@ -1,32 +1,33 @@
 #include "ViewSession.h"
 
-#include "Ui.h"
-#include "core/Error.h"
-#include "core/image/Image.h"
-#include "GlfwWindow.h"
-#include "FrameStatistics.h"
 #include "FrameMeter.h"
+#include "FrameStatistics.h"
+#include "GlfwWindow.h"
 #include "InterruptGuard.h"
 #include "Screenshot.h"
-#include "WindowInput.h"
+#include "Ui.h"
 #include "ViewRefinement.h"
+#include "WalkCamera.h"
+#include "WindowInput.h"
+#include "WireframeColours.h"
+#include "core/Error.h"
+#include "core/image/ToneMap.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
-#include "core/image/ToneMap.h"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <filesystem>
+#include <cstdlib>
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 namespace ml {
 
@@ -38,21 +39,6 @@ double secondsBetween(Clock::time_point a, Clock::time_point b) { return std::ch
 
 // Frames drawn after the last activity, so ImGui settles (hover, fades).
 constexpr int kSettleFrames = 3;
-// Distinct colours for the meshes' wireframes: hues a golden angle apart.
-Rgb meshColour(size_t i) {
-    const double h = std::fmod(0.08 + 0.6180339887 * double(i), 1.0) * 6.0;
-    const double s = 0.7, v = 1.0;
-    const int sector = int(h);
-    const double f = h - sector, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
-    switch (sector % 6) {
-        case 0: return {v, t, p};
-        case 1: return {q, v, p};
-        case 2: return {p, v, t};
-        case 3: return {p, q, v};
-        case 4: return {t, p, v};
-        default: return {v, p, q};
-    }
-}
 
 // What the user set LP_NUM_THREADS to, read before anything in this
 // process can set it (OsMesaContext does).
@@ -120,10 +106,11 @@ struct ViewSession::Impl : ScriptHost {
     double messageUntil = 0;
     int exitCode = 0;
 
-    // Input between frames (GLFW callbacks) and the mouse drag.
+    // Between frames (the GLFW callbacks and the drag are WindowInput's).
     int settleFrames = kSettleFrames;
     Clock::time_point lastFrame = Clock::now();
-    std::optional<double> cursorLux;
+    std::optional<std::pair<int, int>> cursorPixel;  // lux mode: the pixel under the mouse
+    std::optional<double> cursorLux;                 // and its illuminance, read by the last frame
     size_t drawnTriangles = 0;  // by the last frame
     DisplayMode shownMode = DisplayMode::Final;  // the last frame's
 
@@ -141,6 +128,8 @@ struct ViewSession::Impl : ScriptHost {
             lightPowers.push_back(power);
             lightInfo.push_back({l.name, l.radiance, area, power, illuminanceLux(power, settings.efficacy)});
         }
+        // Before the window: a cache that cannot be resumed is refused first.
+        std::unique_ptr<ProgressiveSession> session = ViewRefinement::makeSession(scene, settings);
         if (settings.script) player.emplace(*settings.script);
 
         WindowOptions wo;
@@ -158,7 +147,7 @@ struct ViewSession::Impl : ScriptHost {
         emptyMeshes.resize(scene.lights.size());
         uploader->start(emptyMeshes, {});
         uploader->step(1e9);
-        refinement = std::make_unique<ViewRefinement>(scene, settings, *uploader);
+        refinement = std::make_unique<ViewRefinement>(std::move(session), settings, *uploader);
         ui = std::make_unique<Ui>(w, settings.screenshotPath,
                                   settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
     }
@@ -171,13 +160,16 @@ struct ViewSession::Impl : ScriptHost {
 
     // --- The worker ---------------------------------------------------------------
 
-    void checkWorker() {
-        if (const std::optional<std::string> failure = refinement->newFailure()) {
-            std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", failure->c_str());
-            if (player) {
-                exitCode = 1;
-                quitRequested = true;
-            }
+    void checkWorker() { reportFailure(refinement->newFailure()); }
+
+    // A worker's failure, the first time it is seen: on stderr (the panel
+    // shows refinement->error()); a script ends with status 1.
+    void reportFailure(const std::optional<std::string>& failure) {
+        if (!failure) return;
+        std::fprintf(stderr, "\nmeshlight: refinement failed: %s\n", failure->c_str());
+        if (player) {
+            exitCode = 1;
+            quitRequested = true;
         }
     }
 
@@ -193,7 +185,7 @@ struct ViewSession::Impl : ScriptHost {
             std::fprintf(stderr, "meshlight: could not save the cache: %s\n", saved->error.c_str());
             if (player) exitCode = 1, quitRequested = true;
         }
-        checkWorker();  // a failure before the stop is still reported
+        reportFailure(saved->failure);  // a failure before the stop is still reported
     }
 
     // --- ScriptHost -----------------------------------------------------------------
@@ -245,15 +237,13 @@ struct ViewSession::Impl : ScriptHost {
         cursorPixel = state.mode == DisplayMode::Illuminance ? in.cursorPixel : std::nullopt;
     }
 
-    std::optional<std::pair<int, int>> cursorPixel;
-
     // Does this iteration need a frame? Idle frames are skipped, so the
     // worker has the processor while nothing on screen would change.
     bool wantsFrame(bool newSnapshot) {
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
-        const bool active = newSnapshot || input->active() ||
-                      (player && !player->finished()) || !screenshots.empty() || meter.pending() || lightChangedAt ||
-                      refinement->saving() || quitRequested || stats.firstFrame() < 0;
+        const bool active = newSnapshot || input->active() || (player && !player->finished()) ||
+                            !screenshots.empty() || meter.pending() || lightChangedAt || refinement->saving() ||
+                            quitRequested || stats.firstFrame() < 0;
         if (active) settleFrames = kSettleFrames;
         return active || settleFrames > 0;
     }
@@ -265,17 +255,18 @@ struct ViewSession::Impl : ScriptHost {
         m.lightInfo = lightInfo;
         m.indirectWeight = indirectWeight(lightControls, lightPowers);
         UiStats& s = m.stats;
+        const ViewRefinement::Shown& shown = refinement->shown();
         s.elapsed = now();
-        s.snapshot = refinement->shown().any;
-        s.workerSeconds = refinement->shown().seconds;
-        s.vertices = refinement->shown().vertices;
-        s.triangles = refinement->shown().triangles;
+        s.snapshot = shown.any;
+        s.workerSeconds = shown.seconds;
+        s.vertices = shown.vertices;
+        s.triangles = shown.triangles;
         s.drawnTriangles = drawnTriangles;
-        s.indirectMeshes = refinement->shown().indirectMeshes;
-        s.samples = refinement->shown().samples;
-        s.rounds = refinement->shown().rounds;
-        s.estimatedError = refinement->shown().estimatedError;
-        s.converged = refinement->shown().converged;
+        s.indirectMeshes = shown.indirectMeshes;
+        s.samples = shown.samples;
+        s.rounds = shown.rounds;
+        s.estimatedError = shown.estimatedError;
+        s.converged = shown.converged;
         s.finished = refinement->finished();
         s.paused = refinement->paused();
         s.saving = refinement->saving();
@@ -288,13 +279,7 @@ struct ViewSession::Impl : ScriptHost {
         m.unit = settings.unit;
         m.efficacy = settings.efficacy;
         m.supersample = settings.supersample;
-        const GpuCacheMeshes& meshes = uploader->front();
-        for (size_t i = 0; i < meshes.directCount() + meshes.indirectCount(); ++i)
-            m.meshColours.emplace_back(
-                i < scene.lights.size()     ? concat("light ", i, " '", scene.lights[i].name, "'")
-                : i < meshes.directCount() ? std::string("the lights' shared mesh")
-                                           : concat("indirect, bounce ", i - meshes.directCount() + 1),
-                meshColour(i));
+        m.meshColours = meshLegend(scene, uploader->front());
         if (refinement->session().cache().hasSharedMesh())
             m.sharedLights = concat(
                 "Direct light: ", refinement->session().coverage().describe(),
@@ -350,6 +335,33 @@ struct ViewSession::Impl : ScriptHost {
             stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError, now);
     }
 
+    // The image in the window's back buffer: composited, metered when asked,
+    // tone-mapped, the wireframe over it, the lux under the mouse read back.
+    // Returns its milliseconds.
+    double drawImage(int fbWidth, int fbHeight) {
+        const auto composeStart = Clock::now();
+        const LightWeights weights = compositeWeights(state, lightControls, lightPowers);
+        const CompositeQuantity quantity = compositeQuantity(state.mode);
+        compositor->compose(walk.camera(), uploader->front(), weights,
+                            compositeSettings(fbWidth, fbHeight, quantity));
+        drawnTriangles = compositor->drawnTriangles();
+        meter.meter(*compositor, uploader->front(), walk.camera(), state, lightControls, lightPowers, weights,
+                    compositeSettings(fbWidth, fbHeight, quantity));
+        DisplaySettings ds;
+        ds.exposure = meter.exposureScale() * std::exp2(state.exposureEV);
+        ds.op = state.op;
+        ds.luxMin = state.luxMin;
+        ds.luxMax = state.luxMax;
+        ds.contours = state.contours;
+        compositor->display(0, ds);
+        if (state.wireframe) {
+            const std::vector<Rgb> colours = meshColours(uploader->front());
+            if (!colours.empty()) compositor->drawWireframe(0, uploader->front(), colours);
+        }
+        if (cursorPixel) cursorLux = compositor->readIlluminance(cursorPixel->first, cursorPixel->second);
+        return 1e3 * secondsBetween(composeStart, Clock::now());
+    }
+
     // One pass of the loop: checks the worker and snapshots, then draws a
     // frame when something could have changed.
     void iterate() {
@@ -384,7 +396,7 @@ struct ViewSession::Impl : ScriptHost {
             meter.requestLuxRange();
         shownMode = state.mode;
         // The worker starts once the first frame's camera is known (a
-        // script's first keyframe), so its first view is the one refinement->shown().
+        // script's first keyframe), so its first view is the one shown.
         if (!refinement->started() && !refinement->saving())
             refinement->start(walk.camera(), fbWidth, fbHeight);
         else
@@ -395,30 +407,7 @@ struct ViewSession::Impl : ScriptHost {
             if (state.luxAuto) meter.requestLuxRange();
         }
 
-        // The image.
-        const auto composeStart = Clock::now();
-        const LightWeights weights = compositeWeights(state, lightControls, lightPowers);
-        const CompositeQuantity quantity = compositeQuantity(state.mode);
-        compositor->compose(walk.camera(), uploader->front(), weights,
-                            compositeSettings(fbWidth, fbHeight, quantity));
-        drawnTriangles = compositor->drawnTriangles();
-        meter.meter(*compositor, uploader->front(), walk.camera(), state, lightControls, lightPowers, weights,
-                    compositeSettings(fbWidth, fbHeight, quantity));
-        DisplaySettings ds;
-        ds.exposure = meter.exposureScale() * std::exp2(state.exposureEV);
-        ds.op = state.op;
-        ds.luxMin = state.luxMin;
-        ds.luxMax = state.luxMax;
-        ds.contours = state.contours;
-        compositor->display(0, ds);
-        if (state.wireframe) {
-            std::vector<Rgb> colours;
-            for (size_t i = 0; i < uploader->front().directCount() + uploader->front().indirectCount(); ++i)
-                colours.push_back(meshColour(i));
-            if (!colours.empty()) compositor->drawWireframe(0, uploader->front(), colours);
-        }
-        if (cursorPixel) cursorLux = compositor->readIlluminance(cursorPixel->first, cursorPixel->second);
-        const double composeMs = 1e3 * secondsBetween(composeStart, Clock::now());
+        const double composeMs = drawImage(fbWidth, fbHeight);
         ui->render();
         writeScreenshots(fbWidth, fbHeight);
         glfwSwapBuffers(window->handle());
@@ -469,8 +458,8 @@ struct ViewSession::Impl : ScriptHost {
         stats.printSummary();
         refinement->stop();
         checkWorker();
-        if (const size_t saved = refinement->saveAtExit())
-            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(), saved);
+        if (const std::optional<size_t> saved = refinement->saveAtExit())
+            std::printf("cache: saved to %s (%zu vertices)\n", settings.cachePath.c_str(), *saved);
         if (player && !player->finished() && exitCode == 0 && !interrupted)
             std::printf("script: the window was closed at %s\n", player->where().c_str());
         return interrupted && exitCode == 0 ? 130 : exitCode;

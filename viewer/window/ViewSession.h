@@ -21,9 +21,9 @@
 
 #include "DisplayState.h"
 #include "ViewScript.h"
-#include "WalkCamera.h"
 #include "cache/CacheWorker.h"
 #include "cache/IrradianceCache.h"
+#include "core/Camera.h"
 #include "core/image/Illuminance.h"
 #include "gpu_sampling/SamplerFactory.h"
 
