@@ -3,6 +3,7 @@
 #include "BenchConvergence.h"
 #include "BenchDirect.h"
 #include "BenchIndirect.h"
+#include "BenchLights.h"
 #include "BenchRun.h"
 #include "BenchScaling.h"
 #include "BenchView.h"
@@ -162,6 +163,25 @@ std::vector<ReportSection> reportSections() {
               {"config", "proxy_triangles", "drawn_triangles", "setup_ms", "draw_ms", "readback_ms", "total_ms",
                "rel_rms_pct", "gather_rel_rms_pct", "rel_rms_walls_pct", "rel_rms_blocks_pct",
                "rel_rms_corners_pct"}},
+         }},
+        {"lights", "Many lights: time to an error level as the lights multiply",
+         "The office with 3, 12, 48 and 192 ceiling panels of the same total power, full global illumination: "
+         "Meshlight's progressive session composited at fixed times and the path tracer (depth 8) at doubling "
+         "samples per pixel, against a path-traced reference, the error corrected for the reference's own noise; "
+         "the time to 10%, 5% and 2% for each, their ratio, the exponent of that time in the number of lights, and "
+         "memory per scene.",
+         runBenchLights, "lights_summary.md",
+         {
+             {"lights_error_vs_time.png",
+              "Relative RMSE (the reference's noise taken out) against wall-clock time, Meshlight (solid) and the "
+              "path tracer (dashed) per scene.",
+              {"lights_checkpoints.csv"}},
+             {"lights_time_to_level.png", "Time to each error level against the number of lights.",
+              {"lights_summary.csv", "lights_fits.csv"}},
+         },
+         {
+             {"lights_targets.csv", "Targets of the many-lights issue.", {}},
+             {"lights_summary.csv", "Time to each level, Meshlight and the path tracer.", {}},
          }},
     };
 }

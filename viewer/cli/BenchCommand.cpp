@@ -7,6 +7,7 @@
 #include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
 #include "viewer/bench/BenchIndirect.h"
+#include "viewer/bench/BenchLights.h"
 #include "viewer/bench/BenchOptions.h"
 #include "viewer/bench/BenchReport.h"
 #include "viewer/bench/BenchScaling.h"
@@ -19,7 +20,7 @@ namespace ml {
 namespace {
 
 // More benches arrive with later issues; each adds itself here.
-const char* const kBenches = "direct, scaling, convergence, view, indirect, report";
+const char* const kBenches = "direct, scaling, convergence, view, indirect, lights, report";
 
 // What a bench's --help says of the options every bench takes: the same
 // options, in each bench's own words.
@@ -144,6 +145,11 @@ int runBench(const std::vector<std::string>& args) {
                          {"CI size: fewer points, passes and configurations, coarse voxels and proxies",
                           "points, jitter and path tracer seed; the same seed repeats a run"},
                          rest, runBenchIndirect);
+    if (name == "lights")
+        return runCommon(name,
+                         {"CI size: 3 and 12 panels at 96x54, 5 s each, a 512-spp reference",
+                          "jitter seed of the cache's sampler and the path tracer's streams"},
+                         rest, runBenchLights);
     if (name == "view") {
         CommonHelp help{"CI size: 4 s per scenario, 8 light changes", "the worker's jitter seed"};
         help.headless = false;  // it opens a GLFW window, as `view` does

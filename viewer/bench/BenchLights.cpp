@@ -1,0 +1,977 @@
+#include "BenchLights.h"
+
+#include "BenchRun.h"
+#include "BenchStatistics.h"
+#include "BenchTable.h"
+#include "Gnuplot.h"
+#include "PowerLawFit.h"
+
+#include "cache/IrradianceCache.h"
+#include "cache/ProgressiveSession.h"
+#include "core/Error.h"
+#include "core/Random.h"
+#include "core/image/Image.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "core/scenes/OfficeScene.h"
+#include "gpu_sampling/SamplerFactory.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "viewer/compositor/Compositor.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+namespace ml {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// --- Targets and settings ----------------------------------------------------------
+
+// The error levels each curve is read at (relative RMSE, noise-corrected).
+const std::vector<double> kLevels = {0.10, 0.05, 0.02};
+
+// The many-lights issue's targets at 12 panels: each level within its time,
+// and each at least kTargetSpeedup times faster than the path tracer; with
+// 48 and 192 panels, each level within kTargetGrowth times the 12-panel time.
+struct TimeTarget {
+    double level;
+    double seconds;
+};
+const std::vector<TimeTarget> kTimeTargets = {{0.10, 5}, {0.05, 15}, {0.02, 60}};
+constexpr size_t kTargetLights = 12;
+constexpr double kTargetSpeedup = 3;
+constexpr double kTargetGrowth = 2;
+
+// As `meshlight reference` renders by default: emission, direct light and 7
+// indirect bounces, far more than the office's albedo leaves visible.
+constexpr int kMaxDepth = 8;
+// Sub-pixels per pixel side of the compositor: the production default (render --supersample).
+constexpr int kSupersample = 4;
+// The path tracer's curve starts at 2 samples per pixel, its least (the two
+// halves estimate its noise).
+constexpr int kFirstSpp = 2;
+
+// One office: NX × NZ panels of `panelSize` metres (OfficeScene.h).
+struct OfficeVariant {
+    std::string label;  // "4x3": a cell of the tables, a part of file names
+    int panelsX, panelsZ;
+    double panelSize;
+    size_t lights() const { return size_t(panelsX) * size_t(panelsZ); }
+};
+
+struct Workload {
+    int width, height;                // pixels
+    double seconds;                   // Meshlight's budget; the path tracer stops past it
+    std::vector<double> checkpoints;  // s since the cache was made: a snapshot composited at each
+    // The reference's samples per pixel. The office is mostly lit
+    // indirectly (light bounces off the ceiling and walls), so the path
+    // tracer is noisy: measured on 2 cores at 320×180, 8.5 samples per pixel
+    // per second and a relative noise (as the error is measured, see
+    // relativeNoise) of 8.8% at 256 spp, falling as 1/√spp. 2048 spp (about
+    // 4 minutes per scene) leave ~3%, a third of the 10% level; 2% would
+    // need ~20,000 spp (40 minutes per scene). The correction (errorAgainst)
+    // removes the reference's noise from every error, pooled over every
+    // pixel, so the lower levels are measured all the same.
+    int referenceSpp;
+    std::vector<OfficeVariant> offices;
+};
+
+Workload workloadFor(bool quick) {
+    if (quick) return {96, 54, 5, {0.5, 1, 2, 3, 5}, 512, {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}}};
+    // 5, 15 and 60 s join the times, to read the targets off directly.
+    return {320,
+            180,
+            60,
+            {0.5, 1, 2, 3, 5, 8, 12, 15, 20, 30, 45, 60},
+            2048,
+            {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}, {"8x6", 8, 6, 0.6}, {"16x12", 16, 12, 0.4}}};
+}
+
+// --- Memory ------------------------------------------------------------------------
+
+// A "Key:   1234 kB" field of /proc/self/status, in bytes; 0 when unreadable.
+size_t statusBytes(const std::string& key) {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.compare(0, key.size() + 1, key + ":") == 0) return size_t(std::atoll(line.c_str() + key.size() + 1)) * 1024;
+    return 0;
+}
+
+// Sets the kernel's peak resident set of this process (VmHWM) back to the
+// current resident set (Linux 4.0 and later: "5" into /proc/self/clear_refs),
+// so the peak read later is the peak since now. False when refused: the
+// peak is then the process's since it started.
+bool resetPeakResident() {
+    const int fd = ::open("/proc/self/clear_refs", O_WRONLY);
+    if (fd < 0) return false;
+    const bool ok = ::write(fd, "5", 1) == 1;
+    ::close(fd);
+    return ok;
+}
+
+// --- Error against a noisy reference ------------------------------------------------
+
+// A path-traced reference and its standard error, per pixel and channel.
+struct Reference {
+    ImageRgb radiance, standardError;
+    int spp = 0;
+    double seconds = 0;
+    double noise = 0;  // relativeNoise(standardError, radiance)
+};
+
+// The weight of a squared difference in ml::relativeRmse.
+inline double relativeWeight(double reference) { return 1.0 / (reference * reference + 0.01); }
+
+// sqrt(mean σ²/(r² + 0.01)): a noise image measured as relativeRmse measures
+// an error, σ a standard error per pixel and channel, r the reference.
+double relativeNoise(const ImageRgb& sigma, const ImageRgb& reference) {
+    ML_ASSERT(sigma.data.size() == reference.data.size(), "noise image of ", sigma.width, "x", sigma.height,
+              " for a ", reference.width, "x", reference.height, " reference");
+    double sum = 0;
+    for (size_t i = 0; i < sigma.data.size(); ++i)
+        sum += double(sigma.data[i]) * sigma.data[i] * relativeWeight(reference.data[i]);
+    return sigma.data.empty() ? 0.0 : std::sqrt(sum / double(sigma.data.size()));
+}
+
+struct ImageError {
+    double raw = 0;        // ml::relativeRmse against the reference
+    double corrected = 0;  // the same with the reference's noise taken out
+};
+
+// Against a reference r with noise σ, E[(x − r)²] = (x − R)² + σ² for the
+// true image R (r's noise is independent of x), so mean((x − r)² − σ²)
+// weighted as relativeRmse weighs it estimates the squared error against R.
+// Pooled over every pixel and channel it is precise even where σ is
+// comparable to the error; it may come out below 0 only where the error is
+// far below σ, hence the max.
+ImageError errorAgainst(const ImageRgb& x, const Reference& ref) {
+    const ImageRgb& r = ref.radiance;
+    if (x.width != r.width || x.height != r.height)
+        throw InputError(concat("image sizes differ: ", x.width, "x", x.height, " against a ", r.width, "x",
+                                r.height, " reference"));
+    double squared = 0, noise = 0;
+    for (size_t i = 0; i < r.data.size(); ++i) {
+        const double w = relativeWeight(r.data[i]), d = double(x.data[i]) - r.data[i],
+                     s = ref.standardError.data[i];
+        squared += d * d * w;
+        noise += s * s * w;
+    }
+    const double n = double(std::max<size_t>(1, r.data.size()));
+    return {std::sqrt(squared / n), std::sqrt(std::max(0.0, (squared - noise) / n))};
+}
+
+// --- The path tracer -----------------------------------------------------------------
+
+PathTracerSettings tracerSettings(uint32_t seed) {
+    PathTracerSettings s;
+    s.maxDepth = kMaxDepth;
+    s.threads = 0;  // every core
+    s.seed = seed;
+    return s;
+}
+
+Reference renderReference(const EmbreeScene& rays, const Camera& camera, const Workload& work, uint32_t seed) {
+    const Clock::time_point start = Clock::now();
+    const PathTracer tracer(rays, tracerSettings(seed));
+    ReferenceImage image = tracer.render(camera, work.width, work.height, work.referenceSpp);
+    Reference r;
+    r.radiance = std::move(image.radiance);
+    r.standardError = std::move(image.standardError);
+    r.spp = work.referenceSpp;
+    r.seconds = secondsSince(start);
+    r.noise = relativeNoise(r.standardError, r.radiance);
+    return r;
+}
+
+// The path tracer's image at doubling samples per pixel. Each step renders
+// as many new samples per pixel as the image already has, from fresh streams
+// (another seed), and averages: the image at N samples costs one N-sample
+// render and is the same estimator. Its variance per pixel and channel is
+// combined from each step's halves, for the tracer's own estimate of its
+// error. (BenchConvergence.cpp has a depth-1 twin; both could move to the
+// bench kit.)
+class DoublingPathTracer {
+public:
+    DoublingPathTracer(const EmbreeScene& rays, const Camera& camera, int width, int height, uint32_t seed)
+        : rays_(rays), camera_(camera), width_(width), height_(height), seed_(seed) {}
+
+    void step() {
+        const Clock::time_point start = Clock::now();
+        const PathTracer tracer(rays_, tracerSettings(seedFor(seed_, uint32_t(steps_++))));
+        const ReferenceImage r = tracer.render(camera_, width_, height_, next_);
+        if (spp_ == 0) {
+            image_ = r.radiance;
+            variance_ = r.standardError;
+            for (float& v : variance_.data) v *= v;
+        } else {
+            const double wOld = double(spp_) / double(spp_ + next_), wNew = double(next_) / double(spp_ + next_);
+            for (size_t i = 0; i < image_.data.size(); ++i) {
+                const double se = r.standardError.data[i];
+                image_.data[i] = float(wOld * image_.data[i] + wNew * r.radiance.data[i]);
+                variance_.data[i] = float(wOld * wOld * variance_.data[i] + wNew * wNew * se * se);
+            }
+        }
+        spp_ += next_;
+        next_ = spp_;
+        seconds_ += secondsSince(start);
+    }
+    int spp() const { return spp_; }
+    double seconds() const { return seconds_; }  // wall time of every step so far
+    const ImageRgb& image() const { return image_; }
+    // Its own relative noise (relativeNoise), weighted by `reference`.
+    double ownNoise(const ImageRgb& reference) const {
+        ImageRgb sigma = variance_;
+        for (float& v : sigma.data) v = std::sqrt(v);
+        return relativeNoise(sigma, reference);
+    }
+
+private:
+    const EmbreeScene& rays_;
+    Camera camera_;
+    int width_, height_;
+    uint32_t seed_;
+    int next_ = kFirstSpp;
+    int spp_ = 0, steps_ = 0;
+    double seconds_ = 0;
+    ImageRgb image_, variance_;
+};
+
+// --- One scene ------------------------------------------------------------------------
+
+// An image of either method.
+struct CurvePoint {
+    double seconds = 0;         // wall clock since the method started, to the image being ready
+    ImageError error;
+    double estimatedError = 0;  // the method's own estimate: the cache's, or the path tracer's noise
+    // Meshlight
+    double compositeSeconds = 0;
+    size_t vertices = 0, indirectVertices = 0;  // over every mesh of the snapshot; of those, indirect
+    uint64_t samples = 0;                       // estimates and gathers in all
+    int bouncesFinished = 0, bounces = 0;
+    // The path tracer
+    int spp = 0;
+};
+
+struct SceneResult {
+    OfficeVariant office;
+    size_t triangles = 0;
+    int bounces = 0;  // indirect bounces of the plan
+    Reference reference;
+    double cacheBuildSeconds = 0;  // the session made: base meshes, the solver
+    std::vector<CurvePoint> meshlight;
+    double pathSetupSeconds = 0;   // the BVH, counted in the path tracer's times
+    std::vector<CurvePoint> path;
+    // Memory at the end of Meshlight's run.
+    size_t cacheBytes = 0;        // IrradianceCache::memoryBytes (direct light's meshes)
+    size_t indirectBytes = 0;     // IndirectSolver::memoryBytes (the bounces' meshes)
+    size_t sourceBytes = 0;       // IndirectStats::sourceBytes (the gathers' voxels and proxies)
+    size_t directVertices = 0;    // IrradianceCache::totalVertices
+    size_t rssBefore = 0;         // resident set before the session was made
+    size_t peakRss = 0;           // peak resident set from then to its end, storedBytes included
+    size_t storedBytes = 0;       // the bench's copies of the checkpoints' snapshots (runMeshlight)
+    bool peakSinceStart = false;  // the peak could not be reset: the process's since it started
+
+    const CurvePoint& lastMeshlight() const { return meshlight.back(); }
+    const CurvePoint& lastPath() const { return path.back(); }
+    double medianCompositeSeconds() const {
+        std::vector<double> t;
+        for (const CurvePoint& p : meshlight) t.push_back(p.compositeSeconds);
+        return median(t);
+    }
+};
+
+// Waits for the worker's first snapshot (the time it takes counts).
+const CacheSnapshot* firstSnapshot(ProgressiveSession& session, CacheWorker::Reader& reader) {
+    for (;;) {
+        session.rethrowIfFailed();
+        if (const CacheSnapshot* s = reader.acquire()) return s;
+        ML_ASSERT(!session.finished(), "the cache worker ended without publishing a snapshot");
+        session.waitForVersion(1, 0.05);
+    }
+}
+
+std::string fileLabel(const std::string& kind, const OfficeVariant& office, const char* extension) {
+    return concat("lights_", kind, "_", office.label, extension);
+}
+
+size_t meshBytes(const std::vector<IrradianceMeshCopy>& meshes) {
+    size_t bytes = 0;
+    for (const IrradianceMeshCopy& m : meshes)
+        bytes += m.positions.size() * sizeof(Vec3) + m.normals.size() * sizeof(Vec3) +
+                 m.triangles.size() * sizeof(glm::uvec3) + m.irradiance.size() * sizeof(Rgb) +
+                 m.samples.size() * sizeof(uint32_t);
+    return bytes;
+}
+
+// Meshlight's run on `scene`: its last image is returned, the curve and the
+// memory go into `r`.
+//
+// The snapshots are composited after the run, not at the checkpoints. On a
+// CPU rasteriser a composite costs the worker's cores ~0.3 s with 3 lights
+// and ~4 s with 192 (a pass per light mesh): made while the worker runs,
+// twelve of them would take most of the budget from it, which `render`
+// never does (it composites once, after stopping the worker). So the
+// snapshot of each checkpoint is copied as it is taken, and composited once
+// the worker has stopped; its image counts as ready at the checkpoint plus
+// its composite time: `render --time` stopping there would have it then.
+ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& camera, const Workload& work,
+                      Compositor& compositor, SceneResult& r) {
+    DirectChoice direct;  // the production sampler
+    direct.seed = run.options().seed;
+    direct.backend = run.options().backend;
+    IndirectChoice indirect;  // the production gather, the plan's bounces
+    indirect.decide(scene);
+    r.bounces = indirect.active() ? indirect.solver.bounces : 0;
+    SessionSettings settings;
+    settings.worker.seed = run.options().seed;
+    if (indirect.active()) settings.indirect = indirect.solver;
+
+    struct Taken {
+        CurvePoint point;  // all but the image's error and composite time
+        std::vector<IrradianceMeshCopy> direct, indirect;
+    };
+    std::vector<Taken> taken;
+    r.rssBefore = statusBytes("VmRSS");
+    r.peakSinceStart = !resetPeakResident();
+    {
+        const Clock::time_point start = Clock::now();
+        const std::unique_ptr<ProgressiveSession> session =
+            std::make_unique<ProgressiveSession>(scene, settings, samplerFactory(scene, direct, indirect));
+        r.cacheBuildSeconds = secondsSince(start);
+        session->start(RefinementCamera{camera, work.width, work.height});
+        CacheWorker::Reader reader = session->reader();
+        for (double due : work.checkpoints) {
+            for (double left; (left = due - secondsSince(start)) > 0;) {
+                session->rethrowIfFailed();
+                std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.05)));
+            }
+            const CacheSnapshot* s = firstSnapshot(*session, reader);
+            Taken t;
+            t.point.seconds = secondsSince(start);
+            t.point.estimatedError = s->estimatedError;
+            t.point.vertices = s->vertices;
+            t.point.indirectVertices = s->indirectVertices;
+            t.point.samples = s->samples;
+            t.point.bouncesFinished = s->bouncesFinished;
+            t.point.bounces = s->bounces;
+            t.direct = s->direct;
+            t.indirect = s->indirect;
+            r.storedBytes += meshBytes(t.direct) + meshBytes(t.indirect);
+            taken.push_back(std::move(t));
+        }
+        session->stop();
+        session->rethrowIfFailed();
+        r.peakRss = statusBytes("VmHWM");
+        r.cacheBytes = session->cache().memoryBytes();
+        r.directVertices = session->cache().totalVertices();
+        if (session->indirect()) r.indirectBytes = session->indirect()->memoryBytes();
+        if (const CacheSnapshot* s = reader.acquire()) r.sourceBytes = s->indirectStats.sourceBytes;
+    }
+
+    CompositorSettings comp;
+    comp.width = work.width;
+    comp.height = work.height;
+    comp.supersample = kSupersample;
+    ImageRgb image;
+    for (Taken& t : taken) {
+        const Clock::time_point c = Clock::now();
+        image = compositor.render(camera, t.direct, t.indirect, comp);
+        CurvePoint p = t.point;
+        p.compositeSeconds = secondsSince(c);
+        p.seconds += p.compositeSeconds;
+        p.error = errorAgainst(image, r.reference);
+        t.direct = {};
+        t.indirect = {};
+        r.meshlight.push_back(p);
+        std::printf("  %-5s meshlight   %6.2f s: relative RMSE %6.2f%% (raw %6.2f%%), %zu vertices (%zu indirect), "
+                    "%llu samples, bounces %d/%d, estimated error %.3g%%; composite %.2f s\n",
+                    r.office.label.c_str(), p.seconds, 100 * p.error.corrected, 100 * p.error.raw, p.vertices,
+                    p.indirectVertices, static_cast<unsigned long long>(p.samples), p.bouncesFinished, p.bounces,
+                    100 * p.estimatedError, p.compositeSeconds);
+    }
+    return image;
+}
+
+SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVariant& office, uint32_t index,
+                     GlContext& context) {
+    SceneResult r;
+    r.office = office;
+    OfficeSettings settings;
+    settings.panelsX = office.panelsX;
+    settings.panelsZ = office.panelsZ;
+    settings.panelSize = office.panelSize;
+    const Scene scene = makeOfficeScene(settings);
+    ML_ASSERT(scene.lights.size() == office.lights(), "office ", office.label, " has ", scene.lights.size(),
+              " lights, expected ", office.lights());
+    r.triangles = scene.triangleCount();
+    const Camera camera = scene.cameraOrDefault(double(work.width) / work.height);
+    const uint32_t seed = run.options().seed;
+
+    // The reference first, so that nothing else runs while the two methods are timed.
+    const EmbreeScene referenceRays(scene);
+    run.progress("%s: reference, %d spp at %dx%d\n", office.label.c_str(), work.referenceSpp, work.width,
+                 work.height);
+    r.reference = renderReference(referenceRays, camera, work, seedFor(seed, 0x4ef0u, index));
+    std::printf("  %-5s reference: %d spp in %.1f s, relative noise %.2f%%\n", office.label.c_str(), r.reference.spp,
+                r.reference.seconds, 100 * r.reference.noise);
+    writeImageLinear((run.dir() / fileLabel("reference", office, ".exr")).string(), r.reference.radiance);
+    writeImageLinear((run.dir() / fileLabel("reference", office, ".noise.exr")).string(),
+                     r.reference.standardError);
+
+    run.progress("%s: meshlight for %g s\n", office.label.c_str(), work.seconds);
+    {
+        context.use();
+        Compositor compositor(context, scene);
+        const ImageRgb last = runMeshlight(run, scene, camera, work, compositor, r);
+        writeImageLinear((run.dir() / fileLabel("meshlight", office, ".exr")).string(), last);
+    }
+
+    // The path tracer, alone on the machine now, until it has used the budget.
+    run.progress("%s: path tracer until %g s\n", office.label.c_str(), work.seconds);
+    const Clock::time_point t = Clock::now();
+    const EmbreeScene rays(scene);  // its own, timed as part of its work
+    r.pathSetupSeconds = secondsSince(t);
+    DoublingPathTracer tracer(rays, camera, work.width, work.height, seedFor(seed, 0x1d0bu, index));
+    do {
+        tracer.step();
+        CurvePoint p;
+        p.seconds = r.pathSetupSeconds + tracer.seconds();
+        p.spp = tracer.spp();
+        p.error = errorAgainst(tracer.image(), r.reference);
+        p.estimatedError = tracer.ownNoise(r.reference.radiance);
+        r.path.push_back(p);
+        std::printf("  %-5s path tracer %6.2f s: relative RMSE %6.2f%% (raw %6.2f%%), %d spp, own noise %.3g%%\n",
+                    office.label.c_str(), p.seconds, 100 * p.error.corrected, 100 * p.error.raw, p.spp,
+                    100 * p.estimatedError);
+    } while (r.path.back().seconds <= work.seconds);
+    writeImageLinear((run.dir() / fileLabel("pathtracer", office, ".exr")).string(), tracer.image());
+    return r;
+}
+
+// --- Reading the curves ------------------------------------------------------------------
+
+// When a curve first reaches `level`, interpolated in log-log between the
+// image above it and the first at or below it (errors fall as a power of
+// time); the first image's time if it is already there. None: not reached.
+std::optional<double> timeToLevel(const std::vector<CurvePoint>& curve, double level) {
+    for (size_t i = 0; i < curve.size(); ++i) {
+        const CurvePoint& b = curve[i];
+        if (b.error.corrected > level) continue;
+        if (i == 0) return b.seconds;
+        const CurvePoint& a = curve[i - 1];  // a.error > level >= b.error
+        const double ea = a.error.corrected, eb = b.error.corrected;
+        if (eb > 0) {
+            const double f = std::log(ea / level) / std::log(ea / eb);
+            return std::exp(std::log(a.seconds) + f * (std::log(b.seconds) - std::log(a.seconds)));
+        }
+        return a.seconds + (ea - level) / (ea - eb) * (b.seconds - a.seconds);
+    }
+    return std::nullopt;
+}
+
+// One scene at one level.
+struct LevelResult {
+    std::optional<double> meshlight;
+    std::optional<double> path;     // measured
+    double pathLast = 0;            // the path tracer's last time: a lower bound when it did not reach the level
+    double pathExtrapolated = 0;    // when not reached: its renders' time × (its error / level)², an unbiased
+                                    // estimator's error falling as 1/√samples
+    double pathSeconds() const { return path ? *path : pathExtrapolated; }
+    std::optional<double> ratio() const {
+        if (!meshlight) return std::nullopt;
+        return pathSeconds() / *meshlight;
+    }
+    // What was measured of the ratio where one method did not reach the
+    // level: ">= x" (the path tracer's last time over Meshlight's), "< x"
+    // (the path tracer's time over Meshlight's budget); "" when both did,
+    // "-" when neither.
+    std::string ratioBound(double budget) const {
+        if (meshlight && path) return "";
+        if (meshlight) return concat(">= ", benchNumber(pathLast / *meshlight));
+        if (path) return concat("< ", benchNumber(*path / budget));
+        return "-";
+    }
+};
+
+LevelResult levelResult(const SceneResult& s, double level) {
+    LevelResult l;
+    l.meshlight = timeToLevel(s.meshlight, level);
+    l.path = timeToLevel(s.path, level);
+    l.pathLast = s.lastPath().seconds;
+    if (!l.path) {
+        const double e = s.lastPath().error.corrected;
+        l.pathExtrapolated = s.pathSetupSeconds + (l.pathLast - s.pathSetupSeconds) * (e / level) * (e / level);
+    }
+    return l;
+}
+
+std::string seconds(const std::optional<double>& t) { return t ? benchNumber(*t) : std::string("not reached"); }
+
+// --- Fits --------------------------------------------------------------------------------
+
+struct FitRow {
+    std::string method;
+    double level = 0;
+    std::vector<size_t> lights;  // the scenes that reached the level
+    std::optional<PowerLawFit> fit;
+};
+
+std::vector<FitRow> fitRows(const std::vector<SceneResult>& scenes) {
+    std::vector<FitRow> rows;
+    for (const char* method : {"meshlight", "path-tracer"})
+        for (double level : kLevels) {
+            FitRow row;
+            row.method = method;
+            row.level = level;
+            std::vector<double> x, y;
+            for (const SceneResult& s : scenes) {
+                const LevelResult l = levelResult(s, level);
+                const std::optional<double> t = row.method == "meshlight" ? l.meshlight : l.path;
+                if (!t || *t <= 0) continue;
+                row.lights.push_back(s.office.lights());
+                x.push_back(double(s.office.lights()));
+                y.push_back(*t);
+            }
+            if (x.size() >= 2) row.fit = fitPowerLaw(x, y);
+            rows.push_back(row);
+        }
+    return rows;
+}
+
+// The headline exponent: Meshlight's at 5%, or at 10% where fewer than two
+// scenes reached 5%.
+const FitRow* headlineFit(const std::vector<FitRow>& fits) {
+    for (double level : {0.05, 0.10})
+        for (const FitRow& f : fits)
+            if (f.method == "meshlight" && f.level == level && f.fit) return &f;
+    return nullptr;
+}
+
+// --- Targets -----------------------------------------------------------------------------
+
+struct TargetRow {
+    std::string target, value, status;
+};
+
+const SceneResult* withLights(const std::vector<SceneResult>& scenes, size_t lights) {
+    for (const SceneResult& s : scenes)
+        if (s.office.lights() == lights) return &s;
+    return nullptr;
+}
+
+std::vector<TargetRow> targetRows(const std::vector<SceneResult>& scenes, const Workload& work) {
+    std::vector<TargetRow> rows;
+    const SceneResult* base = withLights(scenes, kTargetLights);
+    ML_ASSERT(base, "every workload has the 12-panel office");
+    for (const TimeTarget& target : kTimeTargets) {
+        const LevelResult l = levelResult(*base, target.level);
+        const std::string pct = benchPct(target.level);
+        const std::string name = concat(kTargetLights, " panels: <= ", pct, "% within ", target.seconds, " s");
+        if (l.meshlight)
+            rows.push_back({name, concat(benchNumber(*l.meshlight), " s"),
+                            *l.meshlight <= target.seconds ? "met" : "not met"});
+        else if (work.seconds >= target.seconds)
+            rows.push_back({name, concat("not reached in ", work.seconds, " s"), "not met"});
+        else
+            rows.push_back({name, concat("not reached in ", work.seconds, " s"),
+                            concat("not measured (this run stops at ", work.seconds, " s)")});
+
+        const std::string speed =
+            concat(kTargetLights, " panels: ", pct, "% >= ", kTargetSpeedup, "x faster than the path tracer");
+        if (!l.meshlight) {
+            // Meshlight took longer than the budget: too slow if a third of
+            // the path tracer's measured time is within it.
+            const bool slower = l.path && *l.path / kTargetSpeedup <= work.seconds;
+            rows.push_back({speed,
+                            concat("Meshlight not within ", work.seconds, " s; path tracer ",
+                                   l.path ? benchNumber(*l.path) : concat("~", benchNumber(l.pathExtrapolated)),
+                                   " s"),
+                            slower ? "not met" : "undecided"});
+        } else if (l.path) {
+            rows.push_back({speed, concat("ratio ", benchNumber(*l.ratio()), " (path tracer ", benchNumber(*l.path),
+                                          " s)"),
+                            *l.ratio() >= kTargetSpeedup ? "met" : "not met"});
+        } else {
+            // The path tracer's time is a lower bound: met if even that is enough.
+            const double atLeast = l.pathLast / *l.meshlight;
+            rows.push_back({speed, concat("ratio >= ", benchNumber(atLeast), ", about ", benchNumber(*l.ratio()),
+                                          " extrapolated (path tracer ~", benchNumber(l.pathExtrapolated), " s)"),
+                            atLeast >= kTargetSpeedup ? "met" : "undecided"});
+        }
+    }
+    for (size_t lights : {size_t(48), size_t(192)})
+        for (double level : kLevels) {
+            const std::string name = concat(lights, " panels: ", benchPct(level), "% within ", kTargetGrowth,
+                                            "x the ", kTargetLights, "-panel time");
+            const SceneResult* s = withLights(scenes, lights);
+            if (!s) {
+                rows.push_back({name, "-", "not measured (not in this run)"});
+                continue;
+            }
+            const LevelResult l12 = levelResult(*base, level), l = levelResult(*s, level);
+            if (!l12.meshlight) {
+                rows.push_back({name, concat(kTargetLights, " panels did not reach the level"), "undecided"});
+            } else if (l.meshlight) {
+                const double ratio = *l.meshlight / *l12.meshlight;
+                rows.push_back({name, concat(benchNumber(*l.meshlight), " s vs ", benchNumber(*l12.meshlight),
+                                             " s: ", benchNumber(ratio), "x"),
+                                ratio <= kTargetGrowth ? "met" : "not met"});
+            } else {
+                const double allowed = kTargetGrowth * *l12.meshlight;
+                rows.push_back({name, concat("not reached in ", work.seconds, " s (allowed ", benchNumber(allowed),
+                                             " s)"),
+                                allowed <= work.seconds ? "not met" : "undecided"});
+            }
+        }
+    return rows;
+}
+
+// --- Tables ------------------------------------------------------------------------------
+
+BenchTable checkpointsTable(const std::vector<SceneResult>& scenes) {
+    BenchTable t({"scene", "lights", "method", "seconds", "relative_rmse_pct", "raw_relative_rmse_pct", "vertices",
+                  "indirect_vertices", "samples", "spp", "estimated_error_pct", "bounces_done", "composite_ms"});
+    for (const SceneResult& s : scenes) {
+        const std::string lights = std::to_string(s.office.lights());
+        for (const CurvePoint& p : s.meshlight)
+            t.addRow({s.office.label, lights, "meshlight", benchNumber(p.seconds), benchPct(p.error.corrected),
+                      benchPct(p.error.raw), std::to_string(p.vertices), std::to_string(p.indirectVertices),
+                      std::to_string(p.samples), "", benchPct(p.estimatedError),
+                      concat(p.bouncesFinished, "/", p.bounces), benchMs(p.compositeSeconds)});
+        for (const CurvePoint& p : s.path)
+            t.addRow({s.office.label, lights, "path-tracer", benchNumber(p.seconds), benchPct(p.error.corrected),
+                      benchPct(p.error.raw), "", "", "", std::to_string(p.spp), benchPct(p.estimatedError), "", ""});
+    }
+    return t;
+}
+
+BenchTable summaryTable(const std::vector<SceneResult>& scenes, const Workload& work) {
+    BenchTable t({"scene", "lights", "level_pct", "meshlight_s", "path_s", "path_how", "ratio", "ratio_bound"});
+    for (const SceneResult& s : scenes)
+        for (double level : kLevels) {
+            const LevelResult l = levelResult(s, level);
+            const std::optional<double> ratio = l.ratio();
+            t.addRow({s.office.label, std::to_string(s.office.lights()), benchPct(level), seconds(l.meshlight),
+                      benchNumber(l.pathSeconds()),
+                      l.path ? "measured" : concat("extrapolated from ", s.lastPath().spp, " spp"),
+                      ratio ? benchNumber(*ratio) : "-", l.ratioBound(work.seconds)});
+        }
+    return t;
+}
+
+BenchTable scenesTable(const std::vector<SceneResult>& scenes) {
+    BenchTable t({"scene", "lights", "panel_m", "triangles", "bounces", "reference_spp", "reference_s",
+                  "reference_noise_pct", "meshlight_final_pct", "path_final_pct", "path_own_noise_pct", "path_spp",
+                  "path_s", "cache_build_s", "composite_ms", "vertices", "indirect_vertices", "cache_vertices", "cache_MB",
+                  "cache_bytes_per_vertex",
+                  "indirect_MB", "sources_MB", "rss_before_MB", "stored_MB", "peak_rss_MB"});
+    for (const SceneResult& s : scenes) {
+        const CurvePoint &m = s.lastMeshlight(), &p = s.lastPath();
+        t.addRow({s.office.label, std::to_string(s.office.lights()), benchNumber(s.office.panelSize),
+                  std::to_string(s.triangles), std::to_string(s.bounces), std::to_string(s.reference.spp),
+                  benchNumber(s.reference.seconds), benchPct(s.reference.noise), benchPct(m.error.corrected),
+                  benchPct(p.error.corrected), benchPct(p.estimatedError), std::to_string(p.spp),
+                  benchNumber(p.seconds), benchNumber(s.cacheBuildSeconds), benchMs(s.medianCompositeSeconds()),
+                  std::to_string(m.vertices), std::to_string(m.indirectVertices), std::to_string(s.directVertices),
+                  benchNumber(s.cacheBytes / 1e6),
+                  benchNumber(s.directVertices ? double(s.cacheBytes) / double(s.directVertices) : 0.0),
+                  benchNumber(s.indirectBytes / 1e6), benchNumber(s.sourceBytes / 1e6),
+                  benchNumber(s.rssBefore / 1e6), benchNumber(s.storedBytes / 1e6),
+                  concat(benchNumber((s.peakRss - std::min(s.peakRss, s.storedBytes)) / 1e6),
+                         s.peakSinceStart ? " (since start)" : "")});
+    }
+    return t;
+}
+
+BenchTable fitsTable(const std::vector<FitRow>& fits) {
+    BenchTable t({"method", "level_pct", "lights", "exponent", "coefficient_s", "r2"});
+    for (const FitRow& f : fits) {
+        std::string lights;
+        for (size_t l : f.lights) lights += (lights.empty() ? "" : " ") + std::to_string(l);
+        if (lights.empty()) lights = "none";
+        if (f.fit)
+            t.addRow({f.method, benchPct(f.level), lights, benchNumber(f.fit->exponent),
+                      benchNumber(f.fit->coefficient), benchNumber(f.fit->r2)});
+        else
+            t.addRow({f.method, benchPct(f.level), lights, "-", "-", "-"});
+    }
+    return t;
+}
+
+BenchTable targetsTable(const std::vector<TargetRow>& rows) {
+    BenchTable t({"target", "value", "status"});
+    for (const TargetRow& r : rows) t.addRow({r.target, r.value, r.status});
+    return t;
+}
+
+// --- Plots ------------------------------------------------------------------------------
+
+const std::vector<GnuplotOutput> kPlots = {
+    {"out_error", "lights_error_vs_time.png"},
+    {"out_levels", "lights_time_to_level.png"},
+};
+
+const char* const kColours[] = {"#1f5fa8", "#c0392b", "#1e8449", "#8e44ad", "#d68910", "#17a589"};
+
+std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload& work) {
+    std::ostringstream gp;
+    gp << "# Written by 'meshlight bench lights'; run with gnuplot in this folder.\n"
+       << gnuplotOutputDefaults(kPlots)
+       << "set terminal pngcairo enhanced size 1200,800 font ',11'\n"
+          "set datafile separator ','\n"
+          "set datafile missing 'NaN'\n"
+          "set grid\n\n";
+    for (size_t i = 0; i < scenes.size(); ++i) {
+        gp << "# " << scenes[i].office.label << ": seconds, relative RMSE % (noise-corrected)\n$ml" << i
+           << " << EOD\n";
+        for (const CurvePoint& p : scenes[i].meshlight)
+            gp << benchNumber(p.seconds) << "," << benchPct(std::max(p.error.corrected, 1e-4)) << "\n";
+        gp << "EOD\n# seconds, relative RMSE %, spp\n$pt" << i << " << EOD\n";
+        for (const CurvePoint& p : scenes[i].path)
+            gp << benchNumber(p.seconds) << "," << benchPct(std::max(p.error.corrected, 1e-4)) << "," << p.spp
+               << "\n";
+        gp << "EOD\n";
+    }
+    // lights, then per level: meshlight, path tracer measured, path tracer extrapolated (seconds; NaN: none)
+    gp << "# lights, then per level (10, 5, 2%): meshlight s, path tracer s, path tracer extrapolated s\n"
+          "$levels << EOD\n";
+    auto cell = [](const std::optional<double>& t) { return t ? benchNumber(*t) : std::string("NaN"); };
+    for (const SceneResult& s : scenes) {
+        gp << s.office.lights();
+        for (double level : kLevels) {
+            const LevelResult l = levelResult(s, level);
+            gp << "," << cell(l.meshlight) << "," << cell(l.path) << ","
+               << (l.path ? std::string("NaN") : benchNumber(l.pathExtrapolated));
+        }
+        gp << "\n";
+    }
+    gp << "EOD\n\n";
+
+    gp << "set output out_error\n"
+          "set title 'Office, full global illumination, " << work.width << "x" << work.height
+       << ": relative RMSE against the path-traced reference (its noise taken out)'\n"
+          "set logscale xy\n"
+          "set xlabel 'wall-clock seconds (Meshlight: since the cache was made; path tracer: BVH + renders)'\n"
+          "set ylabel 'relative RMSE (%)'\n"
+          "set key outside right top\n"
+          "plot ";
+    for (size_t i = 0; i < scenes.size(); ++i) {
+        const char* c = kColours[i % (sizeof kColours / sizeof *kColours)];
+        const std::string n = concat(scenes[i].office.lights(), " lights");
+        gp << (i ? ", \\\n     " : "") << "$ml" << i << " using 1:2 with linespoints lc rgb '" << c
+           << "' pt 7 ps 1.1 title 'Meshlight, " << n << "', \\\n     $pt" << i
+           << " using 1:2 with linespoints dt 2 lc rgb '" << c << "' pt 5 ps 1.0 title 'path tracer, " << n << "'";
+    }
+    for (size_t k = 0; k < kLevels.size(); ++k)
+        gp << ", \\\n     " << benchPct(kLevels[k]) << " with lines dt 3 lc rgb 'gray40' "
+           << (k ? "notitle" : "title 'levels: 10, 5, 2%'");
+    double noise = 0;
+    for (const SceneResult& s : scenes) noise = std::max(noise, s.reference.noise);
+    gp << ", \\\n     " << benchPct(noise) << " with lines dt 4 lc rgb 'gray60' title 'reference noise "
+       << "(largest), taken out'\n\n";
+
+    gp << "set output out_levels\n"
+          "set title 'Time to each error level against the number of lights (same total power)'\n"
+          "set logscale xy\n"
+          "set xrange [" << scenes.front().office.lights() / 1.5 << ":" << scenes.back().office.lights() * 1.5
+       << "]\n"
+          "set xlabel 'ceiling panels (lights)'\n"
+          "set xtics (";
+    for (size_t i = 0; i < scenes.size(); ++i) gp << (i ? ", " : "") << scenes[i].office.lights();
+    gp << ")\n"
+          "set ylabel 'seconds to reach the level'\n"
+          "set key outside right top\n";
+    // Only the series with a point: gnuplot warns of the others.
+    std::vector<std::string> series;
+    for (size_t k = 0; k < kLevels.size(); ++k) {
+        const char* c = kColours[k];
+        const std::string pct = benchPct(kLevels[k]);
+        const size_t col = 2 + 3 * k;
+        bool meshlight = false, path = false, extrapolated = false;
+        for (const SceneResult& s : scenes) {
+            const LevelResult l = levelResult(s, kLevels[k]);
+            meshlight |= bool(l.meshlight);
+            path |= bool(l.path);
+            extrapolated |= !l.path;
+        }
+        if (meshlight)
+            series.push_back(concat("$levels using 1:", col, " with linespoints lc rgb '", c,
+                                    "' pt 7 ps 1.3 title 'Meshlight, ", pct, "%'"));
+        if (path)
+            series.push_back(concat("$levels using 1:", col + 1, " with linespoints dt 2 lc rgb '", c,
+                                    "' pt 5 ps 1.2 title 'path tracer, ", pct, "%'"));
+        if (extrapolated)
+            series.push_back(concat("$levels using 1:", col + 2, " with points lc rgb '", c,
+                                    "' pt 4 ps 1.2 title 'path tracer, ", pct, "% (extrapolated)'"));
+    }
+    if (series.empty()) {
+        gp << "set yrange [0.1:100]\nset label 1 'no level reached' at graph 0.5, graph 0.5 center\n"
+              "plot 1e9 notitle\n";
+    } else {
+        gp << "plot ";
+        for (size_t i = 0; i < series.size(); ++i) gp << (i ? ", \\\n     " : "") << series[i];
+        gp << "\n";
+    }
+    return gp.str();
+}
+
+// --- Summary ------------------------------------------------------------------------------
+
+std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work,
+                            const std::vector<SceneResult>& scenes, const std::vector<FitRow>& fits,
+                            const std::vector<TargetRow>& targets) {
+    const unsigned threads = std::thread::hardware_concurrency();
+    double noiseMax = 0;
+    for (const SceneResult& s : scenes) noiseMax = std::max(noiseMax, s.reference.noise);
+    std::string offices;
+    for (const SceneResult& s : scenes)
+        offices += concat(offices.empty() ? "" : ", ", s.office.label, " (", s.office.lights(), " panels of ",
+                          s.office.panelSize, " m)");
+    std::ostringstream md;
+    md << "# Many lights: Meshlight against the path tracer as lights multiply\n\n"
+       << "- scenes: the office (core/scenes/OfficeScene.h) with " << offices
+       << ", the same total power; its own camera, " << work.width << "×" << work.height
+       << " pixels; full global illumination\n"
+       << "- mode: " << run.mode() << ", seed " << run.options().seed << ", " << threads
+       << " hardware threads; OpenGL: " << run.glDescription() << "; wall time " << benchNumber(wallSeconds)
+       << " s\n"
+       << "- load average " << run.loadAtStart() << " at the start, " << loadAverage()
+       << " at the end (other processes slow every timing)\n"
+       << softwareRasteriserNote(run.glDescription())
+       << "- Meshlight: the production session (cache defaults, jittered 64×64 direct sampler, the slices gather, "
+          "the plan's bounces, one sampling thread per core), the clock started before the cache is made; its "
+          "latest snapshot (direct and indirect meshes) composited at "
+       << kSupersample << "×" << kSupersample << " sub-pixels at ";
+    for (size_t i = 0; i < work.checkpoints.size(); ++i) md << (i ? ", " : "") << work.checkpoints[i];
+    md << " s and composited once the worker has stopped (a composite made while it runs takes its cores: "
+          "up to seconds on a CPU rasteriser with many lights); an image's time is its checkpoint plus its "
+          "composite time, when `render` stopping there would have it\n"
+       << "- path tracer: depth " << kMaxDepth << ", " << threads << " threads, box filter; samples per pixel "
+          "doubled from " << kFirstSpp << " (rendering as many again with fresh streams and averaging) until its "
+          "time passes Meshlight's budget of " << work.seconds << " s; its time includes the BVH build\n"
+       << "- reference: the same path tracer, other streams, " << work.referenceSpp << " samples per pixel "
+          "(its standard error per pixel from the even and odd samples, as `meshlight reference` writes it)\n";
+    if (run.options().quick)
+        md << "- quick mode checks that the bench runs, not the targets: the path tracer's cost falls with the "
+              "pixels, the cache's much less (its base meshes are set by the scene), so the small image favours "
+              "the path tracer; read the targets off a full run\n";
+    md << "\n";
+
+    std::string noises, wellBelow;
+    for (const SceneResult& s : scenes)
+        noises += concat(noises.empty() ? "" : ", ", benchPct(s.reference.noise), "% (", s.office.label, ")");
+    for (double level : kLevels)
+        if (noiseMax <= level / 3) wellBelow += concat(wellBelow.empty() ? "" : ", ", benchPct(level), "%");
+    md << "## Error metric: corrected for the reference's noise\n\n"
+       << "Relative RMSE = sqrt(mean (x − r)² / (r² + 0.01)) over pixels and channels (core/image/ImageMetrics.h). "
+          "The reference r is itself noisy: with σ its standard error per pixel and channel, (x − r)² exceeds the "
+          "squared error against the true image by σ² on average. Every error reported here is therefore "
+          "**sqrt(max(0, mean ((x − r)² − σ²) / (r² + 0.01)))**; the raw value is kept in lights_checkpoints.csv. "
+          "The reference's own noise, sqrt(mean σ² / (r² + 0.01)), is "
+       << noises << " at " << work.referenceSpp << " spp. ";
+    if (noiseMax <= kLevels.back() / 3) {
+        md << "That is well below the lowest level measured (" << benchPct(kLevels.back()) << "%).";
+    } else {
+        const double quieter = noiseMax / (kLevels.back() / 3);
+        md << (wellBelow.empty() ? std::string("That is not well below (a third of) any level measured")
+                                 : concat("That is well below (a third of) only these levels: ", wellBelow))
+           << ". The office is lit mostly indirectly and the path tracer converges slowly on it (see Workload in "
+              "BenchLights.cpp): a reference at a third of " << benchPct(kLevels.back()) << "% would take "
+           << benchNumber(quieter * quieter) << "× as long. The correction is what measures the lower levels: "
+              "pooled over every pixel its own uncertainty is small; how well it does, the check below shows.";
+    }
+    md << " Check: the path tracer's corrected error should equal its own noise estimate (from its halves, "
+          "independent of the reference); at its last image: ";
+    for (size_t i = 0; i < scenes.size(); ++i)
+        md << (i ? ", " : "") << scenes[i].office.label << " " << benchPct(scenes[i].lastPath().error.corrected)
+           << "% vs " << benchPct(scenes[i].lastPath().estimatedError) << "%";
+    md << ".\n\n";
+
+    md << "## Targets\n\n" << targetsTable(targets).markdown() << "\n";
+
+    md << "## Time to each level\n\n"
+       << "Interpolated in log-log between the images around the level (\"not reached\": not within the budget). "
+          "Where the path tracer did not reach a level, its time is extrapolated from its last image as an "
+          "unbiased estimator's error falls (time × (error / level)²). ratio: the path tracer's time over "
+          "Meshlight's; ratio_bound: what was measured of it where one of them did not reach the level (\">= x\": "
+          "the path tracer's last time over Meshlight's; \"< x\": the path tracer's time over Meshlight's "
+          "budget).\n\n"
+       << summaryTable(scenes, work).markdown() << "\n";
+
+    md << "## Cost exponent in the number of lights\n\n"
+       << "Least-squares slope of log(time to a level) against log(lights), over the scenes that reached the "
+          "level (viewer/bench/PowerLawFit.h); 0: the cost does not grow with the lights, 1: it grows in "
+          "proportion.";
+    if (const FitRow* f = headlineFit(fits))
+        md << " Meshlight at " << benchPct(f->level) << "%: **exponent " << benchNumber(f->fit->exponent)
+           << "** (r² " << benchNumber(f->fit->r2) << ", " << f->fit->points << " scenes).";
+    else
+        md << " Meshlight reached neither 5% nor 10% in two scenes: no exponent.";
+    md << "\n\n" << fitsTable(fits).markdown() << "\n";
+
+    md << "## Scenes: reference, final errors, memory\n\n"
+       << "vertices: the last snapshot's, every mesh (direct and indirect); cache_vertices and cache_MB: "
+          "IrradianceCache::totalVertices and memoryBytes when the worker stopped (direct light's meshes); "
+          "indirect_MB: IndirectSolver::memoryBytes (the bounces' meshes); sources_MB: what the gathers' sources "
+          "hold (voxels, proxy); stored_MB: the bench's copies of the checkpoints' snapshots; peak_rss_MB: the "
+          "process's peak resident set from just before the session was made to the worker's end "
+          "(/proc/self/status VmHWM, reset through /proc/self/clear_refs), less stored_MB; it also holds the "
+          "reference, the GL driver and rss_before_MB. composite_ms: median time of a composite, made alone after "
+          "the run.\n\n"
+       << scenesTable(scenes).markdown() << "\n"
+       << "Every image of both methods: lights_checkpoints.csv; the references (and their noise), Meshlight's last "
+          "image and the path tracer's last, as lights_*.exr.\n";
+    return md.str();
+}
+
+}  // namespace
+
+int runBenchLights(const BenchOptions& options) {
+    BenchRun run(options);
+    const Workload work = workloadFor(options.quick);
+    // The compositor's context lives on this thread; the workers make their own.
+    const std::unique_ptr<GlContext> context = run.openContext();
+
+    std::vector<SceneResult> scenes;
+    for (size_t i = 0; i < work.offices.size(); ++i)
+        scenes.push_back(runScene(run, work, work.offices[i], uint32_t(i), *context));
+    const std::vector<FitRow> fits = fitRows(scenes);
+    const std::vector<TargetRow> targets = targetRows(scenes, work);
+
+    const BenchTable checkpointsT = checkpointsTable(scenes), summaryT = summaryTable(scenes, work),
+                     scenesT = scenesTable(scenes), fitsT = fitsTable(fits), targetsT = targetsTable(targets);
+    std::printf("\nTime to each level (relative RMSE corrected for the reference's noise; ratio = path tracer / "
+                "Meshlight).\n\n%s",
+                summaryT.aligned().c_str());
+    std::printf("\nScenes: reference, final errors, memory.\n\n%s", scenesT.aligned().c_str());
+    std::printf("\nCost exponent in the number of lights (log-log least squares).\n\n%s", fitsT.aligned().c_str());
+    std::printf("\nTargets (many lights).\n\n%s", targetsT.aligned().c_str());
+
+    run.writeCsv("lights_checkpoints.csv", checkpointsT);
+    run.writeCsv("lights_summary.csv", summaryT);
+    run.writeCsv("lights_scenes.csv", scenesT);
+    run.writeCsv("lights_fits.csv", fitsT);
+    run.writeCsv("lights_targets.csv", targetsT);
+    run.plot("lights_plots.gp", gnuplotScript(scenes, work), kPlots);
+    const double wall = run.seconds();
+    run.write("lights_summary.md", summaryMarkdown(run, wall, work, scenes, fits, targets));
+    std::printf("\n");
+    run.printWallTime(wall);
+    return 0;
+}
+
+}  // namespace ml
