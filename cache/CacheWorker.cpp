@@ -127,7 +127,7 @@ void CacheWorker::run() {
         const auto directMeshes = [&] { return cache_.copyMeshes(); };
         double lastPublish = -1e30;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
-        double directRate = 0;  // direct samples per second, smoothed
+        double directRate = 0;  // direct samples per second in the last round
         double lastDirectError = 1, lastIndirectError = 1;
         uint64_t rounds = 0;
         std::optional<RefinementCamera> lastView;
@@ -156,17 +156,24 @@ void CacheWorker::run() {
             // their errors: a direct round runs while direct light's error
             // is at least half of indirect light's (and every eighth round
             // regardless, so it never stalls).
-            const bool directTurn = !indirectStarted || lastDirectError >= 0.5 * lastIndirectError || ++rounds % 8 == 0;
+            // Bounce 1's first pass, once started, runs without direct
+            // rounds between: until it is gathered the image lacks all
+            // indirect light (a room's ceiling is black), which is more than
+            // what the rest of direct light's first pass adds.
+            const bool firstBounceDue = indirectStarted && !indirect_->firstBounceGathered();
+            const bool directTurn = !indirectStarted ||
+                                    (!firstBounceDue && (lastDirectError >= 0.5 * lastIndirectError || ++rounds % 8 == 0));
             if (!directConverged && directTurn) {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
                 const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
                 const double took = seconds() - before;
-                // Direct samples per second, for when to start indirect light.
-                if (report.estimates > 0 && took > 0)
-                    directRate = directRate > 0 ? 0.7 * directRate + 0.3 * double(report.estimates) / took
-                                                : double(report.estimates) / took;
+                // Direct samples per second in the last round, for when to
+                // start indirect light. Not smoothed over rounds: the first
+                // pass's first round takes every pair that needs no GPU, a
+                // hundred times faster than the rest will go.
+                if (report.estimates > 0 && took > 0) directRate = double(report.estimates) / took;
                 directConverged = report.converged();
                 lastDirectError = report.estimatedError;
             }

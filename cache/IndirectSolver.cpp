@@ -223,12 +223,22 @@ std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
     return v;
 }
 
+bool IndirectSolver::firstBounceShown() const {
+    if (caches_.empty()) return false;
+    const IrradianceCache& c = *caches_.front();
+    return regathering_ || 4 * c.unsampledCount() <= 3 * c.totalVertices();
+}
+
+bool IndirectSolver::firstBounceGathered() const {
+    return !caches_.empty() && caches_.front()->unsampledCount() == 0;
+}
+
 std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
-    // The bounces whose first pass is complete; a bounce 1 being gathered
-    // again (restart) counts, its copies showing old values until new ones.
-    int complete = 0;
-    while (complete < started() && (caches_[size_t(complete)]->unsampledCount() == 0 || (complete == 0 && regathering_)))
-        ++complete;
+    // The bounces whose first pass is complete, bounce 1 from a quarter of
+    // it on; a bounce 1 being gathered again (restart) counts, its copies
+    // showing old values until new ones.
+    int complete = firstBounceShown() ? 1 : 0;
+    while (complete > 0 && complete < started() && caches_[size_t(complete)]->unsampledCount() == 0) ++complete;
     std::vector<IrradianceMeshCopy> v;
     for (int b = 1; b <= complete; ++b) v.push_back(copyMesh(b));
     if (complete == 0 || complete >= settings_.bounces) return v;

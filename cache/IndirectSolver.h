@@ -45,12 +45,12 @@ struct IndirectSettings {
     CacheSettings cache = defaultCache();
     // Indirect light starts once direct light's first pass is complete or,
     // when what is left of it would take longer than `startSeconds` at the
-    // rate measured, once this fraction of it is done (its copies fill the
+    // last round's rate, once this fraction of it is done (its copies fill the
     // rest from sampled neighbours), so that a coarse first bounce is in the
     // first complete image; bounce 1 is then gathered again when direct
     // light's first pass completes (restart). Early starts cost that second
     // gather, so short first passes are waited for.
-    double startFraction = 0.25;
+    double startFraction = 0.1;
     double startSeconds = 2.0;
     static CacheSettings defaultCache();
     void validate() const;
@@ -102,8 +102,18 @@ public:
     // the last complete bounce k times Σ_{j=1..N−k} ā^j (each bounce carries
     // about ā of the one before): all the light is in the image from the
     // first bounce on, its distribution approximate until the bounces are
-    // gathered. A bounce being gathered is not shown until it is complete.
+    // gathered. A bounce being gathered is not shown until it is complete,
+    // except bounce 1 (see firstBounceShown).
     std::vector<IrradianceMeshCopy> displayMeshes() const;
+    // Bounce 1 is shown once a quarter of its base is gathered (its first
+    // pass visits vertices in a scattered order and copies fill the rest
+    // from gathered neighbours, so no vertex is more than a ring or two
+    // from a gathered one) or while it is gathered again after restart():
+    // a rough first bounce is much nearer the truth than none, which leaves
+    // a room's ceiling black.
+    bool firstBounceShown() const;
+    // Bounce 1's first pass (or its regathering after restart()) is done.
+    bool firstBounceGathered() const;
     IrradianceMeshCopy copyMesh(int bounce) const;
     size_t totalVertices() const;
     uint64_t totalSamples() const;

@@ -324,6 +324,8 @@ void IrradianceCache::resetSamples() {
             lm.stats[v] = {};
         }
         for (detail::VertexStats& st : lm.gridStats) st = {};
+        lm.needsGpu.clear();
+        lm.gridNeedsGpu.clear();
     }
 }
 
@@ -332,6 +334,61 @@ std::vector<IrradianceMeshCopy> IrradianceCache::copyMeshes() const {
     for (size_t l = 0; l < meshCount(); ++l) meshes.push_back(copyMesh(l));
     return meshes;
 }
+
+namespace {
+
+// One of six orientations: the axis of the normal's largest component and its sign.
+int orientation(const Vec3& n) {
+    const Vec3 a = glm::abs(n);
+    const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+    return 2 * axis + (n[axis] < 0);
+}
+
+// Unknown vertices of `out` take the mean of the known ones of their
+// orientation, or of all known ones where none faces their way.
+void fillByOrientation(IrradianceMeshCopy& out, const std::vector<char>& known) {
+    std::array<Rgb, 6> sum{};
+    std::array<size_t, 6> count{};
+    Rgb all(0.0);
+    size_t allCount = 0;
+    for (size_t v = 0; v < known.size(); ++v) {
+        if (!known[v]) continue;
+        const int o = orientation(out.normals[v]);
+        sum[size_t(o)] += out.irradiance[v], ++count[size_t(o)];
+        all += out.irradiance[v], ++allCount;
+    }
+    for (size_t v = 0; v < known.size(); ++v) {
+        if (known[v]) continue;
+        const size_t o = size_t(orientation(out.normals[v]));
+        out.irradiance[v] = count[o] ? sum[o] / double(count[o]) : all / double(allCount);
+    }
+}
+
+// Unknown vertices in `kind` take their known neighbours' mean in `kind`,
+// ring after ring (at most 64); returns how many became known.
+template <class Kind>
+size_t fillRings(const detail::CacheTriMesh& mesh, IrradianceMeshCopy& out, std::vector<char>& known, size_t unknown,
+                 const Kind& kind) {
+    std::vector<std::pair<size_t, Rgb>> filled;
+    size_t done = 0;
+    for (int ring = 0; ring < 64 && done < unknown && unknown < known.size(); ++ring) {
+        filled.clear();
+        for (auto v : mesh.vertices()) {
+            if (known[size_t(v.idx())] || !kind(size_t(v.idx()))) continue;
+            Rgb sum(0.0);
+            int count = 0;
+            for (auto u : mesh.vv_range(v))
+                if (known[size_t(u.idx())] && kind(size_t(u.idx()))) sum += out.irradiance[size_t(u.idx())], ++count;
+            if (count) filled.emplace_back(size_t(v.idx()), sum / double(count));
+        }
+        if (filled.empty()) break;
+        for (const auto& [v, e] : filled) out.irradiance[v] = e, known[v] = 1;
+        done += filled.size();
+    }
+    return done;
+}
+
+}  // namespace
 
 IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     const detail::LightMesh& lm = impl_->state.meshes.at(l);
@@ -360,21 +417,19 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
         if (kept) out.irradiance[v] = lm.provisional[v];
         unknown += !(known[v] = out.samples[v] > 0 || kept);
     }
-    std::vector<std::pair<size_t, Rgb>> filled;
-    for (int ring = 0; ring < 64 && unknown > 0 && unknown < n; ++ring) {
-        filled.clear();
-        for (auto v : lm.mesh.vertices()) {
-            if (known[size_t(v.idx())]) continue;
-            Rgb sum(0.0);
-            int count = 0;
-            for (auto u : lm.mesh.vv_range(v))
-                if (known[size_t(u.idx())]) sum += out.irradiance[size_t(u.idx())], ++count;
-            if (count) filled.emplace_back(size_t(v.idx()), sum / double(count));
-        }
-        if (filled.empty()) break;
-        for (const auto& [v, e] : filled) out.irradiance[v] = e, known[v] = 1;
-        unknown -= filled.size();
-    }
+    // Vertices the sampler could not answer without the GPU (something may
+    // stand between them and the light: under a table, beside a cabinet)
+    // first take what their kind of neighbours saw, ring after ring through
+    // their kind only: the unoccluded light around a shadow would fill it.
+    const auto needsGpu = [&](size_t v) { return v < lm.needsGpu.size() && lm.needsGpu[v]; };
+    if (!lm.needsGpu.empty()) unknown -= fillRings(lm.mesh, out, known, unknown, needsGpu);
+    unknown -= fillRings(lm.mesh, out, known, unknown, [](size_t) { return true; });
+    // What no ring reaches (a part of the mesh, such as a box's face or a
+    // table leg, none of whose vertices has a sample yet) takes the mean of
+    // the known vertices facing the same way (by the sign of the normal's
+    // largest component): a floor's, a ceiling's, a wall's light, rather
+    // than black.
+    if (unknown > 0 && unknown < n) fillByOrientation(out, known);
     out.triangles.reserve(lm.mesh.n_faces());
     for (auto f : lm.mesh.faces()) {
         glm::uvec3 t;
@@ -499,6 +554,13 @@ std::string whereSampled(const CacheState& s, const PendingSample& p, const Samp
                   s.meshes[p.mesh].gridStats[p.index].count, " (point ", r.x.x, ",", r.x.y, ",", r.x.z, ")");
 }
 
+// A batch's failure, with the mesh, vertex and point of the request it names.
+[[noreturn]] void throwWhereSampled(const CacheState& s, const std::vector<PendingSample>& pending,
+                                    const std::vector<SampleRequest>& requests, const SampleBatchError& e) {
+    const size_t i = e.index() < pending.size() ? e.index() : 0;
+    throw std::runtime_error(concat("sampling failed at ", whereSampled(s, pending[i], requests[i]), ": ", e.what()));
+}
+
 void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending) {
     if (pending.empty()) return;
     std::vector<SampleRequest> requests;
@@ -508,9 +570,7 @@ void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std
     try {
         sampler.sampleBatch(requests, results);
     } catch (const SampleBatchError& e) {
-        const size_t i = e.index() < pending.size() ? e.index() : 0;
-        throw std::runtime_error(
-            concat("sampling failed at ", whereSampled(s, pending[i], requests[i]), ": ", e.what()));
+        throwWhereSampled(s, pending, requests, e);
     }
     ML_ASSERT(results.size() == pending.size(), "the sampler returned ", results.size(), " of ", pending.size(),
               " samples");
@@ -544,6 +604,56 @@ size_t unsampledCount(const CacheState& s) {
     return n;
 }
 
+namespace {
+
+bool flagged(const std::vector<char>& flags, size_t i) { return i < flags.size() && flags[i]; }
+
+void flag(std::vector<char>& flags, size_t i, size_t size) {
+    if (flags.size() < size) flags.resize(size, 0);
+    flags[i] = 1;
+}
+
+// The pairs of `ranked` (in order) that the sampler answers without the GPU,
+// until `budget` are taken: each asked once (LightMesh::needsGpu remembers
+// the ones declined). Returns how many were taken.
+size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t seed,
+                             const std::vector<PendingSample>& ranked, size_t budget) {
+    std::vector<PendingSample> ask;
+    std::vector<SampleRequest> requests;
+    std::vector<VertexSample> results;
+    std::vector<char> answered;
+    size_t taken = 0, next = 0;
+    while (taken < budget && next < ranked.size()) {
+        ask.clear();
+        for (; next < ranked.size() && ask.size() < budget - taken; ++next) {
+            const PendingSample& p = ranked[next];
+            const LightMesh& lm = s.meshes[p.mesh];
+            if (!flagged(p.grid ? lm.gridNeedsGpu : lm.needsGpu, p.index)) ask.push_back(p);
+        }
+        if (ask.empty()) break;
+        requests.clear();
+        for (const PendingSample& p : ask) requests.push_back(requestFor(s, p, seed));
+        try {
+            sampler.sampleBatchWithoutGpu(requests, results, answered);
+        } catch (const SampleBatchError& e) {
+            throwWhereSampled(s, ask, requests, e);
+        }
+        for (size_t i = 0; i < ask.size(); ++i) {
+            const PendingSample& p = ask[i];
+            LightMesh& lm = s.meshes[p.mesh];
+            if (!answered[i]) {
+                p.grid ? flag(lm.gridNeedsGpu, p.index, lm.gridStats.size()) : flag(lm.needsGpu, p.index, lm.stats.size());
+                continue;
+            }
+            p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
+            ++taken;
+        }
+    }
+    return taken;
+}
+
+}  // namespace
+
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget) {
     // Every mesh's first vertices before any mesh's later ones: base
     // vertices (numbered first) of every light before the vertices that
@@ -552,6 +662,10 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
     // Within a rank, vertices in a scattered (hashed) order, so that a
     // partial first pass covers every object evenly (IrradianceCache::
     // copyMesh fills the rest from sampled neighbours).
+    // In that order, first the pairs the sampler answers without the GPU
+    // (a light below the horizon, nothing in the way: microseconds each),
+    // then the others: in a room lit by many lights most of the light is
+    // in the image after a fraction of a second.
     std::vector<std::pair<uint64_t, PendingSample>> ranked;
     for (size_t l = 0; l < s.meshes.size(); ++l) {
         const LightMesh& lm = s.meshes[l];
@@ -563,18 +677,22 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
                 ranked.push_back({(uint64_t(hash32(kGridSeedBase + uint32_t(g))) << 32) | (uint64_t(l) << 1) | 1u,
                                   {uint32_t(l), uint32_t(g), true}});
     }
-    const size_t take = std::min(budget, ranked.size());
-    std::partial_sort(ranked.begin(), ranked.begin() + std::ptrdiff_t(take), ranked.end(),
-                      [](const auto& a, const auto& b) {
-                          return a.first != b.first ? a.first < b.first
-                                                    : std::tie(a.second.mesh, a.second.index) <
-                                                          std::tie(b.second.mesh, b.second.index);
-                      });
+    std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+        return a.first != b.first ? a.first < b.first
+                                  : std::tie(a.second.mesh, a.second.index) < std::tie(b.second.mesh, b.second.index);
+    });
+    std::vector<PendingSample> order;
+    order.reserve(ranked.size());
+    for (const auto& r : ranked) order.push_back(r.second);
+    const size_t cheap = takeSamplesWithoutGpu(s, sampler, seed, order, budget);
     std::vector<PendingSample> pending;
-    pending.reserve(take);
-    for (size_t i = 0; i < take; ++i) pending.push_back(ranked[i].second);
+    for (const PendingSample& p : order) {
+        if (pending.size() + cheap >= budget) break;
+        const LightMesh& lm = s.meshes[p.mesh];
+        if ((p.grid ? lm.gridStats[p.index] : lm.stats[p.index]).count == 0) pending.push_back(p);
+    }
     takeSamples(s, sampler, seed, pending);
-    return pending.size();
+    return cheap + pending.size();
 }
 
 void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& sample) {

@@ -186,6 +186,22 @@ public:
             std::copy(out.begin(), out.end(), results.begin() + std::ptrdiff_t(begin));
         });
     }
+    bool sampleWithoutGpu(size_t light, const Vec3& x, const Vec3& n, uint32_t seed, VertexSample& out) override {
+        return pool_.own.direct->sampleWithoutGpu(light, x, n, seed, out);
+    }
+    // Blocks over the threads, as sampleBatch: a few microseconds a pair,
+    // but a first pass asks for every vertex of every light.
+    void sampleBatchWithoutGpu(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
+                               std::vector<char>& answered) override {
+        results.resize(requests.size());
+        answered.assign(requests.size(), 0);
+        constexpr size_t kBlock = 256;
+        const size_t blocks = (requests.size() + kBlock - 1) / kBlock;
+        pool_.forEach(blocks, [&](WorkerSamplers& s, size_t b) {
+            const size_t begin = b * kBlock, end = std::min(requests.size(), begin + kBlock);
+            sampleEachWithoutGpu(*s.direct, requests, results, answered, begin, end);
+        });
+    }
     // Between batches every helper is idle: its sampler's totals are still.
     DirectPhaseTimes phaseTimes() const override {
         DirectPhaseTimes t;

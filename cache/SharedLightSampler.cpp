@@ -26,17 +26,43 @@ std::string SharedLightSampler::name() const {
                   "% of the light, ", draws_, " lights drawn per shared estimate");
 }
 
-VertexSample SharedLightSampler::sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) {
+template <class Take>
+bool SharedLightSampler::estimate(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed, Take take,
+                                  VertexSample& out) {
     const size_t lights = scene_.lights.size();
-    if (mesh >= lights) return sampleShared(x, n, seed);
+    if (mesh >= lights) return estimateShared(x, n, seed, take, out);
     const double w = coverage_->weight(mesh, x);
-    if (w <= 0) return {};  // the shared mesh carries all of this light here
-    VertexSample s = perLight_->sample(mesh, x, n, seed);
+    if (w <= 0) {  // the shared mesh carries all of this light here
+        out = {};
+        return true;
+    }
+    VertexSample s;
+    if (!take(mesh, seed, s)) return false;
     s.irradiance *= w;
-    return s;
+    out = s;
+    return true;
 }
 
-VertexSample SharedLightSampler::sampleShared(const Vec3& x, const Vec3& n, uint32_t seed) {
+VertexSample SharedLightSampler::sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) {
+    VertexSample out;
+    estimate(mesh, x, n, seed,
+             [&](size_t l, uint32_t s, VertexSample& e) {
+                 e = perLight_->sample(l, x, n, s);
+                 return true;
+             },
+             out);
+    return out;
+}
+
+bool SharedLightSampler::sampleWithoutGpu(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed,
+                                          VertexSample& out) {
+    return estimate(mesh, x, n, seed,
+                    [&](size_t l, uint32_t s, VertexSample& e) { return perLight_->sampleWithoutGpu(l, x, n, s, e); },
+                    out);
+}
+
+template <class Take>
+bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
     const size_t lights = scene_.lights.size();
     coverage_->weights(x, weights_);
     // (1 − w_l) U_l for every light, the total exactly, the draws' CDF by luminance.
@@ -61,8 +87,10 @@ VertexSample SharedLightSampler::sampleShared(const Vec3& x, const Vec3& n, uint
         shared_.push_back(1 - w);
         cdf_.push_back(sum);
     }
-    VertexSample out;
-    if (!(sum > 0)) return out;  // nothing shared reaches this point
+    if (!(sum > 0)) {  // nothing shared reaches this point
+        out = {};
+        return true;
+    }
     Rgb occluded(0.0);
     double visibleSum = 0;
     bool partial = false;
@@ -74,7 +102,8 @@ VertexSample SharedLightSampler::sampleShared(const Vec3& x, const Vec3& n, uint
         const size_t i = std::min(c, candidates_.size() - 1);
         const uint32_t l = candidates_[i];
         const double p = (cdf_[i] - (i ? cdf_[i - 1] : 0.0)) / sum;
-        const VertexSample e = perLight_->sample(l, x, n, seedFor(seed, uint32_t(k), l));
+        VertexSample e;
+        if (!take(l, seedFor(seed, uint32_t(k), l), e)) return false;
         // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative.
         const Rgb o = glm::max(unoccluded_[i] - e.irradiance, Rgb(0.0)) * shared_[i];
         occluded += o / (p * double(draws_));
@@ -84,7 +113,7 @@ VertexSample SharedLightSampler::sampleShared(const Vec3& x, const Vec3& n, uint
     out.irradiance = glm::max(total - occluded, Rgb(0.0));
     out.visibility = std::clamp(visibleSum / double(draws_), 0.0, 1.0);
     out.partial = partial;
-    return out;
+    return true;
 }
 
 }  // namespace ml

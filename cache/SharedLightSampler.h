@@ -28,10 +28,18 @@ public:
 
     std::string name() const override;
     VertexSample sample(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed) override;
+    // Where the wrapped sampler answers every pair it needs without the GPU
+    // (for the shared mesh: every light drawn).
+    bool sampleWithoutGpu(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed, VertexSample& out) override;
     DirectPhaseTimes phaseTimes() const override { return perLight_->phaseTimes(); }
 
 private:
-    VertexSample sampleShared(const Vec3& x, const Vec3& n, uint32_t seed);
+    // The estimate of mesh `mesh`, each light's sample from
+    // `take(light, seed, sample)`, which may decline (false): then false.
+    template <class Take>
+    bool estimate(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out);
+    template <class Take>
+    bool estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out);
 
     const Scene& scene_;
     std::shared_ptr<const LightCoverage> coverage_;

@@ -55,6 +55,18 @@ public:
     // without changing any result). A failure throws SampleBatchError naming
     // the first failing request; InputError passes through as it is.
     virtual void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results);
+
+    // sample()'s estimate where it takes no GPU work (a light below the
+    // receiver's horizon, nothing in the way: a closed form), bit for bit
+    // what sample() returns; false, `out` untouched, where it needs more.
+    // The cache's first pass takes these before the others: a few
+    // microseconds each, they put most of the light in the image at once.
+    // The default answers none.
+    virtual bool sampleWithoutGpu(size_t mesh, const Vec3& x, const Vec3& n, uint32_t seed, VertexSample& out);
+    // The same for every request: answered[i] says whether results[i] holds
+    // request i's estimate. Errors as for sampleBatch.
+    virtual void sampleBatchWithoutGpu(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
+                                       std::vector<char>& answered);
 };
 
 // Runs f() for request i of a batch: a failure other than an InputError (a
@@ -65,6 +77,9 @@ void asBatchRequest(size_t i, const std::function<void()>& f);
 // spread a batch: samples requests [begin, end) with `sampler.sample`.
 void sampleEach(VertexSampler& sampler, const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
                 size_t begin, size_t end);
+// sampleBatchWithoutGpu's loop over sampleWithoutGpu, for requests [begin, end).
+void sampleEachWithoutGpu(VertexSampler& sampler, const std::vector<SampleRequest>& requests,
+                          std::vector<VertexSample>& results, std::vector<char>& answered, size_t begin, size_t end);
 
 // A VertexSampler from a callable, for closed forms in tests and benches:
 // `f(mesh, x, n, seed)` returns a VertexSample, or an Rgb irradiance (then

@@ -100,6 +100,17 @@ VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const 
     return vertexSample(s);
 }
 
+bool ConfiguredDirectSampler::sampleWithoutGpu(size_t light, const Vec3& x, const Vec3& n, uint32_t seed,
+                                               VertexSample& out) {
+    if (impl_->exact) return false;  // every pair costs CGAL's exact visibility
+    impl_->context->use();
+    DirectSample s;
+    const bool answered = impl_->sampler->sampleWithoutGl(light, x, n, seed, s);
+    impl_->totals += impl_->sampler->lastTimes();
+    if (answered) out = vertexSample(s);
+    return answered;
+}
+
 void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requests,
                                           std::vector<VertexSample>& results) {
     if (impl_->exact) {

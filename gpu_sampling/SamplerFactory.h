@@ -78,6 +78,9 @@ public:
     // Every request at once: CPU and unlit pairs answered at once, the
     // others' images drawn several at a time (DirectLightSampler::sampleBatch).
     void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) override;
+    // Unlit and unoccluded pairs (DirectLightSampler::sampleWithoutGl);
+    // none with the exact method.
+    bool sampleWithoutGpu(size_t light, const Vec3& x, const Vec3& n, uint32_t seed, VertexSample& out) override;
     DirectPhaseTimes phaseTimes() const override;
     // The context it draws with; null for the exact method.
     GlContext* context() const;

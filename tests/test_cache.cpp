@@ -118,6 +118,70 @@ TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
     EXPECT_LT(cache.estimatedError(), 1e-9);
 }
 
+// The step of `step`, where the bright side (x < 0.25) is answered without
+// the GPU, as an unoccluded pair would be, and the rest needs it; counts
+// both kinds of call.
+class TwoKindSampler final : public VertexSampler {
+public:
+    VertexSample sample(size_t l, const Vec3& x, const Vec3& n, uint32_t seed) override {
+        ++gpu;
+        return step(l, x, n, seed);
+    }
+    bool sampleWithoutGpu(size_t l, const Vec3& x, const Vec3& n, uint32_t seed, VertexSample& out) override {
+        ++asked;
+        if (!cheap(x)) return false;
+        out = step(l, x, n, seed);
+        return true;
+    }
+    static bool cheap(const Vec3& x) { return x.x < 0.25; }
+    size_t gpu = 0, asked = 0;
+};
+
+TEST(CacheRefinement, TheFirstPassTakesWhatNeedsNoGpuFirstAndFillsLikeWithLike) {
+    IrradianceCache cache(bench(), coarse());
+    const size_t n = cache.vertexCount(0);
+    size_t cheapCount = 0;
+    for (size_t v = 0; v < n; ++v) cheapCount += TwoKindSampler::cheap(cache.position(0, v));
+    ASSERT_GT(cheapCount, 50u);
+    ASSERT_GT(n - cheapCount, 50u);
+
+    // A round smaller than the cheap vertices takes only cheap ones and
+    // asks no vertex twice.
+    TwoKindSampler sampler;
+    const size_t first = cheapCount / 2;
+    EXPECT_EQ(first, cache.refine(sampler, first, 1).estimates);
+    EXPECT_EQ(0u, sampler.gpu);
+    const size_t askedFirst = sampler.asked;
+    EXPECT_GE(askedFirst, first);
+    // The next takes the other cheap ones, then 20 that need the GPU.
+    EXPECT_EQ(cheapCount - first + 20, cache.refine(sampler, cheapCount - first + 20, 1).estimates);
+    EXPECT_EQ(20u, sampler.gpu);
+    EXPECT_EQ(n, sampler.asked) << "every vertex is asked once";
+
+    // A copy fills the unsampled vertices that need the GPU from sampled
+    // ones of their kind (here all on the dark side, 0.05), not from their
+    // bright neighbours across the edge. On the floor (the bench's largest
+    // object, many of whose dark vertices were sampled); a small object
+    // none of whose dark vertices has a sample yet (the light's own quad)
+    // takes what its other vertices saw.
+    const IrradianceMeshCopy m = cache.copyMesh(0);
+    size_t filledDark = 0;
+    for (size_t v = 0; v < n; ++v) {
+        if (m.samples[v] || TwoKindSampler::cheap(m.positions[v])) continue;
+        const bool floor = m.normals[v].y > 0.5 && std::abs(m.positions[v].y) < 1e-9;
+        if (floor && m.positions[v].x > 0.45) {  // past the penumbra: the sampled dark side
+            EXPECT_NEAR(0.05, m.irradiance[v].r, 1e-12) << "vertex " << v << " at x " << m.positions[v].x;
+            ++filledDark;
+        }
+    }
+    EXPECT_GT(filledDark, 10u);
+    // The same cache as one sampled in plain rounds: every value is the
+    // sampler's at that vertex.
+    cache.refine(sampler, 1 << 20, 1);
+    const IrradianceMeshCopy all = cache.copyMesh(0);
+    for (size_t v = 0; v < n; ++v) ASSERT_EQ(step(0, all.positions[v], all.normals[v], 0).irradiance, all.irradiance[v]);
+}
+
 TEST(CacheRefinement, NewVerticesGoWhereTheSignalSteps) {
     IrradianceCache cache(bench(), coarse());
     const size_t base = cache.vertexCount(0);

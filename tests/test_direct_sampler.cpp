@@ -946,6 +946,11 @@ TEST(DirectSampler, ABatchGivesWhatSampleGivesBitForBit) {
                                                  v.cpuPairs ? "" : " (no CPU pairs)", ", request ", i, " ", at(r.x));
                 const DirectSample one = sampler.sample(r.mesh, r.x, r.n, r.seed);
                 expectSameSample(batch[i], one, where);
+                // Without GL: exactly the unlit and unoccluded pairs, as sample() answers them.
+                DirectSample noGl;
+                ASSERT_EQ(one.path != DirectPath::Rasterised, sampler.sampleWithoutGl(r.mesh, r.x, r.n, r.seed, noGl))
+                    << where;
+                if (one.path != DirectPath::Rasterised) expectSameSample(noGl, one, where);
                 EXPECT_EQ(batch[i].path, one.path) << where;
                 EXPECT_EQ(batch[i].trianglesDrawn, one.trianglesDrawn) << where;
                 ++paths[int(one.path)];

@@ -43,6 +43,10 @@ struct LightMesh {
     // its sampled neighbours fill in).
     std::vector<Rgb> provisional;
     std::vector<VertexStats> gridStats;  // by grid sample, every grid object's in turn
+    // The first pass asked the sampler for this vertex's (grid sample's)
+    // estimate without the GPU, and it needs the GPU (past the end: not
+    // asked yet). Not saved: a loaded cache asks again.
+    std::vector<char> needsGpu, gridNeedsGpu;
 };
 
 // An object too finely tessellated for a cache mesh: its irradiance is

@@ -949,6 +949,13 @@ struct DirectLightSampler::Impl {
         return p.result;
     }
 
+    bool sampleWithoutGl(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed, DirectSample& out) {
+        times = {};
+        if (!planPair(single, lightIndex, x, n, seed)) return false;
+        out = single.result;
+        return true;
+    }
+
     // --- batches --------------------------------------------------------------
 
     // Images drawn before the first is read back: as many targets as fit in
@@ -1041,6 +1048,11 @@ DirectSample DirectLightSampler::sample(size_t lightIndex, const Vec3& x, const 
 
 void DirectLightSampler::sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results) {
     impl_->sampleBatch(requests, results);
+}
+
+bool DirectLightSampler::sampleWithoutGl(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed,
+                                         DirectSample& out) {
+    return impl_->sampleWithoutGl(lightIndex, x, n, seed, out);
 }
 
 const DirectSamplerSettings& DirectLightSampler::settings() const { return impl_->settings; }

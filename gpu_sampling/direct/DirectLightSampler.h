@@ -138,6 +138,11 @@ public:
     // InputError passes through. lastTimes() then holds the whole batch's.
     void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results);
 
+    // sample()'s answer, bit for bit, where it takes no GL call: an Unlit
+    // or Unoccluded pair (DirectPath); false, `out` untouched, otherwise.
+    // Makes no GL call, but like sample() needs the context current.
+    bool sampleWithoutGl(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed, DirectSample& out);
+
     const DirectSamplerSettings& settings() const;
     // With phase timing on, the sampler waits for the GPU between phases
     // (glFinish) so each phase is timed alone; slightly slower overall.
