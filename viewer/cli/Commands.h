@@ -21,8 +21,12 @@ int runView(const std::vector<std::string>& args);
 // folder and extension, ".noise" before it ("ref.exr" -> "ref.noise.exr").
 std::string referenceNoisePath(const std::string& out);
 
+// What a command's <scene> argument may be, for its usage text.
+inline constexpr const char* kSceneArgumentHelp =
+    "cornell, office[:KEY=VALUE,...], bench, an OBJ or a glTF (.gltf, .glb) file";
 // A scene argument: "cornell" (the built-in measured Cornell box), "bench"
-// (the paper's §6.1 bench scene) or the path of an OBJ file.
+// (the paper's §6.1 bench scene), "office[:...]" (OfficeScene.h) or the path
+// of an OBJ or glTF file.
 Scene loadSceneArgument(const std::string& arg);
 
 }  // namespace ml

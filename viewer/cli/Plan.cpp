@@ -124,7 +124,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
 
 int runPlan(const std::vector<std::string>& args) {
     Options o("plan");
-    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
+    o.positional("scene", kSceneArgumentHelp);
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);

@@ -273,7 +273,7 @@ std::vector<Rgb> probeIndirect(const Scene& scene, const DirectChoice& choice, c
 
 int runProbe(const std::vector<std::string>& args) {
     Options o("probe");
-    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
+    o.positional("scene", kSceneArgumentHelp);
     o.value("points", "IN.csv", "sensor points: columns x,y,z,nx,ny,nz");
     o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²)");
     declareDirectOptions(o);

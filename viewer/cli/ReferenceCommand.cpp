@@ -22,7 +22,7 @@ std::string referenceNoisePath(const std::string& out) {
 
 int runReference(const std::vector<std::string>& args) {
     Options o("reference");
-    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
+    o.positional("scene", kSceneArgumentHelp);
     o.value("out", "FILE", "output image, .exr or .hdr (linear radiance); its standard error goes beside it "
                            "as FILE.noise.exr (.hdr)");
     o.value("spp", "N", "samples per pixel, at least 2 (even and odd samples estimate the noise)");

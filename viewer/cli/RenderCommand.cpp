@@ -99,7 +99,7 @@ void printStatus(const CacheSnapshot& s, double seconds, const std::string& what
 
 int runRender(const std::vector<std::string>& args) {
     Options o("render");
-    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
+    o.positional("scene", kSceneArgumentHelp);
     o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped); with --camera-path a "
                            "pattern whose #### becomes the frame number",
             std::string("meshlight.png"));

@@ -29,7 +29,7 @@ LengthUnit defaultUnit(const std::string& sceneArg) {
 
 int runView(const std::vector<std::string>& args) {
     Options o("view");
-    o.positional("scene", "cornell, office[:KEY=VALUE,...], bench or an OBJ file");
+    o.positional("scene", kSceneArgumentHelp);
     o.value("width", "W", "window width, pixels", std::string("1280"));
     o.value("height", "H", "window height, pixels", std::string("720"));
     declareCameraOptions(o);

@@ -11,7 +11,7 @@ namespace {
 const char* kUsage =
     "usage: meshlight <command> [options]\n"
     "commands:\n"
-    "  render SCENE   render an image (SCENE: cornell, office[:KEY=VALUE,...], bench or an OBJ file)\n"
+    "  render SCENE   render an image (SCENE: cornell, office[:KEY=VALUE,...], bench, an OBJ or glTF file)\n"
     "  plan SCENE     what a render of SCENE would simulate, and why\n"
     "  probe SCENE    direct and indirect irradiance at sensor points from a CSV\n"
     "  reference SCENE --spp N --out REF.exr\n"
