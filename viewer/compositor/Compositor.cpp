@@ -65,7 +65,7 @@ struct Compositor::Impl {
     const GlApi& gl;
     const Scene& scene;
     Vec3 origin;
-    GlProgram surfaceProgram, irradianceProgram, accumulateProgram, resolveProgram, wireframeProgram;
+    GlProgram surfaceProgram, irradianceProgram, occluderProgram, accumulateProgram, resolveProgram, wireframeProgram;
     // Variants compiled on first use (see common_composite.glsl), by key.
     std::map<int, GlProgram> compositePrograms, displayPrograms, forwardPrograms;
     GlBuffer sceneBuffer, lightEmissionBuffer, paletteBuffer;
@@ -76,8 +76,8 @@ struct Compositor::Impl {
     struct Targets {
         int width = 0, height = 0, supersample = 0;  // pixels, sub-pixels per side
         // Sub-pixel targets.
-        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth;
-        GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb;
+        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth, occluderDepth;
+        GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb, occluderFb;
         // Pixel targets: the box-filtered composite; the forward pass's image and depth.
         GlTexture pixels, forwardColour, forwardDepth;
         GlFramebuffer pixelsFb, forwardFb;
@@ -152,6 +152,8 @@ struct Compositor::Impl {
                                  glslSource({shaders::scene_gbuffer_frag}));
         irradianceProgram = program("irradiance.vert", glslSource({shaders::irradiance_vert}), "irradiance.frag",
                                     glslSource({shaders::irradiance_frag}));
+        occluderProgram = program("scene_gbuffer.vert", glslSource({shaders::scene_gbuffer_vert}), "occluder.frag",
+                                  glslSource({shaders::occluder_frag}));
         accumulateProgram = program("composite.vert", glslSource({shaders::composite_vert}), "accumulate.frag",
                                     glslSource({shaders::accumulate_frag}));
         resolveProgram = program("composite.vert", glslSource({shaders::composite_vert}), "resolve.frag",
@@ -212,6 +214,8 @@ struct Compositor::Impl {
         t.sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
         t.irradianceMesh = makeTexture2D(gl, GL_RGBA32F, w, h);
         t.cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
+        t.occluderDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
+        t.occluderFb = makeFramebuffer(gl, {}, t.occluderDepth.id(), "compositor");
         t.surfaceFb = makeFramebuffer(gl, {t.surface.id()}, t.sceneDepth.id(), "compositor");
         t.irradianceFb = makeFramebuffer(gl, {t.irradianceSum.id()}, t.cacheDepth.id(), "compositor");
         t.irradianceMeshFb = makeFramebuffer(gl, {t.irradianceMesh.id()}, t.cacheDepth.id(), "compositor");
@@ -267,13 +271,25 @@ struct Compositor::Impl {
     // drawn wins, so a sub-pixel adds one of them only. On llvmpipe the cost
     // of a large cache is per triangle: one draw, not a depth pass and then
     // a shading pass.
-    void drawIrradianceMesh(const GpuCacheMeshes::Mesh& mesh, const Rgb& weight, bool& first) {
+    //
+    // A mesh that keeps only some of the scene's faces (`partial`: a light's
+    // own mesh where lights share) starts from the scene's surfaces as
+    // occluders (drawOccluders), not from an empty depth buffer: otherwise
+    // where it lacks the face in view it would add what it keeps behind it
+    // (the wall behind a partition it does not cover).
+    void drawIrradianceMesh(const GpuCacheMeshes::Mesh& mesh, const Rgb& weight, bool partial, bool& first) {
         if (mesh.triangleCount == 0 || weight == Rgb(0.0)) return;  // nothing to add
         const float zero[4] = {0, 0, 0, 0};
         const float farDepth = 0.0f;  // reversed depth
-        gl.BindFramebuffer(GL_FRAMEBUFFER, first ? t.irradianceFb.id() : t.irradianceMeshFb.id());
+        const GLuint target = first ? t.irradianceFb.id() : t.irradianceMeshFb.id();
+        gl.BindFramebuffer(GL_FRAMEBUFFER, target);
         if (!first) gl.ClearBufferfv(GL_COLOR, 0, zero);
-        gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+        if (partial) {
+            const int w = t.width * t.supersample, h = t.height * t.supersample;
+            gl.BlitNamedFramebuffer(t.occluderFb.id(), target, 0, 0, w, h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+        } else {
+            gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+        }
         gl.Enable(GL_DEPTH_TEST);
         gl.DepthFunc(GL_GREATER);
         gl.DepthMask(GL_TRUE);
@@ -295,6 +311,21 @@ struct Compositor::Impl {
             gl.Disable(GL_BLEND);
         }
         first = false;
+    }
+
+    // The scene's surfaces into occluderDepth, a hair behind their depth
+    // (occluder.frag), for the partial meshes of drawIrradianceMesh.
+    void drawOccluders() {
+        const float farDepth = 0.0f;  // reversed depth
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.occluderFb.id());
+        gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
+        gl.Enable(GL_DEPTH_TEST);
+        gl.DepthFunc(GL_GREATER);
+        occluderProgram.use();
+        gl.UniformMatrix4fv(occluderProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+        gl.BindVertexArray(sceneVao.id());
+        gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+        gl.Disable(GL_DEPTH_TEST);
     }
 
     // Left, right, bottom, top and near planes of the view (the projection
@@ -371,11 +402,16 @@ struct Compositor::Impl {
         gl.ClearBufferfv(GL_COLOR, 0, zero);
         drawnTriangles = 0;
         bool first = true;
-        // Each light's own mesh, then the mesh the lights share, if any.
-        for (size_t l = 0; l < meshes.directCount(); ++l)
-            drawIrradianceMesh(meshes.direct(l), l < weights.light.size() ? weights.light[l] : weights.shared, first);
+        // Each light's own mesh, then the mesh the lights share, if any:
+        // with a shared mesh, the lights' own meshes keep only some faces.
+        const bool sharing = meshes.directCount() > scene.lights.size();
+        if (sharing) drawOccluders();
+        for (size_t l = 0; l < meshes.directCount(); ++l) {
+            const bool own = l < weights.light.size();
+            drawIrradianceMesh(meshes.direct(l), own ? weights.light[l] : weights.shared, sharing && own, first);
+        }
         for (size_t b = 0; b < meshes.indirectCount(); ++b)
-            drawIrradianceMesh(meshes.indirect(b), weights.indirect, first);
+            drawIrradianceMesh(meshes.indirect(b), weights.indirect, false, first);
         checkGl(gl, "compositing the irradiance");
         composed = true;
         surfaced = composited = resolved = forwarded = false;
