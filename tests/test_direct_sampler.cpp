@@ -17,10 +17,12 @@
 #include "core/reference/Lambert.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
+#include "core/scenes/OfficeScene.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/direct/Jitter.h"
 #include "gpu_sampling/direct/LightFrustum.h"
 #include "gpu_sampling/direct/OccluderBvh.h"
+#include "gpu_sampling/direct/OccluderPolygons.h"
 #include "gpu_sampling/gl/GlContext.h"
 
 #include "BenchReference.h"
@@ -884,6 +886,83 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
     // sees it past the blocks from most places.
     EXPECT_EQ(unlit, int(kPasses) * 150);
     EXPECT_GT(cpu, 2 * raster);
+}
+
+TEST(DirectSampler, PairsInUmbraAreZeroWithoutGlAsTheGpuFindsThem) {
+    // The office with desks, partition and cabinets: cache-like points on
+    // every non-emitting triangle, each light. Every pair the CPU declares
+    // wholly hidden (DirectPath::Occluded) must be one where the GPU, forced
+    // to rasterise, sees not one sample of the light: the same answer,
+    // zero. And most rasterised pairs of such a room are of that kind.
+    const Scene office = makeOfficeScene(OfficeSettings{});
+    std::vector<ReceiverPoint> points = cornellPoints(office);
+    DirectSamplerSettings forced;
+    forced.cpuUnoccludedPairs = false;
+    DirectLightSampler cheap(test::glContext(), office, DirectSamplerSettings{});
+    DirectLightSampler gpu(test::glContext(), office, forced);
+    int occluded = 0, rasterised = 0;
+    for (size_t i = 0; i < points.size(); i += 3)  // a third of them: ~1,900 pairs
+        for (size_t l = 0; l < office.lights.size(); l += 2) {
+            const ReceiverPoint& r = points[i];
+            const uint32_t seed = jitter::seedFor(31, uint32_t(i), uint32_t(l));
+            const DirectSample a = cheap.sample(l, r.position, r.normal, seed);
+            if (a.path == DirectPath::Rasterised) ++rasterised;
+            if (a.path != DirectPath::Occluded) continue;
+            ++occluded;
+            const DirectSample b = gpu.sample(l, r.position, r.normal, seed);
+            const std::string where = concat("light ", l, " at ", at(r.position));
+            EXPECT_GT(b.lightSamples, 0u) << where;
+            EXPECT_EQ(b.visibleSamples, 0u) << where << ": the GPU saw part of the light";
+            EXPECT_EQ(a.irradiance, Rgb(0.0)) << where;
+            EXPECT_EQ(a.cosineSolidAngle, 0.0) << where;
+            EXPECT_GT(a.unoccluded, 0.0) << where;
+            EXPECT_EQ(a.lightSamples, 0u) << where;
+        }
+    std::printf("[ umbra    ] office: %d pairs in umbra answered on the CPU, %d rasterised\n", occluded, rasterised);
+    EXPECT_GT(occluded, rasterised) << "most pairs with an occluder in the office are in umbra";
+}
+
+TEST(OccluderPolygons, TwoTrianglesOfAFaceHideWhatNeitherHidesAlone) {
+    // A unit square occluder at y = 1 made of two triangles, a small light
+    // at y = 2 whose projection from the eye straddles the diagonal.
+    const Vec3 a(-1, 1, -1), b(1, 1, -1), c(1, 1, 1), d(-1, 1, 1);
+    const std::vector<Triangle3> tris = {{a, c, b}, {a, d, c}};
+    const std::vector<uint32_t> ids = {0, 0};
+    const OccluderPolygons polygons(tris, ids);
+    EXPECT_EQ(polygons.quadCount(), 2u);
+    const std::vector<OccluderBvh::Range> all = {{0, 2}};
+    OccluderPolygons::Rules rules;
+    rules.eye = Vec3(0, 0, 0);
+    rules.nearDistance = 1e-6;
+    rules.lightNormal = Vec3(0, -1, 0);
+    rules.lightPoint = Vec3(0, 2, 0);
+    rules.planeTolerance = 1e-6;
+    const Polygon3 small = {Vec3(-0.2, 2, -0.2), Vec3(0.2, 2, -0.2), Vec3(0.2, 2, 0.2), Vec3(-0.2, 2, 0.2)};
+    EXPECT_TRUE(polygons.hideAll({small}, all, rules));
+    // Either triangle without the other does not: the light straddles their
+    // diagonal. (With both in the scene, either one's range brings the quad.)
+    EXPECT_TRUE(polygons.hideAll({small}, {{1, 1}}, rules));
+    for (const Triangle3& t : tris) EXPECT_FALSE(OccluderPolygons({t}, {0}).hideAll({small}, {{0, 1}}, rules));
+    // A light wider than the square's shadow is not hidden: its projection
+    // reaches past the square (half the light's size at half the distance).
+    const Polygon3 wide = {Vec3(-2.2, 2, -1), Vec3(2.2, 2, -1), Vec3(2.2, 2, 1), Vec3(-2.2, 2, 1)};
+    EXPECT_FALSE(polygons.hideAll({wide}, all, rules));
+    // Seen from beside the square, nothing is hidden.
+    rules.eye = Vec3(3, 0, 0);
+    EXPECT_FALSE(polygons.hideAll({small}, all, rules));
+    // An occluder in the light's own plane (within the tolerance) does not occlude it.
+    rules.eye = Vec3(0, 0, 0);
+    rules.lightPoint = Vec3(0, 1 + 1e-7, 0);
+    const Polygon3 onPlane = {Vec3(-0.2, 1 + 1e-7, -0.2), Vec3(0.2, 1 + 1e-7, -0.2), Vec3(0.2, 1 + 1e-7, 0.2),
+                              Vec3(-0.2, 1 + 1e-7, 0.2)};
+    EXPECT_FALSE(polygons.hideAll({onPlane}, all, rules));
+    // Nor does one nearer the eye than the sampler draws.
+    rules.lightPoint = Vec3(0, 2, 0);
+    rules.nearDistance = 0.1;
+    EXPECT_FALSE(polygons.hideAll({small}, all, rules));
+    // Triangles that do not make a convex quad stay triangles.
+    const std::vector<Triangle3> bent = {{a, c, b}, {a, Vec3(-1, 1.5, 1), c}};
+    EXPECT_EQ(OccluderPolygons(bent, ids).quadCount(), 0u);
 }
 
 // === batches ================================================================

@@ -3,6 +3,7 @@
 #include "Jitter.h"
 #include "LightFrustum.h"
 #include "OccluderBvh.h"
+#include "OccluderPolygons.h"
 #include "core/Error.h"
 #include "core/reference/Lambert.h"
 #include "gpu_sampling/gl/GlContext.h"
@@ -46,6 +47,7 @@ const char* directPathName(DirectPath p) {
         case DirectPath::Unlit: return "unlit";
         case DirectPath::Unoccluded: return "unoccluded";
         case DirectPath::Rasterised: return "rasterised";
+        case DirectPath::Occluded: return "occluded";
     }
     return "?";
 }
@@ -169,6 +171,7 @@ struct DirectLightSampler::Impl {
     // index of the light each belongs to (0: none), as in the GPU buffer.
     std::vector<Triangle3> leafTriangles;
     std::vector<uint32_t> leafLightId;
+    std::unique_ptr<OccluderPolygons> polygons;  // for pairs in umbra (OccluderPolygons.h)
 
     GlProgram coverage;
     GlBuffer occluderBuffer;
@@ -271,6 +274,7 @@ struct DirectLightSampler::Impl {
             leafTriangles.push_back(tris[index]);
             leafLightId.push_back(lightOf[index]);
         }
+        polygons = std::make_unique<OccluderPolygons>(leafTriangles, leafLightId);
         occluderBuffer = makeBuffer(gl, std::max<size_t>(corners.size(), 1) * sizeof(Corner), corners.data());
         emptyVao = makeVertexArray(gl);
     }
@@ -879,9 +883,32 @@ struct DirectLightSampler::Impl {
             times.setup += seconds(start, Clock::now());  // all of a CPU pair's time
             return true;
         }
+        if (p.cpuFrusta && hiddenBehindOnePolygon(p, light, eye)) {
+            // Every sample would be occluded: exactly zero, what the GPU
+            // path gives a pair with no visible sample.
+            p.result.unoccluded = exactUnoccluded;
+            p.result.path = DirectPath::Occluded;
+            times.setup += seconds(start, Clock::now());
+            return true;
+        }
         p.result.path = DirectPath::Rasterised;
         p.images.assign(p.frusta.size(), ImageResult());
         times.setup += seconds(start, Clock::now());
+        return false;
+    }
+
+    // The light wholly behind one occluder polygon of the pair's frusta
+    // (OccluderPolygons), by the sampler's own rules for what occludes.
+    bool hiddenBehindOnePolygon(const Pair& p, const AreaLight& light, const Vec3& eye) {
+        OccluderPolygons::Rules rules;
+        rules.eye = eye;
+        rules.nearDistance = p.nearDistance;
+        rules.lightNormal = light.normal;
+        rules.lightPoint = light.centroid;
+        rules.planeTolerance = settings.planeTolerance * sceneSize;
+        rules.skipLightId = uint32_t(p.lightIndex + 1);
+        for (const FrustumCull& c : p.culls)
+            if (c.occluders && polygons->hideAll(p.pieces, c.ranges, rules)) return true;
         return false;
     }
 

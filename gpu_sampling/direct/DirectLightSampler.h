@@ -60,9 +60,11 @@ struct DirectSamplerSettings {
     // With the control variate on a planar light (jittered or regular), a
     // pair whose frusta hold no occluder after culling is answered on the
     // CPU, with no GL call: the estimate is then Lambert's closed form, the
-    // same value the GPU would return (DirectPath::Unoccluded). Needs
-    // cullOccluders (culling makes the decision); off: every pair is
-    // rasterised, as before (for comparisons).
+    // same value the GPU would return (DirectPath::Unoccluded); and a pair
+    // whose light lies wholly behind one occluder polygon is zero, as every
+    // sample the GPU would test is occluded (DirectPath::Occluded,
+    // OccluderPolygons.h). Needs cullOccluders (culling makes the
+    // decision); off: every pair is rasterised, as before (for comparisons).
     bool cpuUnoccludedPairs = true;
 
     void validate() const;       // throws InputError on a bad value
@@ -80,8 +82,11 @@ enum class DirectPath {
     // estimator needs the light itself rasterised (plain, occlusion query,
     // a non-planar light), or cpuUnoccludedPairs is off.
     Rasterised,
+    // The light wholly behind one occluder polygon (cpuUnoccludedPairs):
+    // zero, no GL call. No sample is tested (lightSamples = 0).
+    Occluded,
 };
-const char* directPathName(DirectPath);  // "unlit", "unoccluded", "rasterised"
+const char* directPathName(DirectPath);  // "unlit", "unoccluded", "rasterised", "occluded"
 
 // One estimate; repeats with fresh seeds are independent and their mean
 // converges to the exact irradiance.
@@ -90,9 +95,9 @@ struct DirectSample {
     double cosineSolidAngle = 0;   // irradiance / radiance: ∫ vis·cosθ dω (sr)
     double unoccluded = 0;         // the same without occluders (sr)
     // Jittered tests that fell on the light, and of those, the ones not
-    // occluded. Unoccluded pairs test none (they are answered in closed
-    // form): both 0 there, so partiallyVisible() is false and the visible
-    // fraction, cosineSolidAngle / unoccluded, is 1.
+    // occluded. Unoccluded and Occluded pairs test none (they are answered
+    // on the CPU): both 0 there, so partiallyVisible() is false and the
+    // visible fraction, cosineSolidAngle / unoccluded, is 1 and 0.
     uint32_t lightSamples = 0;
     uint32_t visibleSamples = 0;
     // Sampling images (> 1: light split), rasterised or, where no occluder

@@ -15,6 +15,7 @@
 #include "core/raytrace/PathTracer.h"
 #include "core/scenes/OfficeScene.h"
 #include "gpu_sampling/SamplerFactory.h"
+#include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
 
@@ -266,6 +267,15 @@ struct CurvePoint {
     int spp = 0;
 };
 
+// The direct sampler's (receiver, light) pairs by how they are answered
+// (DirectPath), over cache-like points: 3 barycentric points on every
+// non-emitting triangle, every light. Share and mean time of each kind.
+struct PairKinds {
+    size_t count[4] = {0, 0, 0, 0};
+    double seconds[4] = {0, 0, 0, 0};
+    size_t total() const { return count[0] + count[1] + count[2] + count[3]; }
+};
+
 struct SceneResult {
     OfficeVariant office;
     size_t triangles = 0;
@@ -284,6 +294,7 @@ struct SceneResult {
     size_t peakRss = 0;           // peak resident set from then to its end, storedBytes included
     size_t storedBytes = 0;       // the bench's copies of the checkpoints' snapshots (runMeshlight)
     bool peakSinceStart = false;  // the peak could not be reset: the process's since it started
+    PairKinds pairs;              // measured after both methods ran
 
     const CurvePoint& lastMeshlight() const { return meshlight.back(); }
     const CurvePoint& lastPath() const { return path.back(); }
@@ -406,6 +417,34 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
     return image;
 }
 
+// --- How pairs are answered ------------------------------------------------------
+
+// measurePairKinds: the pairs of PairKinds, answered one by one and timed.
+PairKinds measurePairKinds(GlContext& context, const Scene& scene, uint32_t seed) {
+    context.use();
+    DirectLightSampler sampler(context, scene, DirectSamplerSettings{});
+    PairKinds k;
+    uint32_t index = 0;
+    for (const Mesh& m : scene.meshes)
+        for (size_t t = 0; t < m.triangles.size(); ++t) {
+            if (scene.materials[m.materials[t]].emissive()) continue;
+            const Triangle3 p = m.triangle(t);
+            const Vec3 n = glm::normalize(m.areaNormal(t));
+            for (const Vec3& b : {Vec3(4, 1, 1), Vec3(1, 4, 1), Vec3(1, 1, 4)}) {
+                const Vec3 x = (b.x * p[0] + b.y * p[1] + b.z * p[2]) / 6.0;
+                ++index;
+                for (size_t l = 0; l < scene.lights.size(); ++l) {
+                    const auto start = std::chrono::steady_clock::now();
+                    const DirectSample d = sampler.sample(l, x, n, seedFor(seed, index, uint32_t(l)));
+                    const size_t kind = size_t(d.path);
+                    k.count[kind] += 1;
+                    k.seconds[kind] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                }
+            }
+        }
+    return k;
+}
+
 SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVariant& office, uint32_t index,
                      GlContext& context) {
     SceneResult r;
@@ -459,6 +498,7 @@ SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVari
                     100 * p.estimatedError);
     } while (r.path.back().seconds <= work.seconds);
     writeImageLinear((run.dir() / fileLabel("pathtracer", office, ".exr")).string(), tracer.image());
+    r.pairs = measurePairKinds(context, scene, seed);
     return r;
 }
 
@@ -693,6 +733,26 @@ BenchTable scenesTable(const std::vector<SceneResult>& scenes) {
                   benchNumber(s.rssBefore / 1e6), benchNumber(s.storedBytes / 1e6),
                   concat(benchNumber((s.peakRss - std::min(s.peakRss, s.storedBytes)) / 1e6),
                          s.peakSinceStart ? " (since start)" : "")});
+    }
+    return t;
+}
+
+BenchTable pairsTable(const std::vector<SceneResult>& scenes) {
+    BenchTable t({"scene", "lights", "pairs", "unlit_pct", "unoccluded_pct", "occluded_pct", "rasterised_pct",
+                  "unlit_us", "unoccluded_us", "occluded_us", "rasterised_us"});
+    const DirectPath kinds[4] = {DirectPath::Unlit, DirectPath::Unoccluded, DirectPath::Occluded,
+                                 DirectPath::Rasterised};
+    for (const SceneResult& r : scenes) {
+        const PairKinds& k = r.pairs;
+        std::vector<std::string> row = {r.office.label, benchNumber(double(r.office.lights())),
+                                        benchNumber(double(k.total()))};
+        for (DirectPath kind : kinds)
+            row.push_back(benchNumber(100.0 * double(k.count[size_t(kind)]) / double(std::max<size_t>(k.total(), 1))));
+        for (DirectPath kind : kinds) {
+            const size_t n = k.count[size_t(kind)];
+            row.push_back(n ? benchNumber(1e6 * k.seconds[size_t(kind)] / double(n)) : std::string("-"));
+        }
+        t.addRow(row);
     }
     return t;
 }
@@ -959,6 +1019,10 @@ int runBenchLights(const BenchOptions& options) {
                 summaryT.aligned().c_str());
     std::printf("\nScenes: reference, final errors, memory.\n\n%s", scenesT.aligned().c_str());
     std::printf("\nCost exponent in the number of lights (log-log least squares).\n\n%s", fitsT.aligned().c_str());
+    const BenchTable pairsT = pairsTable(scenes);
+    std::printf("\nDirect-light pairs by how they are answered (3 points on every triangle, every light): share "
+                "and microseconds each.\n\n%s",
+                pairsT.aligned().c_str());
     std::printf("\nTargets (many lights).\n\n%s", targetsT.aligned().c_str());
 
     run.writeCsv("lights_checkpoints.csv", checkpointsT);
@@ -966,6 +1030,7 @@ int runBenchLights(const BenchOptions& options) {
     run.writeCsv("lights_scenes.csv", scenesT);
     run.writeCsv("lights_fits.csv", fitsT);
     run.writeCsv("lights_targets.csv", targetsT);
+    run.writeCsv("lights_pairs.csv", pairsT);
     run.plot("lights_plots.gp", gnuplotScript(scenes, work), kPlots);
     const double wall = run.seconds();
     run.write("lights_summary.md", summaryMarkdown(run, wall, work, scenes, fits, targets));

@@ -182,6 +182,10 @@ std::vector<ReportSection> reportSections() {
          {
              {"lights_targets.csv", "Targets of the many-lights issue.", {}},
              {"lights_summary.csv", "Time to each level, Meshlight and the path tracer.", {}},
+             {"lights_pairs.csv",
+              "Direct-light pairs by how they are answered: below the horizon, nothing in the way (closed form), "
+              "the light behind one occluder polygon (zero), rasterised; share and microseconds each.",
+              {}},
          }},
     };
 }
