@@ -34,6 +34,8 @@ CacheSettings IndirectSettings::defaultCache() {
 void IndirectSettings::validate() const {
     if (bounces < 0 || bounces > 256) throw InputError(concat("bounce count ", bounces, " is not in 0..256"));
     if (!(albedo >= 0 && albedo <= 1)) throw InputError(concat("albedo ", albedo, " is not in [0, 1]"));
+    if (!(tailAlbedo >= 0 && tailAlbedo <= 1))
+        throw InputError(concat("tail albedo ", tailAlbedo, " is not in [0, 1]"));
     if (!(startFraction >= 0 && startFraction <= 1))
         throw InputError(concat("indirect start fraction ", startFraction, " is not in [0, 1]"));
     if (!(startSeconds >= 0)) throw InputError(concat("indirect start seconds ", startSeconds, " is negative"));
@@ -242,9 +244,9 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     std::vector<IrradianceMeshCopy> v;
     for (int b = 1; b <= complete; ++b) v.push_back(copyMesh(b));
     if (complete == 0 || complete >= settings_.bounces) return v;
-    // The bounces still to come, each ā times the one before: Σ_{j=1..N−k} ā^j
+    // The bounces still to come, each r times the one before: Σ_{j=1..N−k} r^j
     // times the last complete bounce k.
-    const double a = std::clamp(settings_.albedo, 0.0, 0.999);
+    const double a = std::clamp(settings_.tailAlbedo, 0.0, 0.999);
     double tail = 0, term = 1;
     for (int j = 1; j <= settings_.bounces - complete; ++j) tail += term *= a;
     IrradianceMeshCopy rest = v.back();

@@ -39,6 +39,10 @@ namespace ml {
 struct IndirectSettings {
     int bounces = 1;          // from countBounces (or --bounces)
     double albedo = 0.5;      // ā, from countBounces: relaxes later bounces' tolerances
+    // The ratio of each bounce still to come to the one before, for the
+    // image while bounces are missing (displayMeshes): countBounces's
+    // areaAlbedo.
+    double tailAlbedo = 0.5;
     // Bounce 1's cache: coarser and smoother than direct light's, since
     // indirect light has no sharp shadows of its own and each sample is a
     // whole hemispherical gather.
@@ -99,8 +103,8 @@ public:
     std::vector<IrradianceMeshCopy> copyMeshes() const;
     // What the image shows while bounces are missing: the bounces whose
     // first pass is complete and, for the ones still to come, one more mesh,
-    // the last complete bounce k times Σ_{j=1..N−k} ā^j (each bounce carries
-    // about ā of the one before): all the light is in the image from the
+    // the last complete bounce k times Σ_{j=1..N−k} r^j (each bounce carries
+    // about r = tailAlbedo of the one before): all the light is in the image from the
     // first bounce on, its distribution approximate until the bounces are
     // gathered. A bounce being gathered is not shown until it is complete,
     // except bounce 1 (see firstBounceShown).

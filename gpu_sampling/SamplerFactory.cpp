@@ -31,6 +31,7 @@ void IndirectChoice::decide(const Scene& scene) {
     bounceCount = countBounces(scene, bounces);
     solver.bounces = enabled ? bounceCount.bounces : 0;
     solver.albedo = bounceCount.meanAlbedo;
+    solver.tailAlbedo = bounceCount.areaAlbedo;
     solver.validate();
 }
 

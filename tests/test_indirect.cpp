@@ -11,6 +11,7 @@
 #include "core/raytrace/BounceCount.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
+#include "core/scenes/OfficeScene.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/RadianceProxy.h"
 #include "gpu_sampling/indirect/SliceGather.h"
@@ -205,6 +206,28 @@ TEST(BounceCount, CountFromAlbedoAndCap) {
     EXPECT_FALSE(free.capped);
     const Scene black = furnace(0.0, 1.0);
     EXPECT_EQ(countBounces(black).bounces, 0);
+    // A uniform albedo is also the area-weighted one (the tail's ratio).
+    EXPECT_NEAR(capped.areaAlbedo, 0.9, 1e-12);
+}
+
+TEST(BounceCount, AreaAlbedoWeighsEveryFaceByItsArea) {
+    // The office: floor, walls, ceiling, furniture and the panels' housing;
+    // the largest channel of their area-weighted mean, computed here from
+    // the scene's own triangles.
+    const Scene office = makeOfficeScene(OfficeSettings{});
+    Rgb sum(0.0);
+    double area = 0;
+    for (const Mesh& m : office.meshes)
+        for (size_t t = 0; t < m.triangles.size(); ++t) {
+            sum += m.area(t) * office.materials[m.materials[t]].kd;
+            area += m.area(t);
+        }
+    const Rgb mean = sum / area;
+    const BounceCount b = countBounces(office);
+    EXPECT_NEAR(b.areaAlbedo, std::max({mean.r, mean.g, mean.b}), 1e-12);
+    // A light room with a dark floor, lit from above: later bounces meet
+    // more of the light walls and ceiling than direct light does.
+    EXPECT_GT(b.areaAlbedo, b.meanAlbedo);
 }
 
 // ---------------------------------------------------------------------------

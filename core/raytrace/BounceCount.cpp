@@ -49,14 +49,20 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
     std::vector<Tri> tris;
     std::vector<double> cdf;
     double total = 0;
+    Rgb areaWeighted(0.0);
     for (uint32_t m = 0; m < scene.meshes.size(); ++m)
         for (uint32_t t = 0; t < scene.meshes[m].triangles.size(); ++t) {
             const double a = scene.meshes[m].area(t);
             if (!(a > 0)) continue;
             total += a;
+            areaWeighted += a * scene.materials[scene.meshes[m].materials[t]].kd;
             tris.push_back({m, t});
             cdf.push_back(total);
         }
+    if (total > 0) {
+        const Rgb r = areaWeighted / total;
+        plan.areaAlbedo = std::clamp(std::max({r.r, r.g, r.b}), 0.0, 1.0);
+    }
     Rgb weighted(0.0);
     double weight = 0;
     if (!tris.empty() && !scene.lights.empty()) {
