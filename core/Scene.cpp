@@ -3,6 +3,7 @@
 #include "DisjointSets.h"
 #include "Error.h"
 
+#include <algorithm>
 #include <map>
 
 namespace ml {
@@ -52,6 +53,66 @@ AreaLight makeLight(const Scene& scene, uint32_t meshIndex, uint32_t material,
     return light;
 }
 
+// A two-sided panel (see Scene::finalize): when the triangles lie in one plane
+// and face both ways, sets side[t] to 0 for those facing like the largest
+// triangle, 1 for the others, and returns true; otherwise changes nothing.
+bool splitBySide(const Mesh& mesh, const std::vector<uint32_t>& tris, std::vector<uint8_t>& side) {
+    if (tris.size() < 2) return false;
+    uint32_t largest = tris.front();
+    double largestArea = 0;
+    Bounds3 bounds;
+    for (uint32_t t : tris) {
+        const double a = glm::length(mesh.areaNormal(t));
+        if (a > largestArea) largestArea = a, largest = t;
+        for (const Vec3& v : mesh.triangle(t)) bounds.extend(v);
+    }
+    if (!(largestArea > 0)) return false;
+    const Vec3 n = mesh.areaNormal(largest) / largestArea;
+    const Vec3 origin = mesh.triangle(largest)[0];
+    const double tol = kLightPlanarTolerance * std::max(bounds.diagonal(), 1e-300);
+    std::vector<uint8_t> sides;
+    sides.reserve(tris.size());
+    for (uint32_t t : tris) {
+        const Vec3 an = mesh.areaNormal(t);
+        const double length = glm::length(an);
+        if (!(length > 0)) return false;
+        const Vec3 u = an / length;
+        if (glm::length(u - n) <= kLightNormalTolerance) sides.push_back(0);
+        else if (glm::length(u + n) <= kLightNormalTolerance) sides.push_back(1);
+        else return false;
+        for (const Vec3& v : mesh.triangle(t))
+            if (std::abs(glm::dot(v - origin, n)) > tol) return false;
+    }
+    if (std::find(sides.begin(), sides.end(), 1) == sides.end()) return false;
+    for (size_t k = 0; k < tris.size(); ++k) side[tris[k]] = sides[k];
+    return true;
+}
+
+// The mesh's emissive triangles grouped by connection: those of one material
+// and one side[t] sharing a vertex position, transitively. Keyed by a
+// representative triangle; each group's triangles in increasing order.
+std::map<uint32_t, std::vector<uint32_t>> connectedEmitters(const Scene& scene, const Mesh& mesh,
+                                                            const std::vector<uint8_t>& side) {
+    using Key = std::pair<uint64_t, Vec3>;  // (material, side), position
+    DisjointSets sets(mesh.triangles.size());
+    std::map<Key, uint32_t, bool (*)(const Key&, const Key&)> firstAt([](const Key& a, const Key& b) {
+        if (a.first != b.first) return a.first < b.first;
+        return Vec3Less{}(a.second, b.second);
+    });
+    for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+        const uint32_t mat = mesh.materials[t];
+        if (!scene.materials[mat].emissive()) continue;
+        for (const Vec3& p : mesh.triangle(t)) {
+            auto [it, inserted] = firstAt.emplace(Key(2 * uint64_t(mat) + side[t], p), t);
+            if (!inserted) sets.unite(t, it->second);
+        }
+    }
+    std::map<uint32_t, std::vector<uint32_t>> groups;
+    for (uint32_t t = 0; t < mesh.triangles.size(); ++t)
+        if (scene.materials[mesh.materials[t]].emissive()) groups[sets.find(t)].push_back(t);
+    return groups;
+}
+
 }  // namespace
 
 void Scene::finalize() {
@@ -62,25 +123,14 @@ void Scene::finalize() {
     lights.clear();
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
         const Mesh& mesh = meshes[mi];
-        // Emissive triangles sharing a vertex position, per material, form one light.
-        DisjointSets sets(mesh.triangles.size());
-        std::map<std::pair<uint32_t, Vec3>, uint32_t,
-                 bool (*)(const std::pair<uint32_t, Vec3>&, const std::pair<uint32_t, Vec3>&)>
-            firstAt([](const std::pair<uint32_t, Vec3>& a, const std::pair<uint32_t, Vec3>& b) {
-                if (a.first != b.first) return a.first < b.first;
-                return Vec3Less{}(a.second, b.second);
-            });
-        for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-            const uint32_t mat = mesh.materials[t];
-            if (!materials[mat].emissive()) continue;
-            for (const Vec3& p : mesh.triangle(t)) {
-                auto [it, inserted] = firstAt.emplace(std::make_pair(mat, p), t);
-                if (!inserted) sets.unite(t, it->second);
-            }
-        }
-        std::map<uint32_t, std::vector<uint32_t>> groups;  // root -> triangles, in order
-        for (uint32_t t = 0; t < mesh.triangles.size(); ++t)
-            if (materials[mesh.materials[t]].emissive()) groups[sets.find(t)].push_back(t);
+        // Grouped by connection; grouped again where a two-sided panel splits.
+        // The second grouping repeats the first's unions for the sets that do
+        // not split, so their representatives (and light names) stay.
+        std::vector<uint8_t> side(mesh.triangles.size(), 0);
+        std::map<uint32_t, std::vector<uint32_t>> groups = connectedEmitters(*this, mesh, side);
+        bool split = false;
+        for (const auto& [root, tris] : groups) split |= splitBySide(mesh, tris, side);
+        if (split) groups = connectedEmitters(*this, mesh, side);
         std::map<uint32_t, int> perMaterial;
         for (auto& [root, tris] : groups) perMaterial[mesh.materials[tris.front()]]++;
         std::map<uint32_t, int> seen;

@@ -62,7 +62,12 @@ struct Mesh {
 // light's bounding diagonal from its mean plane.
 constexpr double kLightPlanarTolerance = 1e-6;
 
-// A connected set of emissive triangles of one material and one mesh.
+// Two triangles face the same way when their unit normals differ by at most
+// this (about 1e-3 radians); see Scene::finalize's two-sided panels.
+constexpr double kLightNormalTolerance = 1e-3;
+
+// A connected set of emissive triangles of one material and one mesh, all
+// facing one way when they lie in one plane (Scene::finalize).
 struct AreaLight {
     std::string name;                 // "<material>" or "<material>#k" when a material makes several
     uint32_t mesh = 0;                // index into Scene::meshes
@@ -89,8 +94,22 @@ struct Scene {
     Bounds3 bounds;                  // filled by finalize()
     std::vector<std::string> warnings;
 
-    // Computes bounds and area lights (connected emissive faces of one
-    // material). Call once after the meshes are complete.
+    // Computes bounds and area lights. Call once after the meshes are complete.
+    //
+    // A light is a connected set of emissive triangles (sharing a vertex
+    // position) of one mesh and one material, with one exception: a
+    // two-sided panel. A connected set that lies in one plane (every vertex
+    // within kLightPlanarTolerance of its size from the plane of its largest
+    // triangle) but faces both ways (every triangle's unit normal within
+    // kLightNormalTolerance of n or of −n, some of each) is split into its
+    // front and its back, each grouped again by connection: two coincident
+    // quads facing opposite ways (exported double-sided panels) become two
+    // planar lights rather than one whose normals cancel. Every other set
+    // stays one light as before, planar or not: a sphere, a fold, a closed
+    // cube (its six faces are not in one plane) or a double-sided room. Lights
+    // are ordered by mesh, then by a representative triangle of the set, and
+    // named "<material>", or "<material>#k" (k from 0 in that order) when a
+    // material makes several in one mesh.
     void finalize();
 
     size_t triangleCount() const;

@@ -5,20 +5,16 @@
 // Images are left to us (TINYGLTF_NO_STB_IMAGE, TINYGLTF_NO_EXTERNAL_IMAGE):
 // tinygltf would decode every image, normal and metal maps included, and only
 // warns when an image file is missing. We decode the few textures that are
-// averaged into Kd and Ke with stb_image, compiled here as static functions.
+// averaged into Kd and Ke (TextureMean.h).
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#include <stb/stb_image.h>
-
 #include "GltfLoader.h"
+
+#include "TextureMean.h"
 
 #include "core/Error.h"
 #include "core/MeshUtil.h"
@@ -47,13 +43,6 @@ namespace tg = tinygltf;
 // Triangles with an area <= (1e-6 · mesh diagonal)² are dropped as degenerate.
 constexpr double kDegenerateRelTol = 1e-6;
 
-// A texture's mean over a triangle uses k² stratified points, about one per
-// texel the triangle covers, with k within these bounds. With at most 32 the
-// back rooms' light-grid texture came out 4% off its mean; 64 costs 0.5 s
-// more there (1.1 s in all for 9,185 triangles and five large textures).
-constexpr int kMinTextureSubdivision = 8;
-constexpr int kMaxTextureSubdivision = 64;
-
 // An accessor without a buffer view (zeros, or sparse values only) may not
 // have more elements than this: its count is not bounded by any data.
 constexpr size_t kMaxUnbackedCount = size_t(1) << 26;
@@ -64,12 +53,6 @@ std::string item(const std::string& array, size_t index) { return concat(array, 
 // "1 triangle", "3 triangles"
 std::string count(size_t n, const char* singular, const char* plural) {
     return concat(n, " ", n == 1 ? singular : plural);
-}
-
-std::string rgbText(const Rgb& c) {
-    char text[96];
-    std::snprintf(text, sizeof text, "(%.3g, %.3g, %.3g)", c.r, c.g, c.b);
-    return text;
 }
 
 bool startsWith(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
@@ -137,17 +120,11 @@ double readComponent(const unsigned char* p, int componentType, bool normalized)
     }
 }
 
-// The sRGB EOTF (IEC 61966-2-1) for each 8-bit value.
-const std::array<double, 256>& srgbToLinear() {
-    static const std::array<double, 256> table = [] {
-        std::array<double, 256> t{};
-        for (int i = 0; i < 256; ++i) {
-            const double e = i / 255.0;
-            t[i] = e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
-        }
-        return t;
-    }();
-    return table;
+// A sampler's wrap mode (checked to be one of the three).
+TextureWrap wrapMode(int mode) {
+    if (mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return TextureWrap::ClampToEdge;
+    if (mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return TextureWrap::MirroredRepeat;
+    return TextureWrap::Repeat;
 }
 
 // The JSON chunk of a .glb (12-byte header, then chunk length, type "JSON"
@@ -170,54 +147,6 @@ bool keepEncodedImage(tg::Image* image, const int index, std::string*, std::stri
         (*static_cast<EncodedImages*>(encoded))[index].assign(bytes, bytes + size);
     return true;
 }
-
-// A decoded texture: 8-bit RGBA, sampled the way its glTF sampler says.
-struct Texture {
-    std::string name;  // for messages: the image's name, else its URI, else images[i]
-    int width = 0;
-    int height = 0;
-    std::vector<unsigned char> rgba;
-    double minAlpha = 1;
-    int wrapS = TINYGLTF_TEXTURE_WRAP_REPEAT;
-    int wrapT = TINYGLTF_TEXTURE_WRAP_REPEAT;
-    bool nearest = false;
-
-    // Linear RGB (decoded from sRGB) at texture coordinates `uv`.
-    Rgb sample(Vec2 uv) const {
-        const double x = wrapped(uv.x, wrapS) * width;
-        const double y = wrapped(uv.y, wrapT) * height;
-        if (nearest) return texel(std::floor(x), std::floor(y));
-        const double x0 = std::floor(x - 0.5), y0 = std::floor(y - 0.5);
-        const double fx = x - 0.5 - x0, fy = y - 0.5 - y0;
-        return (1 - fy) * ((1 - fx) * texel(x0, y0) + fx * texel(x0 + 1, y0)) +
-               fy * ((1 - fx) * texel(x0, y0 + 1) + fx * texel(x0 + 1, y0 + 1));
-    }
-
-private:
-    // Reduced to one period of every wrap mode (2 covers mirroring), so
-    // texel indices stay small for any finite coordinate.
-    static double wrapped(double u, int mode) {
-        if (mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return std::clamp(u, -1.0, 2.0);
-        return u - 2 * std::floor(u / 2);
-    }
-    // `i` is within a texel of [0, 2·size] (wrapped() made it so): a few
-    // steps of one period replace the slower integer division.
-    static long long wrapIndex(long long i, long long size, int mode) {
-        if (mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return std::clamp(i, 0LL, size - 1);
-        const bool mirrored = mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT;
-        const long long period = mirrored ? 2 * size : size;
-        while (i < 0) i += period;
-        while (i >= period) i -= period;
-        return mirrored && i >= size ? period - 1 - i : i;
-    }
-    Rgb texel(double x, double y) const {
-        const long long i = wrapIndex(static_cast<long long>(x), width, wrapS);
-        const long long j = wrapIndex(static_cast<long long>(y), height, wrapT);
-        const unsigned char* p = &rgba[4 * (static_cast<size_t>(j) * width + i)];
-        const auto& lin = srgbToLinear();
-        return Rgb(lin[p[0]], lin[p[1]], lin[p[2]]);
-    }
-};
 
 // A primitive as the file gives it, in its mesh's space.
 struct Primitive {
@@ -931,18 +860,9 @@ const Texture* GltfReader::texture(const tg::TextureInfo& info, const std::strin
             fail(imageAt, ".uri: cannot read '", image.uri, "': ", error);
         bytes = file.data(), size = file.size();
     }
-    if (size > INT32_MAX) fail(imageAt, ": larger than 2 GiB");
-    int width = 0, height = 0, channels = 0;
-    unsigned char* pixels =
-        stbi_load_from_memory(bytes, static_cast<int>(size), &width, &height, &channels, 4);
-    if (!pixels)
-        fail(imageAt, tex->name == imageAt ? "" : " ('" + tex->name + "')", ": cannot decode: ",
-             stbi_failure_reason());
-    tex->width = width;
-    tex->height = height;
-    tex->rgba.assign(pixels, pixels + size_t(4) * width * height);
-    stbi_image_free(pixels);
-    for (size_t i = 3; i < tex->rgba.size(); i += 4) tex->minAlpha = std::min(tex->minAlpha, tex->rgba[i] / 255.0);
+    const std::string reason = decodeTexture(bytes, size, *tex);
+    if (!reason.empty())
+        fail(imageAt, tex->name == imageAt ? "" : " ('" + tex->name + "')", ": cannot decode: ", reason);
 
     if (t.sampler != -1) {
         const tg::Sampler& s = element(model_.samplers, t.sampler, "samplers", at + ".sampler");
@@ -951,21 +871,17 @@ const Texture* GltfReader::texture(const tg::TextureInfo& info, const std::strin
             if (mode != TINYGLTF_TEXTURE_WRAP_REPEAT && mode != TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE &&
                 mode != TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT)
                 fail(samplerAt, ".", name, " ", mode, " is not a glTF wrap mode");
-        tex->wrapS = s.wrapS;
-        tex->wrapT = s.wrapT;
+        tex->wrapS = wrapMode(s.wrapS);
+        tex->wrapT = wrapMode(s.wrapT);
         tex->nearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
     }
     it->second = std::move(tex);
     return it->second.get();
 }
 
-// The texture's area-weighted mean over the triangles that use `material`:
-// per triangle, the centroids of its k² congruent sub-triangles, each
-// weighted by 1/k² of the triangle's world area.
+// The texture's area-weighted mean over the triangles that use `material`.
 Rgb GltfReader::textureMean(const Texture& tex, int texCoord, int material, const std::string& field) {
-    Rgb sum(0.0);
-    double weight = 0;
-    const double texels = static_cast<double>(tex.width) * tex.height;
+    TextureMean mean(tex);
     for (const Piece& piece : pieces_) {
         if (piece.primitive->material != material) continue;
         const auto set = piece.primitive->texcoords.find(texCoord);
@@ -975,27 +891,12 @@ Rgb GltfReader::textureMean(const Texture& tex, int texCoord, int material, cons
             continue;
         }
         const std::vector<Vec2>& uv = set->second;
-        for (const glm::uvec3& t : piece.triangles) {
-            const double area = 0.5 * glm::length(glm::cross(piece.positions[t.y] - piece.positions[t.x],
-                                                             piece.positions[t.z] - piece.positions[t.x]));
-            if (!(area > 0)) continue;
-            const Vec2 a = uv[t.x], e1 = uv[t.y] - a, e2 = uv[t.z] - a;
-            const double uvTexels = 0.5 * std::abs(e1.x * e2.y - e1.y * e2.x) * texels;
-            const int k = static_cast<int>(std::clamp(std::ceil(std::sqrt(uvTexels)),
-                                                      double(kMinTextureSubdivision),
-                                                      double(kMaxTextureSubdivision)));
-            Rgb triangleSum(0.0);
-            for (int i = 0; i < k; ++i)
-                for (int j = 0; i + j < k; ++j) {
-                    triangleSum += tex.sample(a + ((i + 1.0 / 3) * e1 + (j + 1.0 / 3) * e2) / double(k));
-                    if (i + j + 1 < k)
-                        triangleSum += tex.sample(a + ((i + 2.0 / 3) * e1 + (j + 2.0 / 3) * e2) / double(k));
-                }
-            sum += area / (k * k) * triangleSum;
-            weight += area;
-        }
+        for (const glm::uvec3& t : piece.triangles)
+            mean.add(0.5 * glm::length(glm::cross(piece.positions[t.y] - piece.positions[t.x],
+                                                  piece.positions[t.z] - piece.positions[t.x])),
+                     {uv[t.x], uv[t.y], uv[t.z]});
     }
-    return weight > 0 ? sum / weight : Rgb(1.0);
+    return mean.mean();
 }
 
 uint32_t GltfReader::sceneMaterial(int gltfMaterial) {

@@ -6,6 +6,7 @@
 
 #include "core/Error.h"
 #include "core/MeshUtil.h"
+#include "TextureMean.h"
 
 #include <algorithm>
 #include <array>
@@ -14,6 +15,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <unordered_map>
@@ -133,7 +136,12 @@ std::string allDegenerate(size_t n, const char* determiner) {
                   : concat("all ", determiner, " ", n, " triangles are degenerate");
 }
 
-// Statements whose value could come from an image; only constants are supported.
+// The textures whose means multiply a constant (map_Kd, map_Ke) or cut
+// triangles out (map_d).
+bool isAveragedTexture(string_view kw) { return kw == "map_Kd" || kw == "map_Ke" || kw == "map_d"; }
+
+// Statements whose value could come from an image; those that are not
+// isAveragedTexture are warned about and their constant is used.
 bool isTextureStatement(string_view kw) {
     return kw.substr(0, 4) == "map_" || kw == "bump" || kw == "disp" || kw == "decal" ||
            kw == "refl" || kw == "norm";
@@ -142,6 +150,32 @@ bool isTextureStatement(string_view kw) {
 bool isMaterialStatement(string_view kw) {
     return isTextureStatement(kw) || kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ns" ||
            kw == "Ka" || kw == "Ni" || kw == "d" || kw == "Tr" || kw == "illum";
+}
+
+// MTL texture options (the MTL specification's), with how many values each
+// takes: numbers for the numeric ones, else one word ("on", "m").
+struct TextureOption {
+    string_view name;
+    size_t maxValues;
+    bool numeric;
+};
+constexpr TextureOption kTextureOptions[] = {
+    {"-blendu", 1, false}, {"-blendv", 1, false}, {"-bm", 1, true},    {"-boost", 1, true},
+    {"-cc", 1, false},     {"-clamp", 1, false},  {"-imfchan", 1, false}, {"-mm", 2, true},
+    {"-o", 3, true},       {"-s", 3, true},       {"-t", 3, true},     {"-texres", 1, true},
+    {"-type", 1, false},
+};
+
+// map_d: a triangle whose mean coverage over its footprint is below this is
+// cut out, the others are opaque.
+constexpr double kCutOutCoverage = 0.5;
+
+// Returns false unless the whole token is a finite number.
+bool isNumber(string_view token) {
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+    double value = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    return ec == std::errc() && end == token.data() + token.size() && !token.empty() && std::isfinite(value);
 }
 
 // Names an index kind in errors: "vertex index 9 is out of range (4 vertices ...)".
@@ -179,12 +213,17 @@ private:
     std::map<std::string, Seen> seen_;
 };
 
-// A triangle as read: global OBJ indices (0-based), -1 for a missing normal.
+// A triangle as read: global OBJ indices (0-based), -1 for a missing normal
+// or texture coordinate.
 struct RawTriangle {
     std::array<uint32_t, 3> position;
     std::array<int32_t, 3> normal;
+    std::array<int32_t, 3> texcoord;
     uint32_t material;  // index into Scene::materials
     int line;
+    bool cutOut = false;  // removed by its material's map_d
+
+    bool hasTexcoords() const { return texcoord[0] >= 0 && texcoord[1] >= 0 && texcoord[2] >= 0; }
 };
 
 struct Group {
@@ -192,10 +231,31 @@ struct Group {
     std::vector<RawTriangle> triangles;
 };
 
+// A map_Kd, map_Ke or map_d statement: the image and the options honoured.
+struct TextureStatement {
+    std::string keyword;  // "map_Kd"
+    std::string file;     // as written
+    std::string path;     // relative to the MTL's folder, lexically normalised
+    SourceLocation at;
+    Vec2 scale{1.0};      // -s u v
+    Vec2 offset{0.0};     // -o u v
+    bool clamp = false;   // -clamp on
+
+    // "map_Kd 'wood.png'", for messages.
+    std::string named() const { return concat(keyword, " '", file, "'"); }
+    // Where an OBJ texture coordinate reads the image: scaled, offset, and
+    // with v turned down (an OBJ vt has v up; images are stored top row first).
+    Vec2 lookup(const Vec2& vt) const {
+        const Vec2 p = vt * scale + offset;
+        return {p.x, 1 - p.y};
+    }
+};
+
 struct LibraryMaterial {
     Material material;
     SourceLocation definedAt;
     int sceneIndex = -1;  // set when a face first uses it
+    std::optional<TextureStatement> mapKd, mapKe, mapD;
 };
 
 class ObjParser {
@@ -223,6 +283,17 @@ private:
     // MTL
     void loadMaterialLibrary(string_view name, const SourceLocation& at);
     void parseMaterialStatement(const Statement& st, const SourceLocation& at, Material& m);
+    void parseAveragedTexture(const Statement& st, const SourceLocation& at, LibraryMaterial& m,
+                              RepeatedWarnings& repeated);
+
+    // Textures
+    void applyTextures();
+    const Texture& loadTexture(const TextureStatement& statement);
+    void cutOut(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles);
+    Rgb textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles);
+    double worldArea(const RawTriangle& t) const;
+    std::array<Vec2, 3> lookups(const TextureStatement& statement, const RawTriangle& t) const;
+    void warnWithoutUv(const TextureStatement& statement, size_t triangles);
 
     // Assembly
     Mesh buildMesh(const Group& group);
@@ -236,7 +307,7 @@ private:
     std::vector<Vec3> positions_;
     std::vector<Vec3> normals_;   // unit, or zero when the file's vn has zero length
     std::vector<int> normalLines_;
-    size_t texcoordCount_ = 0;
+    std::vector<Vec2> texcoords_;  // u, v (v up, as the file gives it)
 
     std::vector<Group> groups_;
     std::unordered_map<std::string, size_t> groupIndex_;
@@ -244,17 +315,20 @@ private:
 
     std::map<std::string, LibraryMaterial> library_;
     std::vector<std::string> libraryFiles_;
+    std::map<std::string, std::unique_ptr<Texture>> textures_;  // by path, and "(clamp)" when clamped
     LibraryMaterial* currentLibraryMaterial_ = nullptr;  // null: no usemtl yet
     int defaultMaterial_ = -1;
 
     size_t nonConvexPolygons_ = 0;
     int firstNonConvexLine_ = 0;
     size_t degenerateTriangles_ = 0;
+    size_t cutOutTriangles_ = 0;
     int firstDegenerateLine_ = 0;
 
     // Reused across faces to avoid an allocation per line.
     std::vector<uint32_t> facePositions_;
     std::vector<int32_t> faceNormals_;
+    std::vector<int32_t> faceTexcoords_;
     std::vector<Vec3> fanNormals_;
 };
 
@@ -264,6 +338,7 @@ Scene ObjParser::parse() {
                                 " degrees is not in [0, 180]"));
     scene_.name = path_;
     readStatements();
+    applyTextures();
     assembleMeshes();
     scene_.finalize();
     return std::move(scene_);
@@ -303,7 +378,11 @@ void ObjParser::readStatements() {
 void ObjParser::assembleMeshes() {
     size_t faceTriangles = 0;
     for (const Group& g : groups_) faceTriangles += g.triangles.size();
-    if (faceTriangles == 0) throwInputError(SourceLocation{path_}, "no faces (f statements) found");
+    if (faceTriangles == 0)
+        throwInputError(SourceLocation{path_}, cutOutTriangles_ > 0
+                                                   ? concat("map_d cuts out every triangle (",
+                                                            cutOutTriangles_, ")")
+                                                   : std::string("no faces (f statements) found"));
 
     std::vector<size_t> trianglesPerMaterial(scene_.materials.size(), 0);
     std::vector<int> firstLinePerMaterial(scene_.materials.size(), 0);
@@ -370,8 +449,12 @@ void ObjParser::parseTexcoord(const Statement& st, const SourceLocation& at) {
     if (st.args.empty() || st.args.size() > 3)
         throwInputError(at, "vt has ", count(st.args.size(), "value", "values"),
                         ", expected 1 to 3");
-    for (string_view a : st.args) parseNumber(a, at, "texture coordinate");
-    ++texcoordCount_;
+    Vec2 uv(0.0);  // w, the third value, is for 3D textures
+    for (size_t k = 0; k < st.args.size(); ++k) {
+        const double value = parseNumber(st.args[k], at, "texture coordinate");
+        if (k < 2) uv[static_cast<int>(k)] = value;
+    }
+    texcoords_.push_back(uv);
 }
 
 uint32_t ObjParser::resolveIndex(string_view token, size_t defined, const IndexKind& kind,
@@ -394,6 +477,7 @@ void ObjParser::parseFace(const Statement& st, const SourceLocation& at) {
                         ", expected at least 3");
     facePositions_.clear();
     faceNormals_.clear();
+    faceTexcoords_.clear();
     for (string_view corner : st.args) {
         // v, v/vt, v//vn or v/vt/vn
         std::array<string_view, 3> parts;
@@ -412,8 +496,10 @@ void ObjParser::parseFace(const Statement& st, const SourceLocation& at) {
             throwInputError(at, "face vertex '", corner,
                             "' is malformed (expected v, v/vt, v//vn or v/vt/vn)");
         facePositions_.push_back(resolveIndex(parts[0], positions_.size(), kVertexIndex, at));
-        if (partCount >= 2 && !parts[1].empty())
-            resolveIndex(parts[1], texcoordCount_, kTexcoordIndex, at);
+        faceTexcoords_.push_back(
+            partCount >= 2 && !parts[1].empty()
+                ? static_cast<int32_t>(resolveIndex(parts[1], texcoords_.size(), kTexcoordIndex, at))
+                : -1);
         int32_t normal = -1;
         if (partCount == 3) {
             normal =
@@ -445,6 +531,7 @@ void ObjParser::parseFace(const Statement& st, const SourceLocation& at) {
         RawTriangle t;
         t.position = {facePositions_[0], facePositions_[k], facePositions_[k + 1]};
         t.normal = {faceNormals_[0], faceNormals_[k], faceNormals_[k + 1]};
+        t.texcoord = {faceTexcoords_[0], faceTexcoords_[k], faceTexcoords_[k + 1]};
         t.material = material;
         t.line = at.line;
         group.triangles.push_back(t);
@@ -539,6 +626,8 @@ void ObjParser::loadMaterialLibrary(string_view name, const SourceLocation& at) 
             repeated.add(concat("unknown statement '", kw, "' ignored"), where.line);
         } else if (!current) {
             throwInputError(where, kw, " before any newmtl");
+        } else if (isAveragedTexture(kw)) {
+            parseAveragedTexture(st, where, *current, repeated);
         } else {
             parseMaterialStatement(st, where, current->material);
         }
@@ -604,6 +693,188 @@ void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation
                                          " (transparency) is not supported; rendered opaque"));
     }
     // Ni (index of refraction) matters only for refraction, which illum reports.
+}
+
+// Options come first, each with its values; the file name is the rest of
+// the line, blanks included. -o, -s and -clamp are honoured (see
+// TextureStatement), the others warned about once per MTL file.
+void ObjParser::parseAveragedTexture(const Statement& st, const SourceLocation& at, LibraryMaterial& m,
+                                     RepeatedWarnings& repeated) {
+    TextureStatement texture;
+    texture.keyword = std::string(st.keyword);
+    texture.at = at;
+    size_t i = 0;
+    // The last argument is never an option's value: it is (the end of) the file name.
+    while (i + 1 < st.args.size() && st.args[i].size() > 1 && st.args[i].front() == '-') {
+        const string_view name = st.args[i++];
+        const auto option = std::find_if(std::begin(kTextureOptions), std::end(kTextureOptions),
+                                         [&](const TextureOption& o) { return o.name == name; });
+        if (option == std::end(kTextureOptions))
+            throwInputError(at, st.keyword, ": unknown texture option '", name, "'");
+        std::vector<double> values;
+        string_view word;
+        if (option->numeric) {
+            while (values.size() < option->maxValues && i + 1 < st.args.size() && isNumber(st.args[i]))
+                values.push_back(parseNumber(st.args[i++], at, "texture option value"));
+            if (values.empty())
+                throwInputError(at, st.keyword, ": texture option ", name, " has no value before the file name");
+        } else {
+            if (i + 1 >= st.args.size())
+                throwInputError(at, st.keyword, ": texture option ", name, " has no value before the file name");
+            word = st.args[i++];
+        }
+        if (name == "-o") {
+            texture.offset = Vec2(values[0], values.size() > 1 ? values[1] : 0.0);
+        } else if (name == "-s") {
+            texture.scale = Vec2(values[0], values.size() > 1 ? values[1] : 1.0);
+        } else if (name == "-clamp") {
+            if (word != "on" && word != "off")
+                throwInputError(at, st.keyword, ": -clamp takes on or off, not '", word, "'");
+            texture.clamp = word == "on";
+        } else {
+            repeated.add(concat("texture option ", name, " is not supported; ignored"), at.line);
+        }
+    }
+    if (i >= st.args.size()) throwInputError(at, st.keyword, " without a file name");
+    const string_view file(st.args[i].data(), static_cast<size_t>(st.rest.data() + st.rest.size() - st.args[i].data()));
+    texture.file = std::string(file);
+    // Windows exporters write folders with backslashes.
+    std::string portable = texture.file;
+    std::replace(portable.begin(), portable.end(), '\\', '/');
+    fs::path path{portable};
+    if (path.is_relative()) path = fs::path(at.file).parent_path() / path;
+    texture.path = path.lexically_normal().string();
+    std::optional<TextureStatement>& slot =
+        st.keyword == "map_Kd" ? m.mapKd : st.keyword == "map_Ke" ? m.mapKe : m.mapD;
+    slot = std::move(texture);
+}
+
+// Textures --------------------------------------------------------------------
+
+// Per material that faces use: map_d cuts triangles out first, then map_Kd
+// and map_Ke are averaged over the triangles left.
+void ObjParser::applyTextures() {
+    std::vector<const LibraryMaterial*> textured(scene_.materials.size(), nullptr);
+    bool any = false;
+    for (const auto& [name, lm] : library_)
+        if (lm.sceneIndex >= 0 && (lm.mapKd || lm.mapKe || lm.mapD)) {
+            textured[lm.sceneIndex] = &lm;
+            any = true;
+        }
+    if (!any) return;
+    std::vector<std::vector<RawTriangle*>> trianglesOf(scene_.materials.size());
+    for (Group& g : groups_)
+        for (RawTriangle& t : g.triangles)
+            if (textured[t.material]) trianglesOf[t.material].push_back(&t);
+
+    for (size_t mi = 0; mi < textured.size(); ++mi) {
+        const LibraryMaterial* lm = textured[mi];
+        if (!lm) continue;
+        std::vector<RawTriangle*>& triangles = trianglesOf[mi];
+        Material& m = scene_.materials[mi];
+        if (lm->mapD) {
+            cutOut(*lm->mapD, triangles);
+            triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
+                                           [](const RawTriangle* t) { return t->cutOut; }),
+                            triangles.end());
+        }
+        if (lm->mapKd) {
+            m.kd = glm::clamp(m.kd * textureMean(*lm->mapKd, triangles), Rgb(0.0), Rgb(1.0));
+            scene_.warnings.push_back(concat(lm->mapKd->at.str(), ": texture ", lm->mapKd->named(),
+                                             " averaged to Kd ", rgbText(m.kd)));
+        }
+        if (lm->mapKe) {
+            // Exporters often write Ke 0 with an emission map: the map is the emission.
+            const bool unset = m.ke == Rgb(0.0);
+            if (unset) m.ke = Rgb(1.0);
+            m.ke *= textureMean(*lm->mapKe, triangles);
+            scene_.warnings.push_back(concat(lm->mapKe->at.str(), ": texture ", lm->mapKe->named(),
+                                             " averaged to Ke ", rgbText(m.ke),
+                                             unset ? " (no Ke or Ke 0: taken as 1 1 1 under map_Ke)" : ""));
+        }
+    }
+    for (Group& g : groups_)
+        g.triangles.erase(std::remove_if(g.triangles.begin(), g.triangles.end(),
+                                         [](const RawTriangle& t) { return t.cutOut; }),
+                          g.triangles.end());
+}
+
+// The texture a statement names, read (through read_) and decoded once.
+const Texture& ObjParser::loadTexture(const TextureStatement& statement) {
+    const std::string key = statement.clamp ? statement.path + " (clamp)" : statement.path;
+    auto found = textures_.find(key);
+    if (found != textures_.end()) return *found->second;
+    std::string bytes;
+    if (!read_(statement.path, bytes))
+        throwInputError(statement.at, statement.named(), ": cannot read: no such file or not readable (",
+                        statement.path, ")");
+    auto texture = std::make_unique<Texture>();
+    texture->name = statement.file;
+    const std::string reason =
+        decodeTexture(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), *texture);
+    if (!reason.empty())
+        throwInputError(statement.at, statement.named(),
+                        ": cannot read: not a PNG, JPEG or TGA image that stb_image can decode (", reason, ")");
+    // The nearest texel: a footprint of whole texels averages exactly those.
+    texture->nearest = true;
+    texture->wrapS = texture->wrapT = statement.clamp ? TextureWrap::ClampToEdge : TextureWrap::Repeat;
+    return *textures_.emplace(key, std::move(texture)).first->second;
+}
+
+void ObjParser::cutOut(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles) {
+    const Texture& texture = loadTexture(statement);
+    std::optional<double> imageCoverage;  // computed once, when a triangle has no vt
+    size_t removed = 0, withoutUv = 0;
+    for (RawTriangle* t : triangles) {
+        double coverage;
+        if (t->hasTexcoords()) {
+            coverage = footprintCoverage(texture, lookups(statement, *t));
+        } else {
+            if (!imageCoverage) imageCoverage = texture.imageCoverage();
+            coverage = *imageCoverage;
+            ++withoutUv;
+        }
+        t->cutOut = coverage < kCutOutCoverage;
+        removed += t->cutOut;
+    }
+    cutOutTriangles_ += removed;
+    scene_.warnings.push_back(concat(
+        statement.at.str(), ": texture ", statement.named(), " cuts out ", removed, " of ",
+        count(triangles.size(), "triangle", "triangles"), " (mean coverage below ", kCutOutCoverage,
+        "); the others render opaque (cut-outs are per triangle until per-pixel texturing exists)"));
+    if (withoutUv > 0) warnWithoutUv(statement, withoutUv);
+}
+
+Rgb ObjParser::textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles) {
+    TextureMean mean(loadTexture(statement));
+    size_t withoutUv = 0;
+    for (const RawTriangle* t : triangles) {
+        if (t->hasTexcoords()) {
+            mean.add(worldArea(*t), lookups(statement, *t));
+        } else {
+            mean.addWithoutUv(worldArea(*t));
+            ++withoutUv;
+        }
+    }
+    if (withoutUv > 0) warnWithoutUv(statement, withoutUv);
+    return mean.mean();
+}
+
+void ObjParser::warnWithoutUv(const TextureStatement& statement, size_t triangles) {
+    scene_.warnings.push_back(concat(statement.at.str(), ": texture ", statement.named(), ": ",
+                                     count(triangles, "triangle has", "triangles have"),
+                                     " no vt (texture coordinates); the mean over the whole image is used for ",
+                                     triangles == 1 ? "it" : "them"));
+}
+
+double ObjParser::worldArea(const RawTriangle& t) const {
+    const Vec3& p0 = positions_[t.position[0]];
+    return 0.5 * glm::length(glm::cross(positions_[t.position[1]] - p0, positions_[t.position[2]] - p0));
+}
+
+std::array<Vec2, 3> ObjParser::lookups(const TextureStatement& statement, const RawTriangle& t) const {
+    return {statement.lookup(texcoords_[t.texcoord[0]]), statement.lookup(texcoords_[t.texcoord[1]]),
+            statement.lookup(texcoords_[t.texcoord[2]])};
 }
 
 // Assembly --------------------------------------------------------------------
