@@ -48,7 +48,9 @@ inline void orthonormalBasis(const Vec3& n, Vec3& t, Vec3& b) {
     b = Vec3(c, sign + n.y * n.y * a, -n.y);
 }
 
-// Luminance of linear Rec.709 RGB.
+// Luminance of linear Rec.709 RGB: how bright a value looks on screen (tone
+// mapping, exposure, noise measures). Lux and lumens take the photometry's
+// weights instead (core/image/Photometry.h).
 inline double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
 
 }  // namespace ml

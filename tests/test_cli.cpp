@@ -3,6 +3,7 @@
 #include "CsvColumn.h"
 #include "RunCommand.h"
 #include "TempDirTest.h"
+#include "core/image/Image.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,7 @@ namespace fs = std::filesystem;
 using ml::test::CommandResult;
 using ml::test::csvColumn;
 using ml::test::runMeshlight;
+using namespace ml;
 
 namespace {
 
@@ -163,4 +165,129 @@ TEST_F(Cli, PlanPrintsWhatWouldBeSimulated) {
     EXPECT_NE(r.output.find("light 'light'"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("specular: no pass"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("grid cache"), std::string::npos) << r.output;
+}
+
+// --- Lux: probe's RADIANCE-style input and lux columns, render --quantity lux ---
+
+namespace {
+
+// lux from a probe CSV's E_r, E_g, E_b (direct light) with the weights of a photometry.
+double luxOf(const std::string& csv, int row, const Rgb& weights) {
+    return 179 * (weights.r * csvColumn(csv, row, "E_r") + weights.g * csvColumn(csv, row, "E_g") +
+                  weights.b * csvColumn(csv, row, "E_b"));
+}
+
+}  // namespace
+
+TEST_F(Cli, ProbeReadsRadiancePointsFromStandardInputAndWritesLux) {
+    write("scene.mtl", kQuadMtl);
+    write("scene.obj", kQuadObj);
+    // rtrace's input: x y z dx dy dz, any white space, '#' comments, blank lines.
+    write("points.txt", "# two sensors\n\n0 0 0 0 1 0\n  0.5\t0 0.3   0 2 0  # on the desk\n");
+    write("points.csv", "x,y,z,nx,ny,nz\n0,0,0,0,1,0\n0.5,0,0.3,0,1,0\n");
+    const std::string probe = "probe " + path("scene.obj") + " --method exact --direct-only";
+    CommandResult r = runMeshlight(probe + " --points - --out " + path("stdin.csv") + " < " + path("points.txt"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runMeshlight(probe + " --points " + path("points.csv") + " --out " + path("file.csv"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = runMeshlight(probe + " --photometry rec709 --points - --out " + path("rec709.csv") + " < " +
+                     path("points.txt"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    for (int row = 0; row < 2; ++row) {
+        EXPECT_EQ(csvColumn(path("stdin.csv"), row, "E_g"), csvColumn(path("file.csv"), row, "E_g"));
+        EXPECT_EQ(csvColumn(path("stdin.csv"), row, "ny"), 1.0);  // the direction is normalised
+        const double radiance = luxOf(path("stdin.csv"), row, Rgb(0.265, 0.670, 0.065));
+        ASSERT_GT(radiance, 0);
+        EXPECT_NEAR(csvColumn(path("stdin.csv"), row, "lux"), radiance, 1e-8 * radiance);  // 9 digits in the CSV
+        const double rec709 = luxOf(path("rec709.csv"), row, Rgb(0.2126, 0.7152, 0.0722));
+        EXPECT_NEAR(csvColumn(path("rec709.csv"), row, "lux"), rec709, 1e-8 * rec709);
+    }
+    // Direct light only: no lux_indirect column.
+    std::ifstream in(path("stdin.csv"));
+    std::string header;
+    std::getline(in, header);
+    EXPECT_NE(header.find(",lux,"), std::string::npos) << header;
+    EXPECT_EQ(header.find("lux_indirect"), std::string::npos) << header;
+}
+
+TEST_F(Cli, ProbeStandardInputErrorsNameTheLine) {
+    write("scene.mtl", kQuadMtl);
+    write("scene.obj", kQuadObj);
+    const std::string probe = "probe " + path("scene.obj") + " --method exact --direct-only --points - --out " +
+                              path("o.csv") + " < ";
+    write("short.txt", "0 0 0 0 1 0\n\n# a comment\n1 2 3 0 1\n");
+    CommandResult r = runMeshlight(probe + path("short.txt"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("<stdin>:4: expected 6 numbers (x y z dx dy dz), found 5"), std::string::npos) << r.output;
+    write("word.txt", "0 0 zero 0 1 0\n");
+    r = runMeshlight(probe + path("word.txt"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("<stdin>:1: column z: 'zero' is not a finite number"), std::string::npos) << r.output;
+    write("zero.txt", "\n\n0 0 0 0 0 0\n");
+    r = runMeshlight(probe + path("zero.txt"));
+    EXPECT_NE(r.output.find("<stdin>:3: the normal is zero"), std::string::npos) << r.output;
+    write("empty.txt", "# nothing\n");
+    r = runMeshlight(probe + path("empty.txt"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_FALSE(fs::exists(path("o.csv")));
+    r = runMeshlight("probe " + path("scene.obj") + " --photometry cie --points - --out " + path("o.csv") + " < " +
+                     path("zero.txt"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("radiance|rec709"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, RenderLuxImages) {
+    write("scene.mtl", kQuadMtl);
+    write("scene.obj", kQuadObj);
+    const std::string render = "render " + path("scene.obj") + " --width 48 --height 32 --samples 300 --quantity lux";
+    CommandResult r = runMeshlight(render + " --out " + path("lux.png"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(fs::exists(path("lux.png")));
+    r = runMeshlight(render + " --photometry rec709 --out " + path("lux.exr"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(readImageAttribute(path("lux.exr"), "meshlight:unit"), std::optional<std::string>("lx"));
+    EXPECT_EQ(readImageChannel(path("lux.exr"), "Y").width, 48);
+    for (const std::string& bad : {render + " --quantity candela --out " + path("x.png"),
+                                   render + " --photometry cie --out " + path("x.png"),
+                                   render + " --log " + path("l.csv") + " --reference " + path("lux.exr") +
+                                       " --out " + path("x.png")}) {
+        r = runMeshlight(bad);
+        EXPECT_EQ(r.status, 2) << bad << "\n" << r.output;
+    }
+    EXPECT_EQ(files(), 4u);  // obj, mtl, png, exr
+}
+
+// The lux image holds irradiance from the cache, not radiance: at the floor's
+// centre of the Cornell box it is what probe computes there.
+TEST_F(Cli, RenderLuxAtTheCornellFloorCentreAgreesWithProbe) {
+    // Straight down on the floor's centre from 300 mm, 10° across: 1.6 mm a
+    // pixel. The point is in the tall block's penumbra (about 1 % a mm), and
+    // the view makes the cache refine there first.
+    const std::string view = "--direct-only --camera-pos 276.4,300,279.6 --camera-target 276.4,0,279.6 "
+                             "--camera-up 0,0,1 --fov 10 --width 33 --height 33";
+    CommandResult r = runMeshlight("render cornell --quantity lux --until-error 0.02 --time 12 --every 0.5 " + view +
+                                   " --log " +
+                                   path("log.csv") + " --out " + path("lux.exr"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    write("point.txt", "276.4 0 279.6 0 1 0\n");
+    r = runMeshlight("probe cornell --method exact --direct-only --points - --out " + path("p.csv") + " < " +
+                     path("point.txt"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    const ImageChannel lux = readImageChannel(path("lux.exr"), "Y");
+    ASSERT_EQ(lux.width, 33);
+    const double rendered = lux.values[16 * 33 + 16];  // the centre pixel sees the centre
+    const double exact = csvColumn(path("p.csv"), 0, "lux");
+    // The tolerance is three times the cache's own estimate of its error
+    // (its last log row's direct_error, a relative RMS over the vertices
+    // that matter for the view): interpolation between vertices and their
+    // sampling noise are what separate a pixel from the exact value, and a
+    // single point may stray beyond the RMS. The pixel's own width adds
+    // nothing to first order (the gradient is linear across 1.6 mm).
+    std::ifstream log(path("log.csv"));
+    int rows = -1;  // not counting the header
+    for (std::string line; std::getline(log, line);) ++rows;
+    const double estimated = csvColumn(path("log.csv"), rows - 1, "direct_error");
+    ASSERT_GT(exact, 50);  // about 76 lx
+    ASSERT_LT(estimated, 0.05) << "the cache did not get near enough in 12 s:\n" << r.output;
+    EXPECT_NEAR(rendered, exact, 3 * estimated * exact) << "estimated error " << estimated;
 }

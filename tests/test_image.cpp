@@ -1,6 +1,7 @@
-// Images: pixel filter, files (EXR/HDR/PNG, atomic writes, path checks) and
-// tone mapping, checked against values known exactly.
+// Images: pixel filter, files (EXR/HDR/PNG, atomic writes, path checks),
+// tone mapping and photometry, checked against values known exactly.
 #include "core/image/Image.h"
+#include "core/image/Photometry.h"
 #include "core/image/ToneMap.h"
 
 #include <gtest/gtest.h>
@@ -148,6 +149,27 @@ TEST_F(ImageFiles, HdrRoundTripWithinRgbePrecision) {
             const double largest = std::max({a.r, a.g, a.b});
             for (int c = 0; c < 3; ++c) EXPECT_NEAR(b[c], a[c], largest / 64.0);
         }
+}
+
+TEST_F(ImageFiles, OneChannelAndAttributesRoundTrip) {
+    const std::vector<float> lux = {0.0f, 1.5f, 2e4f, 3.25f, 7.0f, 0.125f};  // 3 x 2, row 0 at the top
+    writeImageChannel(path("lux.exr"), lux, 3, 2, "Y",
+                      {{"meshlight:spp", 84}, {"meshlight:quantity", std::string("illuminance")},
+                       {"meshlight:scale", 0.5}});
+    const ImageChannel back = readImageChannel(path("lux.exr"), "Y");
+    EXPECT_EQ(back.width, 3);
+    EXPECT_EQ(back.height, 2);
+    EXPECT_EQ(back.values, lux);
+    EXPECT_EQ(readImageAttribute(path("lux.exr"), "meshlight:spp"), std::optional<std::string>("84"));
+    EXPECT_EQ(readImageAttribute(path("lux.exr"), "meshlight:quantity"), std::optional<std::string>("illuminance"));
+    EXPECT_EQ(readImageAttribute(path("lux.exr"), "meshlight:scale"), std::optional<std::string>("0.5"));
+    EXPECT_EQ(readImageAttribute(path("lux.exr"), "meshlight:none"), std::nullopt);
+    EXPECT_THROW(readImageChannel(path("lux.exr"), "R"), InputError);
+    // RGBE has no single channel: the value goes to all three.
+    writeImageChannel(path("lux.hdr"), lux, 3, 2, "Y");
+    const ImageRgb grey = readImageLinear(path("lux.hdr"));
+    EXPECT_NEAR(grey.at(1, 0).g, 1.5, 1.5 / 64);
+    EXPECT_EQ(entries(), (std::set<std::string>{"lux.exr", "lux.hdr"}));
 }
 
 TEST_F(ImageFiles, PngHasTheRightSize) {
@@ -317,4 +339,39 @@ TEST(ToneMap, NonFiniteInputIsABug) {
     EXPECT_THROW(toneMap(img, ToneMapSettings{}), std::logic_error);
     img.set(1, 1, Rgb(kInf));
     EXPECT_THROW(autoExposureScale(img), std::logic_error);
+}
+
+// --- Photometry ---
+
+TEST(Photometry, PureRedGivesEfficacyTimesTheRedWeightExactly) {
+    const Rgb red(1, 0, 0);  // W/m²
+    EXPECT_NEAR(photometryNamed("radiance").luminous(red), 179 * 0.265, 1e-9);
+    EXPECT_NEAR(photometryNamed("radiance").luminous(red), 47.435, 1e-9);
+    EXPECT_NEAR(photometryNamed("rec709").luminous(red), 38.0554, 1e-9);  // 179 × 0.2126
+    EXPECT_NEAR(photometryNamed("radiance").luminous(Rgb(0, 1, 0)), 119.93, 1e-9);
+    EXPECT_NEAR(photometryNamed("rec709").luminous(Rgb(0, 0, 2)), 2 * 179 * 0.0722, 1e-9);
+    // The weights sum to 1: white of 1 W/m² is the efficacy in both.
+    for (const char* name : {"radiance", "rec709"}) {
+        const Photometry p = photometryNamed(name);
+        EXPECT_NEAR(p.luminous(Rgb(1.0)), 179, 1e-9) << name;
+        EXPECT_EQ(p.name, name);
+        EXPECT_EQ(p.factors(), p.efficacy * p.weights);
+    }
+    // RADIANCE's is the default.
+    EXPECT_EQ(Photometry().weights, photometryNamed("radiance").weights);
+    EXPECT_EQ(Photometry().efficacy, kRadianceEfficacy);
+}
+
+TEST(Photometry, UnknownNamesAndBadEfficaciesAreInputErrors) {
+    try {
+        photometryNamed("cie1931");
+        FAIL() << "no InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("radiance|rec709"), std::string::npos) << e.what();
+    }
+    Photometry p;
+    p.efficacy = 0;
+    EXPECT_THROW(p.validate(), InputError);
+    p.efficacy = 683;
+    EXPECT_NO_THROW(p.validate());
 }

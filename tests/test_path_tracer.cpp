@@ -28,6 +28,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -230,6 +231,52 @@ TEST(PathTracer, SameSeedGivesTheSameImageWhateverTheThreadCount) {
                           images[0].radiance.data.size() * sizeof(float)), 0);
 }
 
+TEST(PathTracer, PassesGiveTheSameImageAndAStopKeepsWholePasses) {
+    const Scene scene = makeCornellBox();
+    const EmbreeScene rays(scene);
+    const Camera camera = *scene.camera;
+    PathTracerSettings s;
+    s.maxDepth = 3;
+    const PathTracer tracer(rays, s);
+    const ReferenceImage whole = tracer.render(camera, 20, 12, 10);
+    EXPECT_EQ(whole.samplesPerPixel, 10);
+    for (int pass : {2, 4, 6}) {  // 4: a short last pass
+        RenderControl control;
+        control.passSamples = pass;
+        const ReferenceImage r = tracer.render(camera, 20, 12, 10, control);
+        EXPECT_EQ(r.samplesPerPixel, 10);
+        EXPECT_FALSE(r.cancelled);
+        EXPECT_EQ(r.paths, 20u * 12u * 10u);
+        EXPECT_EQ(std::memcmp(r.radiance.data.data(), whole.radiance.data.data(),
+                              whole.radiance.data.size() * sizeof(float)), 0) << "pass " << pass;
+        EXPECT_EQ(std::memcmp(r.standardError.data.data(), whole.standardError.data.data(),
+                              whole.standardError.data.size() * sizeof(float)), 0) << "pass " << pass;
+    }
+    // Stopped after the first pass (the stop is set by the progress call
+    // that ends it): that pass is kept whole, the next one dropped.
+    std::atomic<bool> stop{false};
+    RenderControl control;
+    control.passSamples = 2;
+    control.stop = &stop;
+    control.progress = [&](uint64_t done, uint64_t) {
+        if (done >= 20u * 12u * 2u) stop = true;
+    };
+    const ReferenceImage partial = tracer.render(camera, 20, 12, 10, control);
+    EXPECT_TRUE(partial.cancelled);
+    EXPECT_EQ(partial.samplesPerPixel % 2, 0);
+    EXPECT_GE(partial.samplesPerPixel, 2);
+    EXPECT_LT(partial.samplesPerPixel, 10);
+    EXPECT_EQ(partial.paths, 20u * 12u * uint64_t(partial.samplesPerPixel));
+    // Stopped before anything: no sample, a black image.
+    stop = true;
+    control.progress = {};
+    const ReferenceImage none = tracer.render(camera, 20, 12, 10, control);
+    EXPECT_EQ(none.samplesPerPixel, 0);
+    EXPECT_EQ(none.radiance.at(10, 6), Rgb(0.0));
+    control.passSamples = 3;
+    EXPECT_THROW(tracer.render(camera, 20, 12, 10, control), InputError);
+}
+
 TEST(PathTracer, PixelsFollowTheCompositorsProjection) {
     // The compositor (viewer/Compositor.cpp) maps a point through
     // Camera::view() (glm::lookAtRH) and x_ndc = f/aspect·x/(−z),
@@ -359,6 +406,7 @@ TEST_F(Commands, ReferenceRejectsBadOptionsWithoutWritingAnything) {
     for (const std::string& bad : {"reference cornell --spp 0" + out, "reference cornell --spp 1" + out,
                                    "reference cornell --spp 4 --frobnicate 2" + out,
                                    "reference cornell --spp 4 --max-depth 0" + out,
+                                   "reference cornell --spp 4 --pass 3" + out,
                                    "reference cornell --spp 4 --out " + path("ref.png"),
                                    "reference cornell" + out, "reference nowhere.obj --spp 4" + out}) {
         const CommandResult r = runMeshlight(bad);
@@ -399,6 +447,15 @@ TEST_F(Commands, ProbePathAndRaytraceAgreeWithExact) {
         // value (1e-9: summation order); (0, 0) is in penumbra, within the
         // jittered sampler's one-pass error (well under 1 % there).
         EXPECT_NEAR(csvColumn(path("rt.csv"), row, "E_g"), e, row == 1 ? 1e-9 * e : 0.01 * e);
+        // lux: RADIANCE's photometry of all the light computed.
+        auto lux = [&](const std::string& file, const std::string& prefix) {
+            return 179 * (0.265 * csvColumn(file, row, prefix + "_r") + 0.670 * csvColumn(file, row, prefix + "_g") +
+                          0.065 * csvColumn(file, row, prefix + "_b"));
+        };
+        EXPECT_NEAR(csvColumn(path("rt.csv"), row, "lux"), lux(path("rt.csv"), "E"), 1e-7 * lux(path("rt.csv"), "E"));
+        EXPECT_NEAR(csvColumn(path("path.csv"), row, "lux"),
+                    lux(path("path.csv"), "E") + lux(path("path.csv"), "E_indirect"), 1e-7 * e * 179);
+        EXPECT_EQ(csvColumn(path("path.csv"), row, "lux_indirect"), 0.0);
     }
     // Options of other methods are refused, not ignored.
     const CommandResult bad = runMeshlight(common + " --method path --bits 4 --out " + path("bad.csv"));

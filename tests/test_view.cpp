@@ -23,7 +23,9 @@
 #include "gpu_sampling/gl/GlObjects.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
+#include "core/image/FalseColour.h"
 #include "core/image/Illuminance.h"
+#include "core/image/Photometry.h"
 #include "core/image/ToneMap.h"
 #include "viewer/window/DisplayState.h"
 #include "viewer/window/ViewScript.h"
@@ -418,8 +420,6 @@ TEST(DisplayState, ModesChooseWeightsAndQuantities) {
 // --- Illuminance -------------------------------------------------------------
 
 TEST(Illuminance, LuxLevelsAndFalseColour) {
-    EXPECT_DOUBLE_EQ(illuminanceLux(Rgb(1.0), 179), 179);
-    EXPECT_DOUBLE_EQ(illuminanceLux(Rgb(0, 1, 0), 100), 71.52);
     for (int i = -9; i <= 12; ++i) {
         EXPECT_NEAR(luxLevelIndex(luxAtLevel(i)), double(i), 1e-9) << i;
         EXPECT_LT(luxLevelIndex(luxAtLevel(i) * 0.999), double(i)) << i;
@@ -590,7 +590,7 @@ TEST(ViewCompositor, IndirectMeshesAddToDirectAndShowAlone) {
     EXPECT_GT(checked, 500u);
 }
 
-TEST(ViewCompositor, IlluminanceIsEfficacyTimesLuminanceOfTheIrradiance) {
+TEST(ViewCompositor, IlluminanceIsThePhotometryOfTheIrradiance) {
     const TwoLights& t = twoLights();
     Compositor c(test::glContext(), t.scene);
     const GpuCacheMeshes meshes = uploaded(t.direct);
@@ -606,7 +606,7 @@ TEST(ViewCompositor, IlluminanceIsEfficacyTimesLuminanceOfTheIrradiance) {
             const Rgb k = kd.at(x, y);
             if (k.r < 0.05 || k.g < 0.05 || k.b < 0.05) continue;  // background, lights, or a dark channel
             const Rgb e = kPi * radiance.at(x, y) / k;
-            EXPECT_NEAR(lux.at(x, y).r, illuminanceLux(e, kDefaultEfficacy), 1e-4 * lux.at(x, y).r);
+            EXPECT_NEAR(lux.at(x, y).r, Photometry().luminous(e), 1e-4 * lux.at(x, y).r);
             EXPECT_EQ(lux.at(x, y).r, lux.at(x, y).g);
             ++checked;
         }
@@ -706,6 +706,83 @@ TEST(ViewCompositor, FalseColourFollowsTheLegend) {
     for (size_t i = 0; i < gpu.size(); ++i) darker += lined[i] + 8 < gpu[i];
     EXPECT_GT(darker, 10u);
     EXPECT_LT(darker, gpu.size() / 3);
+}
+
+// `render --quantity lux` to a PNG draws on the CPU what the viewer draws
+// on the GPU: the same colours, the same iso-lux lines, the same photometry.
+TEST(ViewCompositor, CpuFalseColourIsTheViewersDisplay) {
+    const TwoLights& t = twoLights();
+    Compositor c(test::glContext(), t.scene);
+    const int size = 64;
+    CompositorSettings s;
+    s.width = s.height = size;
+    s.supersample = 2;
+    for (const char* name : {"radiance", "rec709"}) {
+        s.photometry = photometryNamed(name);
+        const LuxImage lux = c.renderIlluminance(t.camera(), t.direct, {}, s);
+        // The irradiance of pixels wholly on a surface, against the composite's
+        // own lux (a plain box filter of lux × seen).
+        const GpuCacheMeshes meshes = uploaded(t.direct);
+        const ImageRgb plain = composeImage(c, meshes, LightWeights::unit(2), CompositeQuantity::Illuminance, 2, size);
+        c.renderIlluminance(t.camera(), t.direct, {}, s);  // display() shows this composite again
+        size_t covered = 0;
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                if (lux.coverage[lux.index(x, y)] == 1.0f) {
+                    ++covered;
+                    if (std::string(name) == "radiance") {  // composeImage's photometry
+                        EXPECT_NEAR(lux.lux[lux.index(x, y)], plain.at(x, y).r, 1e-5 * plain.at(x, y).r);
+                    }
+                }
+        EXPECT_GT(covered, size_t(size * size / 2)) << name;
+        for (bool contours : {false, true}) {
+            DisplaySettings d;
+            d.luxMin = 20;
+            d.luxMax = 2000;
+            d.contours = contours;
+            const std::vector<uint8_t> gpu = displayed(c, size, d);
+            const std::vector<uint8_t> cpu = displayBytes(falseColourImage(lux, d.luxMin, d.luxMax, contours));
+            ASSERT_EQ(gpu.size(), cpu.size());
+            size_t off = 0;
+            int worst = 0;
+            for (size_t i = 0; i < gpu.size(); ++i) {
+                const int diff = std::abs(int(gpu[i]) - int(cpu[i]));
+                worst = std::max(worst, diff);
+                off += diff > 2;
+            }
+            // Float on the GPU against double here: a line's edge may round
+            // the other way, nothing more.
+            if (!contours) {
+                EXPECT_LE(worst, 2) << name;
+            }
+            EXPECT_LE(off, gpu.size() / 100) << name << (contours ? " with iso-lux lines" : "");
+        }
+    }
+}
+
+TEST(FalseColourLegend, TicksAreTheLevelsAndLabelTheDecadesWhenCrowded) {
+    // 20 .. 2000 lx: 2, 5 per decade and the decades, seven levels.
+    const std::vector<LegendTick> roomy = legendTicks(20, 2000, 300, 13);
+    ASSERT_EQ(roomy.size(), 7u);
+    EXPECT_EQ(roomy.front().lux, 20);
+    EXPECT_NEAR(roomy.front().position, 1.0, 1e-12);  // the low end at the bottom
+    EXPECT_NEAR(roomy.back().position, 0.0, 1e-12);
+    for (const LegendTick& t : roomy) EXPECT_TRUE(t.labelled);
+    const std::vector<LegendTick> crowded = legendTicks(20, 2000, 60, 13);
+    std::vector<double> labelled;
+    for (const LegendTick& t : crowded)
+        if (t.labelled) labelled.push_back(t.lux);
+    EXPECT_EQ(labelled, (std::vector<double>{100, 1000}));
+    EXPECT_EQ(legendBarHeight(100), 120);
+    EXPECT_EQ(legendBarHeight(1000), 360);
+    // The legend is drawn in the top-right corner and leaves the rest.
+    ImageRgb image(400, 300, Rgb(0.5));
+    drawLuxLegend(image, 20, 2000, "20 .. 2k lx");
+    EXPECT_EQ(image.at(10, 290), Rgb(0.5f));
+    EXPECT_NE(image.at(400 - 10 - 20, 60), Rgb(0.5f));
+    ImageRgb tiny(40, 30, Rgb(0.5));
+    drawLuxLegend(tiny, 20, 2000, "20 .. 2k lx");
+    EXPECT_EQ(tiny.at(20, 15), Rgb(0.5f));
 }
 
 TEST(ViewCompositor, WireframeDrawsEdgesOnlyWhereTheMeshIsSeen) {

@@ -33,8 +33,6 @@ double metresPerUnit(LengthUnit unit) {
     return 1.0;
 }
 
-double illuminanceLux(const Rgb& irradiance, double efficacy) { return efficacy * luminance(irradiance); }
-
 double luxLevelIndex(double lux) {
     if (!(lux > 0)) return -kInf;
     // Decade k and mantissa m ∈ [1, 10): levels 1, 2, 5 at 3k, 3k+1, 3k+2.

@@ -1,26 +1,16 @@
-// Illuminance for lighting designers: irradiance to lux, the scene's length
-// unit, and the false-colour scale with its 1-2-5 iso-lux levels. The
-// compositor's shaders compute the same mapping on the GPU (display.frag
-// gets the palette from falseColourPalette()); these are the CPU originals
-// the legend and the tests use.
+// Illuminance for lighting designers: the scene's length unit, and the
+// false-colour scale with its 1-2-5 iso-lux levels. Lux itself comes from
+// Photometry.h; the false-colour image and its legend on the CPU from
+// FalseColour.h. The compositor's shaders compute the same mapping on the
+// GPU (display.frag gets the palette from falseColourPalette()).
 //
 // Units. Irradiance E = ∫ L cos θ dω integrates radiance (W·sr⁻¹·m⁻²) over
 // solid angle, which has no length unit: for a given Ke, the cached
 // irradiance in W·m⁻² is the same whether the scene's coordinates are
 // millimetres or metres. Lux therefore never depends on the length unit,
-// only on the luminous efficacy. The unit matters where a length or an area
-// is shown or used: walking speed, positions, and a light's power
-// Φ = π Ke A (A in m² = A in scene units² × metres per unit²).
-//
-// Efficacy. Meshlight's RGB values are radiometric (W per channel), like
-// RADIANCE's; lux = K × (0.2126 R + 0.7152 G + 0.0722 B) with K in lm/W
-// (Rec. 709 luminance, as everywhere in Meshlight; RADIANCE weighs its own
-// primaries 0.265, 0.670, 0.065). The default K = 179 lm/W is RADIANCE's
-// WHTEFFICACY: the luminous efficacy of equal-energy white over the visible
-// band (683 lm/W × the mean of the photopic curve V(λ) there, about 0.26),
-// which is what an RGB white of 1 W stands for when no spectrum is given. 683 lm/W would be right
-// only if every watt were at 555 nm; a scene calibrated for another source
-// passes its own with --efficacy.
+// only on the photometry (efficacy and luminance weights). The unit matters
+// where a length or an area is shown or used: walking speed, positions, and
+// a light's power Φ = π Ke A (A in m² = A in scene units² × metres per unit²).
 #pragma once
 
 #include "core/Math.h"
@@ -31,15 +21,10 @@
 
 namespace ml {
 
-constexpr double kDefaultEfficacy = 179.0;  // lm/W, RADIANCE's equal-energy white
-
 enum class LengthUnit { Millimetre, Centimetre, Metre };
 LengthUnit parseLengthUnit(const std::string& name);  // "mm", "cm", "m"; InputError otherwise
 const char* lengthUnitName(LengthUnit unit);           // "mm", "cm", "m"
 double metresPerUnit(LengthUnit unit);                 // 0.001, 0.01, 1
-
-// Lux from irradiance (W·m⁻², RGB) and efficacy (lm/W).
-double illuminanceLux(const Rgb& irradiance, double efficacy);
 
 // The 1-2-5 levels (1, 2, 5, 10, 20, ...) as a continuous index: an integer
 // exactly at each level (index 0 at 1 lx, 3 at 10 lx, −3 at 0.1 lx) and

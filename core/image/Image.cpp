@@ -75,6 +75,23 @@ void writeAtomically(const std::string& path, ImageFormat format, const OIIO::Im
     temp.commit();
 }
 
+void addAttributes(OIIO::ImageSpec& spec, const ImageAttributes& attributes) {
+    for (const ImageAttribute& a : attributes) {
+        if (const int* i = std::get_if<int>(&a.value))
+            spec.attribute(a.name, *i);
+        else if (const double* d = std::get_if<double>(&a.value))
+            spec.attribute(a.name, OIIO::TypeDesc::DOUBLE, d);
+        else
+            spec.attribute(a.name, std::get<std::string>(a.value));
+    }
+}
+
+OIIO::ImageInput::unique_ptr openImage(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throwInputError(SourceLocation{path}, "cannot read image: ", OIIO::geterror());
+    return in;
+}
+
 }  // namespace
 
 ImageFormat outputFormat(const std::string& path) {
@@ -104,7 +121,7 @@ void checkOutputPath(const std::string& path) {
                         "' is not writable");
 }
 
-void writeImageLinear(const std::string& path, const ImageRgb& image) {
+void writeImageLinear(const std::string& path, const ImageRgb& image, const ImageAttributes& attributes) {
     const ImageFormat format = outputFormat(path);
     ML_ASSERT(format != ImageFormat::Png, "'", path, "' is 8-bit: tone map and use writeImage8");
     ML_ASSERT(image.width > 0 && image.height > 0 && image.data.size() == 3 * image.pixelCount(),
@@ -113,7 +130,28 @@ void writeImageLinear(const std::string& path, const ImageRgb& image) {
     // renderer's full precision (half has 11 bits and overflows at 65504).
     OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
     spec.attribute("oiio:ColorSpace", "Linear");
+    addAttributes(spec, attributes);
     writeAtomically(path, format, spec, OIIO::TypeDesc::FLOAT, image.data.data());
+}
+
+void writeImageChannel(const std::string& path, const std::vector<float>& values, int width, int height,
+                       const std::string& channel, const ImageAttributes& attributes) {
+    const ImageFormat format = outputFormat(path);
+    ML_ASSERT(format != ImageFormat::Png, "'", path, "' is 8-bit: map the values to colours and use writeImage8");
+    ML_ASSERT(width > 0 && height > 0 && values.size() == size_t(width) * size_t(height), width, "x", height,
+              " image with ", values.size(), " values");
+    if (format == ImageFormat::Hdr) {
+        ImageRgb grey(width, height);
+        for (size_t i = 0; i < values.size(); ++i)
+            grey.data[3 * i] = grey.data[3 * i + 1] = grey.data[3 * i + 2] = values[i];
+        writeImageLinear(path, grey, attributes);
+        return;
+    }
+    OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {channel};
+    spec.attribute("oiio:ColorSpace", "Linear");
+    addAttributes(spec, attributes);
+    writeAtomically(path, format, spec, OIIO::TypeDesc::FLOAT, values.data());
 }
 
 void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, int width,
@@ -127,10 +165,31 @@ void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, 
     writeAtomically(path, format, spec, OIIO::TypeDesc::UINT8, rgb.data());
 }
 
+ImageChannel readImageChannel(const std::string& path, const std::string& channel) {
+    const SourceLocation where{path};
+    auto in = openImage(path);
+    const OIIO::ImageSpec& spec = in->spec();
+    const int index = spec.channelindex(channel);
+    if (index < 0) throwInputError(where, "has no channel '", channel, "'");
+    ImageChannel out;
+    out.width = spec.width;
+    out.height = spec.height;
+    out.values.resize(size_t(spec.width) * size_t(spec.height));
+    if (!in->read_image(0, 0, index, index + 1, OIIO::TypeDesc::FLOAT, out.values.data()))
+        throwInputError(where, "cannot read image: ", in->geterror());
+    return out;
+}
+
+std::optional<std::string> readImageAttribute(const std::string& path, const std::string& name) {
+    auto in = openImage(path);
+    const OIIO::ParamValue* p = in->spec().find_attribute(name);
+    if (!p) return std::nullopt;
+    return std::string(p->get_string());
+}
+
 ImageRgb readImageLinear(const std::string& path) {
     const SourceLocation where{path};
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throwInputError(where, "cannot read image: ", OIIO::geterror());
+    auto in = openImage(path);
     const std::string format = in->format_name();
     if (format != "openexr" && format != "hdr")
         throwInputError(where, "is a ", format, " file; expected linear EXR or HDR");

@@ -10,7 +10,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace ml {
@@ -67,11 +69,26 @@ ImageFormat outputFormat(const std::string& path);
 // error that was knowable at the start.
 void checkOutputPath(const std::string& path);
 
+// Metadata stored in an image file's header beside the pixels, e.g.
+// {"meshlight:spp", 256}. EXR keeps every attribute; HDR and PNG may drop them.
+struct ImageAttribute {
+    std::string name;
+    std::variant<int, double, std::string> value;
+};
+using ImageAttributes = std::vector<ImageAttribute>;
+
 // Writes a linear image as 32-bit float EXR or RGBE HDR, chosen by extension.
 // Writes go to a temporary file in the same directory that is then renamed
 // over `path`, so `path` is either the old file or the complete new one,
 // never a partial file; the temporary is removed on failure.
-void writeImageLinear(const std::string& path, const ImageRgb& image);
+void writeImageLinear(const std::string& path, const ImageRgb& image, const ImageAttributes& attributes = {});
+
+// Writes one linear value per pixel (row 0 at the top), e.g. illuminance in
+// lux: an EXR with the single 32-bit float channel `channel` ("Y"), or, as
+// RGBE HDR has no single channel, an HDR with the value in all three.
+// Atomic like writeImageLinear.
+void writeImageChannel(const std::string& path, const std::vector<float>& values, int width, int height,
+                       const std::string& channel, const ImageAttributes& attributes = {});
 
 // Writes 8-bit sRGB (e.g. from toneMap) as PNG, with the same temporary-file
 // guarantee as writeImageLinear.
@@ -83,5 +100,19 @@ void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, 
 // float, e.g. a reference image. Other formats, fewer than three channels
 // and non-finite pixels are InputErrors naming the file.
 ImageRgb readImageLinear(const std::string& path);
+
+// A one-channel image read back: the channel named `channel` of an EXR or
+// HDR file ("Y" of writeImageChannel). InputError naming the file when it
+// is missing, unreadable or has no such channel.
+struct ImageChannel {
+    int width = 0, height = 0;
+    std::vector<float> values;  // row 0 at the top
+};
+ImageChannel readImageChannel(const std::string& path, const std::string& channel);
+
+// An attribute of an image file's header as text (an int as its digits),
+// e.g. "84" for meshlight:spp; none when the file lacks it. InputError
+// naming the file when it cannot be read.
+std::optional<std::string> readImageAttribute(const std::string& path, const std::string& name);
 
 }  // namespace ml

@@ -1,6 +1,7 @@
 // Output files that appear whole or not at all: written to a temporary
 // sibling, then renamed over the target. A failed command leaves no partial
-// output file behind.
+// output file behind, and neither does one ended by a second Ctrl-C
+// (InterruptGuard.h calls removePendingOutputs before it exits).
 #pragma once
 
 #include <filesystem>
@@ -33,11 +34,18 @@ private:
     std::string target_;
     std::filesystem::path path_;
     bool committed_ = false;
+    int pendingSlot_ = -1;  // where removePendingOutputs finds the temporary; -1: not listed
 };
 
 // Makes the folder `dir` (and its parents) if missing; throws InputError
 // naming it if it cannot be made or is not a folder.
 void makeOutputDirectory(const std::string& dir);
+
+// Removes the temporary of every AtomicOutput not yet committed or
+// destroyed. Async-signal-safe (unlink only): for a signal handler about to
+// _exit. Up to 32 temporaries at a time are known to it; more are rare
+// (one per file being written) and would only be left behind.
+void removePendingOutputs() noexcept;
 
 // Writes `text` to `path` through an AtomicOutput.
 void writeTextFileAtomically(const std::string& path, const std::string& text);

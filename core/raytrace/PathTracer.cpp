@@ -5,6 +5,7 @@
 #include "core/Random.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -301,60 +302,83 @@ ReferenceImage PathTracer::render(const Camera& camera, int width, int height, i
     const double tanHalf = std::tan(glm::radians(camera.fovYDegrees) * 0.5);
     const double aspect = double(width) / double(height);
 
+    if (control.passSamples < 0 || control.passSamples % 2 != 0)
+        throw InputError(concat("samples per pass ", control.passSamples, " is not even (passes keep the even and "
+                                "odd halves the same size)"));
+    const int pass = control.passSamples > 0 ? std::min(control.passSamples, samplesPerPixel) : samplesPerPixel;
+
     ReferenceImage out;
     out.radiance = ImageRgb(width, height);
     out.standardError = ImageRgb(width, height);
-    std::vector<double> relative(size_t(width) * size_t(height), -1.0);  // per pixel; −1: unlit
 
     constexpr int kTile = 16;
     const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
-    const uint64_t total = uint64_t(width) * uint64_t(height) * uint64_t(samplesPerPixel);
+    const size_t pixels = size_t(width) * size_t(height);
+    const uint64_t total = uint64_t(pixels) * uint64_t(samplesPerPixel);
     std::atomic<uint64_t> done{0};
-    const int spp = samplesPerPixel;
-    const double nA = double((spp + 1) / 2), nB = double(spp / 2);  // even, odd sample indices
-    const double halvesToError = std::sqrt(nA * nB) / double(spp);
+    // Per pixel, the sums of the even and odd samples of the passes done
+    // (`sums`), and of those plus the pass under way (`next`), swapped in
+    // once the pass is whole. Each pixel adds its samples in order, so the
+    // sums do not depend on the pass size or the threads.
+    std::vector<std::array<Rgb, 2>> sums(pixels, {Rgb(0.0), Rgb(0.0)}), next(pixels);
 
-    auto tile = [&](size_t index) {
-        const int tx = int(index % size_t(tilesX)), ty = int(index / size_t(tilesX));
-        const int x0 = tx * kTile, y0 = ty * kTile;
-        const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
-                Rgb sum[2] = {Rgb(0.0), Rgb(0.0)};
-                for (int s = 0; s < spp; ++s) {
-                    Stream rng(settings_.seed, pixel, uint32_t(s), 0);
-                    const double jx = rng.uniform(), jy = rng.uniform();
-                    const double sx = 2.0 * (x + jx) / width - 1.0;   // NDC, right
-                    const double sy = 1.0 - 2.0 * (y + jy) / height;  // NDC, up; row 0 at the top
-                    const Vec3 dir = glm::normalize(forward + (sx * aspect * tanHalf) * right + (sy * tanHalf) * up);
-                    const Rgb l = radiance(camera.position, dir, rng);
-                    ML_ASSERT(isFinite(l) && l.r >= 0 && l.g >= 0 && l.b >= 0, "radiance (", l.r, ", ", l.g, ", ",
-                              l.b, ") at pixel (", x, ", ", y, "), sample ", s, ", seed ", settings_.seed);
-                    sum[s & 1] += l;
+    int spp = 0;
+    while (spp < samplesPerPixel) {
+        const int first = spp, last = std::min(samplesPerPixel, spp + pass);
+        auto tile = [&](size_t index) {
+            const int tx = int(index % size_t(tilesX)), ty = int(index / size_t(tilesX));
+            const int x0 = tx * kTile, y0 = ty * kTile;
+            const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
+                    std::array<Rgb, 2> sum = sums[pixel];
+                    for (int s = first; s < last; ++s) {
+                        Stream rng(settings_.seed, pixel, uint32_t(s), 0);
+                        const double jx = rng.uniform(), jy = rng.uniform();
+                        const double sx = 2.0 * (x + jx) / width - 1.0;   // NDC, right
+                        const double sy = 1.0 - 2.0 * (y + jy) / height;  // NDC, up; row 0 at the top
+                        const Vec3 dir =
+                            glm::normalize(forward + (sx * aspect * tanHalf) * right + (sy * tanHalf) * up);
+                        const Rgb l = radiance(camera.position, dir, rng);
+                        ML_ASSERT(isFinite(l) && l.r >= 0 && l.g >= 0 && l.b >= 0, "radiance (", l.r, ", ", l.g,
+                                  ", ", l.b, ") at pixel (", x, ", ", y, "), sample ", s, ", seed ", settings_.seed);
+                        sum[s & 1] += l;
+                    }
+                    next[pixel] = sum;
                 }
+            done += uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(last - first);
+        };
+        std::function<void()> progress;
+        if (control.progress) progress = [&] { control.progress(done.load(), total); };
+        parallelFor(size_t(tilesX) * size_t(tilesY), threadCount(), tile, progress, control.stop);
+        if (done.load() < uint64_t(pixels) * uint64_t(last)) break;  // stopped: the pass is dropped
+        sums.swap(next);
+        spp = last;
+    }
+    out.samplesPerPixel = spp;
+    out.cancelled = spp < samplesPerPixel;
+
+    if (spp > 0) {
+        const double nA = double((spp + 1) / 2), nB = double(spp / 2);  // even, odd sample indices
+        const double halvesToError = std::sqrt(nA * nB) / double(spp);
+        double sumRelative = 0;
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const std::array<Rgb, 2>& sum = sums[size_t(y) * size_t(width) + size_t(x)];
                 const Rgb a = sum[0] / nA, b = sum[1] / nB;
                 const Rgb mean = (sum[0] + sum[1]) / double(spp);
                 out.radiance.set(x, y, mean);
                 out.standardError.set(x, y, glm::abs(a - b) * halvesToError);
                 const double lum = luminance(mean);
-                if (lum > 0) relative[pixel] = std::abs(luminance(a) - luminance(b)) * halvesToError / lum;
+                if (lum > 0) {
+                    sumRelative += std::abs(luminance(a) - luminance(b)) * halvesToError / lum;
+                    ++out.litPixels;
+                }
             }
-        done += uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(spp);
-    };
-    std::function<void()> progress;
-    if (control.progress) progress = [&] { control.progress(done.load(), total); };
-    parallelFor(size_t(tilesX) * size_t(tilesY), threadCount(), tile, progress, control.stop);
-    out.cancelled = done.load() < total;
-
-    double sumRelative = 0;
-    for (double r : relative)
-        if (r >= 0) {
-            sumRelative += r;
-            ++out.litPixels;
-        }
-    out.meanRelativeError = out.litPixels ? sumRelative / double(out.litPixels) : 0.0;
-    out.paths = done.load();
+        out.meanRelativeError = out.litPixels ? sumRelative / double(out.litPixels) : 0.0;
+    }
+    out.paths = uint64_t(pixels) * uint64_t(spp);
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
 }

@@ -79,18 +79,26 @@ struct ReferenceImage {
     // SE of the luminance estimated from the halves like the channels.
     double meanRelativeError = 0;
     size_t litPixels = 0;    // pixels that entered meanRelativeError
-    uint64_t paths = 0;      // camera paths traced (width × height × spp)
+    uint64_t paths = 0;      // camera paths in the images (width × height × samplesPerPixel)
     double seconds = 0;      // wall time of the render
-    bool cancelled = false;  // stopped early by RenderControl::stop: the images are incomplete
+    // Samples in every pixel: the spp asked for, or fewer whole passes when
+    // stopped early (0: stopped before the first pass ended; images black).
+    int samplesPerPixel = 0;
+    bool cancelled = false;  // stopped early by RenderControl::stop: fewer samples than asked for
 };
 
 // Progress and cancellation of a render.
 struct RenderControl {
     // Called on the calling thread, about ten times a second and once at the
-    // end, with camera paths done and in all.
+    // end of each pass, with camera paths done and in all.
     std::function<void(uint64_t done, uint64_t total)> progress;
-    // When set and true, workers stop after their current tile.
+    // When set and true, workers stop after their current tile and the pass
+    // under way is dropped: the images hold the passes done before.
     const std::atomic<bool>* stop = nullptr;
+    // Samples per pixel a pass adds to every pixel, even, typical 2 (0: one
+    // pass of all). The last pass may be shorter; the image is bit for bit
+    // the same whatever the pass size.
+    int passSamples = 0;
 };
 
 // Irradiance at a point, split by origin (W·m⁻², RGB).
@@ -111,7 +119,8 @@ public:
     const PathTracerSettings& settings() const { return settings_; }
 
     // A width × height image from `camera` with `samplesPerPixel` samples
-    // (>= 2: the halves estimate the noise). Throws InputError for bad sizes.
+    // (>= 2: the halves estimate the noise), in passes (RenderControl).
+    // Throws InputError for bad sizes.
     ReferenceImage render(const Camera& camera, int width, int height, int samplesPerPixel,
                           const RenderControl& control = {}) const;
 

@@ -1,6 +1,10 @@
 // meshlight probe: irradiance at sensor points (RADIANCE's `rtrace -I`),
-// what lighting designers check: direct light per light, and indirect light.
+// what lighting designers check: direct light per light, indirect light,
+// and the illuminance in lux. Points come from a CSV file, or, with
+// `--points -`, as RADIANCE's rtrace reads them: "x y z dx dy dz" lines on
+// standard input.
 #include "Commands.h"
+#include "PhotometryOptions.h"
 #include "Plan.h"
 #include "Progress.h"
 #include "SamplerOptions.h"
@@ -13,11 +17,13 @@
 #include "core/raytrace/PathTracer.h"
 #include "gpu_sampling/direct/RayTracedLightSampler.h"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 namespace ml {
@@ -40,14 +46,36 @@ std::vector<std::string> splitCsv(const std::string& line) {
     return cells;
 }
 
-std::vector<SensorPoint> readPoints(const std::string& path) {
+// One coordinate of a points file: a finite number, else an error naming
+// the line and the column.
+double finiteValue(const std::string& text, const SourceLocation& at, const char* column) {
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(v))
+        throwInputError(at, "column ", column, ": '", text, "' is not a finite number");
+    return v;
+}
+
+// A point from its six values, in the order of `columns`; the normal is normalised.
+SensorPoint sensorPoint(const std::vector<std::string>& cells, const SourceLocation& at,
+                        const std::array<const char*, 6>& columns) {
+    double v[6];
+    for (size_t k = 0; k < 6; ++k) v[k] = finiteValue(cells[k], at, columns[k]);
+    const Vec3 n(v[3], v[4], v[5]);
+    if (!(glm::length(n) > 0)) throwInputError(at, "the normal is zero");
+    return {Vec3(v[0], v[1], v[2]), glm::normalize(n)};
+}
+
+// A CSV file with the header x,y,z,nx,ny,nz.
+std::vector<SensorPoint> readCsvPoints(const std::string& path) {
     std::ifstream in(path);
     if (!in) throwInputError(SourceLocation{path}, "cannot open the points file");
     std::string line;
     int lineNo = 0;
     std::vector<SensorPoint> points;
     bool header = false;
-    const std::vector<std::string> expected = {"x", "y", "z", "nx", "ny", "nz"};
+    const std::array<const char*, 6> columns = {"x", "y", "z", "nx", "ny", "nz"};
+    const std::vector<std::string> expected(columns.begin(), columns.end());
     while (std::getline(in, line)) {
         ++lineNo;
         if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#')
@@ -60,19 +88,37 @@ std::vector<SensorPoint> readPoints(const std::string& path) {
             continue;
         }
         if (cells.size() != 6) throwInputError(at, "expected 6 values, found ", cells.size());
-        double v[6];
-        for (int k = 0; k < 6; ++k) {
-            char* end = nullptr;
-            v[k] = std::strtod(cells[size_t(k)].c_str(), &end);
-            if (cells[size_t(k)].empty() || *end != '\0' || !std::isfinite(v[k]))
-                throwInputError(at, "column ", expected[size_t(k)], ": '", cells[size_t(k)], "' is not a finite number");
-        }
-        const Vec3 n(v[3], v[4], v[5]);
-        if (!(glm::length(n) > 0)) throwInputError(at, "the normal is zero");
-        points.push_back({Vec3(v[0], v[1], v[2]), glm::normalize(n)});
+        points.push_back(sensorPoint(cells, at, columns));
     }
     if (!header) throwInputError(SourceLocation{path}, "empty file: expected the header x,y,z,nx,ny,nz");
     return points;
+}
+
+// RADIANCE's rtrace input: a point and a direction a line, "x y z dx dy dz",
+// separated by white space; blank lines and '#' comments (to the end of the
+// line) are skipped.
+std::vector<SensorPoint> readRadiancePoints(std::istream& in, const std::string& name) {
+    std::string line;
+    int lineNo = 0;
+    std::vector<SensorPoint> points;
+    const std::array<const char*, 6> columns = {"x", "y", "z", "dx", "dy", "dz"};
+    while (std::getline(in, line)) {
+        ++lineNo;
+        std::istringstream words(line.substr(0, line.find('#')));
+        std::vector<std::string> cells;
+        for (std::string w; words >> w;) cells.push_back(w);
+        if (cells.empty()) continue;
+        const SourceLocation at{name, lineNo};
+        if (cells.size() != 6) throwInputError(at, "expected 6 numbers (x y z dx dy dz), found ", cells.size());
+        points.push_back(sensorPoint(cells, at, columns));
+    }
+    if (points.empty()) throwInputError(SourceLocation{name}, "no points: expected lines of x y z dx dy dz");
+    return points;
+}
+
+// `--points -`: RADIANCE's format on standard input; else a CSV file.
+std::vector<SensorPoint> readPoints(const std::string& path) {
+    return path == "-" ? readRadiancePoints(std::cin, "<stdin>") : readCsvPoints(path);
 }
 
 // Light names as CSV column names: letters, digits and '_' only.
@@ -108,6 +154,14 @@ std::string csvHeader(const Scene& scene) {
 
 void csvRgb(std::ostringstream& csv, const Rgb& c) { csv << "," << c.r << "," << c.g << "," << c.b; }
 
+// The lux columns: "lux", the illuminance of all the light computed, and
+// with indirect light "lux_indirect", its indirect part.
+const char* luxHeader(bool indirect) { return indirect ? ",lux,lux_indirect" : ",lux"; }
+void csvLux(std::ostringstream& csv, const Photometry& photometry, const Rgb& direct, const Rgb* indirect) {
+    csv << "," << photometry.luminous(indirect ? direct + *indirect : direct);
+    if (indirect) csv << "," << photometry.luminous(*indirect);
+}
+
 void csvPoint(std::ostringstream& csv, const SensorPoint& p) {
     csv << p.position.x << "," << p.position.y << "," << p.position.z << "," << p.normal.x << "," << p.normal.y << ","
         << p.normal.z;
@@ -123,13 +177,14 @@ int probePath(const Options& o, const std::vector<std::string>& args, const std:
     settings.threads = o.has("threads") ? o.integer("threads", 0, 1024) : 0;
     settings.seed = o.seed("seed");
     const int spp = o.has("spp") ? o.integer("spp", 2, 1 << 24) : 1024;
+    const Photometry photometry = readPhotometryOption(o);
     const EmbreeScene rays(scene);
     const PathTracer tracer(rays, settings);
 
     std::ostringstream csv;
     csv.precision(9);
     csv << csvHeader(scene) << ",E_se_r,E_se_g,E_se_b,E_indirect_r,E_indirect_g,E_indirect_b,"
-        << "E_indirect_se_r,E_indirect_se_g,E_indirect_se_b,method,samples,max_depth,time_s\n";
+        << "E_indirect_se_r,E_indirect_se_g,E_indirect_se_b" << luxHeader(true) << ",method,samples,max_depth,time_s\n";
     Progress progress("probe", points.size());
     double relative = 0;
     size_t lit = 0;
@@ -144,6 +199,7 @@ int probePath(const Options& o, const std::vector<std::string>& args, const std:
         csvRgb(csv, e.directError);
         csvRgb(csv, e.indirect);
         csvRgb(csv, e.indirectError);
+        csvLux(csv, photometry, e.direct, &e.indirect);
         csv << ",path," << spp << "," << settings.maxDepth << "," << seconds << "\n";
         const Rgb total = e.direct + e.indirect;
         if (luminance(total) > 0) {
@@ -175,12 +231,13 @@ int probeRaytrace(const Options& o, const std::vector<std::string>& args, const 
     settings.validate();
     const int passes = o.integer("passes", 1, 1 << 20);
     const uint32_t seed = o.seed("seed");
+    const Photometry photometry = readPhotometryOption(o);
     const EmbreeScene rays(scene);
     const RayTracedLightSampler sampler(rays, settings);
 
     std::ostringstream csv;
     csv.precision(9);
-    csv << csvHeader(scene) << ",method,samples,time_s\n";
+    csv << csvHeader(scene) << luxHeader(false) << ",method,samples,time_s\n";
     Progress progress("probe", points.size());
     for (size_t i = 0; i < points.size(); ++i) {
         const SensorPoint& p = points[i];
@@ -201,6 +258,7 @@ int probeRaytrace(const Options& o, const std::vector<std::string>& args, const 
             total += e;
         }
         csvRgb(csv, total);
+        csvLux(csv, photometry, total, nullptr);
         csv << ",raytrace," << passes * int(scene.lights.size()) << "," << seconds << "\n";
         progress.update(i + 1);
     }
@@ -274,8 +332,11 @@ std::vector<Rgb> probeIndirect(const Scene& scene, const DirectChoice& choice, c
 int runProbe(const std::vector<std::string>& args) {
     Options o("probe");
     o.positional("scene", kSceneArgumentHelp);
-    o.value("points", "IN.csv", "sensor points: columns x,y,z,nx,ny,nz");
-    o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²)");
+    o.value("points", "IN.csv|-", "sensor points: a CSV file with columns x,y,z,nx,ny,nz, or - for RADIANCE's rtrace "
+                                  "input on standard input: lines of x y z dx dy dz ('#' comments)");
+    o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²), and illuminance: lux (all the light "
+                              "computed) and lux_indirect (its indirect part, when indirect light is computed)");
+    declarePhotometryOption(o);
     declareDirectOptions(o);
     // The CPU references (--method path: the path tracer; --method raytrace:
     // the jittered sampler with shadow rays) and their own options.
@@ -306,6 +367,7 @@ int runProbe(const std::vector<std::string>& args) {
     const DirectChoice choice = readDirectOptions(o);
     const CacheSettings cacheSettings = readCacheSettings(o);
     IndirectChoice indirect = readIndirectOptions(o);
+    const Photometry photometry = readPhotometryOption(o);
     std::optional<double> timeLimit;
     if (o.has("time")) timeLimit = o.number("time", 0, 1e7);
     const std::vector<SensorPoint> points = readPoints(o.str("points"));
@@ -320,13 +382,8 @@ int runProbe(const std::vector<std::string>& args) {
 
     std::ostringstream csv;
     csv.precision(9);
-    csv << "x,y,z,nx,ny,nz";
-    for (const AreaLight& l : scene.lights) {
-        const std::string c = columnName(l.name);
-        csv << ",E_" << c << "_r,E_" << c << "_g,E_" << c << "_b";
-    }
-    csv << ",E_r,E_g,E_b" << (indirect.enabled ? ",E_indirect_r,E_indirect_g,E_indirect_b" : "")
-        << ",method,samples,time_s\n";
+    csv << csvHeader(scene) << (indirect.enabled ? ",E_indirect_r,E_indirect_g,E_indirect_b" : "")
+        << luxHeader(indirect.enabled) << ",method,samples,time_s\n";
     const std::string method = choice.exact ? std::string("exact") : directMethodName(choice.sampler.method);
 
     Progress progress("probe", points.size());
@@ -343,14 +400,14 @@ int runProbe(const std::vector<std::string>& args) {
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         Rgb total(0.0);
-        csv << p.position.x << "," << p.position.y << "," << p.position.z << "," << p.normal.x << "," << p.normal.y
-            << "," << p.normal.z;
+        csvPoint(csv, p);
         for (const Rgb& e : perLight) {
-            csv << "," << e.r << "," << e.g << "," << e.b;
+            csvRgb(csv, e);
             total += e;
         }
-        csv << "," << total.r << "," << total.g << "," << total.b;
+        csvRgb(csv, total);
         if (indirect.enabled) csvRgb(csv, indirectAt[i]);
+        csvLux(csv, photometry, total, indirect.enabled ? &indirectAt[i] : nullptr);
         csv << "," << method << "," << choice.passes * int(scene.lights.size()) << "," << seconds << "\n";
         progress.update(i + 1);
     }

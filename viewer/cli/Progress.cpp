@@ -34,4 +34,10 @@ void Progress::finish() {
     if (terminal_) std::fputc('\n', stderr);
 }
 
+void Progress::abandon() {
+    if (finished_) return;
+    finished_ = true;
+    if (terminal_) std::fputc('\n', stderr);
+}
+
 }  // namespace ml

@@ -13,6 +13,8 @@ public:
     Progress(std::string label, size_t total);
     void update(size_t done);
     void finish();
+    // Ends the bar where it stands, not at 100% (an interrupted run).
+    void abandon();
 
 private:
     std::string label_;

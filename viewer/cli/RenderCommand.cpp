@@ -1,26 +1,35 @@
 // meshlight render: progressive rendering. A worker thread refines and
 // samples the cache meshes while this thread composites snapshots of them:
 // for a time budget, an error target or a number of samples, one image or a
-// walkthrough of many, with snapshots, a log and a resumable cache file.
+// walkthrough of many, with snapshots, a log and a resumable cache file;
+// radiance, or illuminance in lux (--quantity lux). Ctrl-C or SIGTERM ends
+// refinement at the end of the worker's round and writes what is cached
+// (the image and the cache file), then exits with status 130.
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "PhotometryOptions.h"
 #include "Plan.h"
 #include "SamplerOptions.h"
 #include "cache/ProgressiveSession.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "core/CameraPath.h"
 #include "core/Error.h"
+#include "core/image/FalseColour.h"
+#include "core/image/Illuminance.h"
 #include "core/image/Image.h"
 #include "core/image/ImageMetrics.h"
-#include "core/io/AtomicFile.h"
-#include "viewer/compositor/Compositor.h"
 #include "core/image/ToneMap.h"
+#include "core/io/AtomicFile.h"
+#include "core/io/InterruptGuard.h"
+#include "viewer/compositor/Compositor.h"
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 
 namespace ml {
@@ -42,19 +51,84 @@ std::string framePath(const std::string& pattern, size_t frame) {
     return pattern.substr(0, at) + number + pattern.substr(end);
 }
 
-class ImageWriter {
+enum class OutputQuantity { Radiance, Lux };
+
+OutputQuantity parseOutputQuantity(const std::string& name) {
+    if (name == "radiance") return OutputQuantity::Radiance;
+    if (name == "lux") return OutputQuantity::Lux;
+    throw InputError(concat("--quantity '", name, "': use radiance or lux"));
+}
+
+// The images render writes, one per view: radiance (EXR, HDR linear; PNG
+// tone-mapped) or illuminance (EXR: one channel Y in lux; HDR: lux in every
+// channel; PNG: the viewer's false colour, iso-lux lines and legend).
+class ImageOutput {
 public:
-    ImageWriter(const ToneMapSettings& tone) : tone_(tone) {}
-    void write(const std::string& path, const ImageRgb& image) const {
+    ImageOutput(Compositor& compositor, const CompositorSettings& settings, const ToneMapSettings& tone,
+                OutputQuantity quantity)
+        : compositor_(compositor), settings_(settings), tone_(tone), quantity_(quantity) {}
+
+    ImageRgb radiance(const CacheSnapshot& s, const Camera& camera) {
+        return compositor_.render(camera, s.direct, s.indirect, settings_);
+    }
+    // Composites `s` from `camera` and writes it to `path`; returns the
+    // radiance image written (empty for lux).
+    ImageRgb write(const std::string& path, const CacheSnapshot& s, const Camera& camera) {
+        if (quantity_ == OutputQuantity::Lux) {
+            writeLux(path, compositor_.renderIlluminance(camera, s.direct, s.indirect, settings_));
+            return {};
+        }
+        ImageRgb image = radiance(s, camera);
         if (outputFormat(path) == ImageFormat::Png)
             writeImage8(path, toneMap(image, tone_), image.width, image.height);
         else
             writeImageLinear(path, image);
+        return image;
     }
 
 private:
+    void writeLux(const std::string& path, const LuxImage& lux) const {
+        if (outputFormat(path) != ImageFormat::Png) {
+            writeImageChannel(path, lux.lux, lux.width, lux.height, "Y",
+                              {{"meshlight:quantity", std::string("illuminance")},
+                               {"meshlight:unit", std::string("lx")},
+                               {"meshlight:photometry", settings_.photometry.describe()}});
+            return;
+        }
+        // The viewer's automatic range: percentiles of the lit pixels.
+        std::vector<double> values;
+        for (size_t i = 0; i < lux.lux.size(); ++i)
+            if (lux.coverage[i] > 0) values.push_back(lux.lux[i]);
+        const auto [lo, hi] = autoLuxRange(std::move(values));
+        ImageRgb display = falseColourImage(lux, lo, hi, true);
+        drawLuxLegend(display, lo, hi, concat(formatLux(lo), " .. ", formatLux(hi), " lx"));
+        writeImage8(path, displayBytes(display), display.width, display.height);
+    }
+
+    Compositor& compositor_;
+    CompositorSettings settings_;
     ToneMapSettings tone_;
+    OutputQuantity quantity_;
 };
+
+// ProgressiveSession::refineUntil in slices of at most 0.1 s, so that an
+// interrupt ends the wait within one; true when one did. `stop` holds for
+// the whole view, as in refineUntil.
+bool refineUntilInterrupted(ProgressiveSession& session, CacheWorker::Reader& reader, const StopRule& stop,
+                            uint64_t serial, double every, const std::function<void(const CacheSnapshot&)>& tick,
+                            const InterruptGuard& interrupt) {
+    const auto start = Clock::now();
+    for (;;) {
+        const double left = stop.seconds ? *stop.seconds - secondsSince(start) : kInf;
+        StopRule slice = stop;
+        slice.seconds = std::clamp(left, 0.0, 0.1);
+        const CacheSnapshot* s = session.refineUntil(reader, slice, serial, every, tick);
+        if (interrupt.interrupted()) return true;
+        if (left <= 0.1 || session.finished()) return false;
+        const bool fresh = s && s->cameraSerial >= serial;
+        if (fresh && (s->converged || (stop.error && s->estimatedError <= *stop.error))) return false;
+    }
+}
 
 // The --log rows, kept in memory and written whole at the end.
 class ConvergenceLog {
@@ -103,6 +177,10 @@ int runRender(const std::vector<std::string>& args) {
     o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped); with --camera-path a "
                            "pattern whose #### becomes the frame number",
             std::string("meshlight.png"));
+    o.value("quantity", "radiance|lux", "what the image holds: radiance, or illuminance in lux at each pixel's "
+                                        "surface (EXR: channel Y; PNG: false colour with iso-lux lines and a legend)",
+            std::string("radiance"));
+    declarePhotometryOption(o);
     declareViewOptions(o);
     o.value("camera-path", "FILE", "walkthrough: one image per line (px,py,pz,tx,ty,tz,ux,uy,uz,fov), all from one "
                                    "cache that keeps refining; --time and --until-error apply per image");
@@ -139,7 +217,9 @@ int runRender(const std::vector<std::string>& args) {
     comp.width = o.integer("width", 1, 16384);
     comp.height = o.integer("height", 1, 16384);
     comp.supersample = o.integer("supersample", 1, 16);
+    comp.photometry = readPhotometryOption(o);
     comp.validate();
+    const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));
     const DirectChoice choice = readDirectOptions(o);
     if (choice.passes != 1)
         throw InputError("render samples each vertex as often as its noise asks: --passes is for probe; "
@@ -161,6 +241,8 @@ int runRender(const std::vector<std::string>& args) {
     const std::string logPath = o.has("log") ? o.str("log") : "";
     if (!logPath.empty()) checkOutputDirectory(logPath);
     if (o.has("reference") && logPath.empty()) throw InputError("--reference needs --log, where the errors go");
+    if (o.has("reference") && quantity != OutputQuantity::Radiance)
+        throw InputError("--reference compares radiance: it does not go with --quantity lux");
     ImageRgb reference;
     if (o.has("reference")) {
         reference = readImageLinear(o.str("reference"));
@@ -188,6 +270,8 @@ int runRender(const std::vector<std::string>& args) {
     indirect.decide(scene);
     printPlan(scene, choice, cacheSettings, indirect);
     std::printf("  stop refining each image at %s\n", stop.describe().c_str());
+    if (quantity == OutputQuantity::Lux)
+        std::printf("  the image: illuminance in lux, photometry %s\n", comp.photometry.describe().c_str());
 
     if (indirect.active()) sessionSettings.indirect = indirect.solver;
     ProgressiveSession session(scene, sessionSettings, samplerFactory(scene, choice, indirect), stop);
@@ -205,57 +289,63 @@ int runRender(const std::vector<std::string>& args) {
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::printf("OpenGL: %s\n", context->describe().c_str());
     Compositor compositor(*context, scene);
-    const ImageWriter writer(tone);
+    ImageOutput output(compositor, comp, tone, quantity);
     ConvergenceLog log(scene.lights.size(), cache.hasSharedMesh(), o.has("reference"));
 
+    // From here on, the first Ctrl-C ends refinement and writes what is cached.
+    const InterruptGuard interrupt;
     const uint64_t firstSerial = session.start(RefinementCamera{cameras.front(), comp.width, comp.height});
     CacheWorker::Reader reader = session.reader();
 
     size_t snapshotIndex = 0;
-    auto render = [&](const CacheSnapshot& s, const Camera& camera) {
-        return compositor.render(camera, s.direct, s.indirect, comp);
-    };
     auto tick = [&](const CacheSnapshot& s, size_t frame) {
         const double seconds = session.seconds();
         ImageRgb image;
-        if (!snapshotsDir.empty() || o.has("reference")) image = render(s, cameras[frame]);
         if (!snapshotsDir.empty()) {
             char name[96];
             std::snprintf(name, sizeof name, "snapshot_%04zu%s.%s", snapshotIndex,
                           walkthrough ? concat("_frame", frame).c_str() : "",
                           outputFormat(out) == ImageFormat::Png ? "png" : "exr");
-            writer.write((std::filesystem::path(snapshotsDir) / name).string(), image);
+            image = output.write((std::filesystem::path(snapshotsDir) / name).string(), s, cameras[frame]);
         }
+        if (o.has("reference") && image.data.empty()) image = output.radiance(s, cameras[frame]);
         ++snapshotIndex;
         if (!logPath.empty()) log.add(seconds, frame, s, &image, o.has("reference") ? &reference : nullptr);
         printStatus(s, seconds, walkthrough ? concat("frame ", frame) : std::string("refining"), false);
     };
 
-    for (size_t frame = 0; frame < cameras.size(); ++frame) {
+    // The frame refined last: the last one, or the one an interrupt ended.
+    size_t lastFrame = cameras.size() - 1;
+    bool interrupted = false;
+    for (size_t frame = 0; frame < cameras.size() && !interrupted; ++frame) {
         // Only snapshots made for this frame's view count for it.
         const uint64_t serial =
             frame == 0 ? firstSerial : session.setCamera(RefinementCamera{cameras[frame], comp.width, comp.height});
         const auto frameStart = Clock::now();
-        session.refineUntil(reader, stop, serial, every, [&](const CacheSnapshot& s) { tick(s, frame); });
-        if (frame + 1 < cameras.size()) {
+        interrupted = refineUntilInterrupted(session, reader, stop, serial, every,
+                                             [&](const CacheSnapshot& s) { tick(s, frame); }, interrupt);
+        if (interrupted) {
+            lastFrame = frame;
+        } else if (frame + 1 < cameras.size()) {
             const CacheSnapshot* s = reader.acquire();
-            writer.write(framePath(out, frame), render(*s, cameras[frame]));
+            output.write(framePath(out, frame), *s, cameras[frame]);
             std::printf("frame %zu: %.2f s, %zu vertices; wrote %s\n", frame, secondsSince(frameStart), s->vertices,
                         framePath(out, frame).c_str());
         }
     }
-    // The last image is made from everything the worker did, so it stops first.
+    // The last image is made from everything the worker did, so it stops
+    // first (at the end of its round).
+    if (interrupted) std::fprintf(stderr, "\nmeshlight: %s: ending the worker's round\n", interrupt.signalName());
     session.stop();
     session.rethrowIfFailed();
     const CacheSnapshot* final = reader.acquire();
     ML_ASSERT(final, "the worker published no snapshot");
     const double refineSeconds = session.seconds();
-    const size_t lastFrame = cameras.size() - 1;
     const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
-    const ImageRgb image = render(*final, cameras[lastFrame]);
-    if (!logPath.empty()) log.add(refineSeconds, lastFrame, *final, &image, o.has("reference") ? &reference : nullptr);
+    const ImageRgb image = output.write(lastPath, *final, cameras[lastFrame]);
+    if (!logPath.empty())
+        log.add(refineSeconds, lastFrame, *final, &image, o.has("reference") ? &reference : nullptr);
     printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);
-    writer.write(lastPath, image);
     if (!logPath.empty()) writeTextFileAtomically(logPath, log.text());
     if (!cachePath.empty()) session.save(cachePath);
 
@@ -277,7 +367,12 @@ int runRender(const std::vector<std::string>& args) {
                     st.estimates ? 1e3 * st.estimateSeconds / double(st.estimates) : 0.0, st.buildSeconds,
                     st.sourceBytes / 1e6, st.source.c_str());
     }
-    std::printf("total %.2f s; wrote %s (%dx%d)\n", secondsSince(t0), lastPath.c_str(), image.width, image.height);
+    std::printf("total %.2f s; wrote %s (%dx%d)\n", secondsSince(t0), lastPath.c_str(), comp.width, comp.height);
+    if (interrupted) {
+        std::fprintf(stderr, "meshlight: interrupted: wrote %s%s (what was cached after %.1f s)\n", lastPath.c_str(),
+                     cachePath.empty() ? "" : concat(" and ", cachePath).c_str(), refineSeconds);
+        return 130;
+    }
     return 0;
 }
 

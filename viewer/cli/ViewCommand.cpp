@@ -5,6 +5,7 @@
 #include "viewer/window/ViewSession.h"
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "PhotometryOptions.h"
 #include "SamplerOptions.h"
 #include "Plan.h"
 
@@ -47,9 +48,9 @@ int runView(const std::vector<std::string>& args) {
                              "save to it");
     o.value("units", "mm|cm|m", "the scene's length unit, for walking speed, positions and light power (lux does "
                                 "not depend on it); default mm for cornell, m otherwise");
-    o.value("efficacy", "LM_PER_W", "luminous efficacy turning irradiance (W/m2) into lux; 179 is RADIANCE's "
-                                    "equal-energy white",
-            concat(kDefaultEfficacy));
+    declarePhotometryOption(o);
+    o.value("efficacy", "LM_PER_W", "luminous efficacy turning irradiance (W/m2) into lux, in place of the "
+                                    "photometry's 179 (RADIANCE's equal-energy white)");
     o.value("supersample", "S", "S×S sub-pixels per pixel on screen (1..4; screenshots use the same)",
             std::string("1"));
     o.value("exposure", "EV", "exposure in stops, on top of the metered exposure", std::string("0"));
@@ -78,7 +79,8 @@ int runView(const std::vector<std::string>& args) {
     if (!s.cachePath.empty()) checkOutputDirectory(s.cachePath);
     const std::string sceneArg = o.positionalValue("scene");
     s.unit = o.has("units") ? parseLengthUnit(o.str("units")) : defaultUnit(sceneArg);
-    s.efficacy = o.number("efficacy", 1e-3, 683);
+    s.photometry = readPhotometryOption(o);
+    if (o.has("efficacy")) s.photometry.efficacy = o.number("efficacy", 1e-3, 683);
     s.display.exposureEV = o.number("exposure", -50, 50);
     s.display.op = parseToneOperator(o.str("tonemap"));
     s.maxFps = o.number("max-fps", 0, 1000);
@@ -99,8 +101,9 @@ int runView(const std::vector<std::string>& args) {
         s.script = std::move(*script);
     }
     s.camera = cameraFromOptions(o, scene, double(s.width) / s.height);
-    std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights; units %s, %g lm/W\n", scene.name.c_str(),
-                scene.meshes.size(), scene.triangleCount(), scene.lights.size(), lengthUnitName(s.unit), s.efficacy);
+    std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights; units %s, photometry %s\n", scene.name.c_str(),
+                scene.meshes.size(), scene.triangleCount(), scene.lights.size(), lengthUnitName(s.unit),
+                s.photometry.describe().c_str());
     s.indirect.decide(scene);
     printPlan(scene, s.direct, s.cache, s.indirect);
     if (s.worker.maxSamples)

@@ -13,7 +13,7 @@ const char* kUsage =
     "commands:\n"
     "  render SCENE   render an image (SCENE: cornell, office[:KEY=VALUE,...], bench, an OBJ or glTF file)\n"
     "  plan SCENE     what a render of SCENE would simulate, and why\n"
-    "  probe SCENE    direct and indirect irradiance at sensor points from a CSV\n"
+    "  probe SCENE    direct and indirect irradiance and lux at sensor points (a CSV, or rtrace's x y z dx dy dz)\n"
     "  reference SCENE --spp N --out REF.exr\n"
     "                 path-traced reference image (and REF.noise.exr, its standard error)\n"
     "  view SCENE     walk through SCENE in a window while its lighting converges\n"

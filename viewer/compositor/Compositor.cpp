@@ -21,8 +21,7 @@ void CompositorSettings::validate() const {
     if (long(width) * supersample > 16384 || long(height) * supersample > 16384)
         throw InputError(concat("image ", width, "x", height, " with supersampling ", supersample,
                                 " exceeds 16384 sub-pixels per side: lower --supersample"));
-    if (!(efficacy > 0 && efficacy < 1e6))
-        throw InputError(concat("luminous efficacy ", efficacy, " lm/W is not within (0, 1e6)"));
+    photometry.validate();
 }
 
 LightWeights LightWeights::unit(size_t lights) {
@@ -88,7 +87,7 @@ struct Compositor::Impl {
     glm::mat4 mvp{1.0f};
     std::array<glm::vec4, 5> frustum;  // planes of mvp's view, inside: dot(plane, (p, 1)) ≥ 0
     CompositeQuantity quantity = CompositeQuantity::Radiance;
-    double efficacy = kDefaultEfficacy;
+    Photometry photometry;
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
 
@@ -388,7 +387,7 @@ struct Compositor::Impl {
         mvp = clipFromLocal(camera, double(s.width) / s.height);
         setFrustum();
         quantity = s.quantity;
-        efficacy = s.efficacy;
+        photometry = s.photometry;
         if (!scene.lights.empty()) {
             std::vector<glm::vec4> emission;
             for (size_t l = 0; l < scene.lights.size(); ++l)
@@ -440,10 +439,15 @@ struct Compositor::Impl {
 
     // The composite's inputs and uniforms, for composite.frag and display.frag.
     void bindCompositeInputs(const GlProgram& p) {
-        gl.Uniform1f(p.uniform("uEfficacy"), float(efficacy));
+        setLuxFactors(p);
         gl.BindTextureUnit(0, t.surface.id());
         gl.BindTextureUnit(1, t.irradianceSum.id());
         gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
+    }
+
+    void setLuxFactors(const GlProgram& p) {
+        const Rgb k = photometry.factors();
+        gl.Uniform3f(p.uniform("uLuxFactors"), float(k.r), float(k.g), float(k.b));
     }
 
     void bindDisplayUniforms(const GlProgram& p, const DisplaySettings& d) {
@@ -504,7 +508,7 @@ struct Compositor::Impl {
             const GlProgram& forward = forwardProgram(quantity, d.op, d.contours);
             forward.use();
             gl.UniformMatrix4fv(forward.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
-            gl.Uniform1f(forward.uniform("uEfficacy"), float(efficacy));
+            setLuxFactors(forward);
             gl.BindTextureUnit(1, t.irradianceSum.id());
             gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
             bindDisplayUniforms(forward, d);
@@ -595,6 +599,35 @@ struct Compositor::Impl {
         return boxDownsample(toImage(readRgba(t.compositeFb.id(), 0, 0, w, h), w, h), t.supersample);
     }
 
+    // The illuminance composite box-filtered on the CPU: per pixel the sums
+    // of lux × seen and of seen over its sub-pixels.
+    LuxImage readIlluminanceImage() {
+        ML_ASSERT(quantity == CompositeQuantity::Illuminance, "the last composite is not illuminance");
+        ensureComposite();
+        const int s = t.supersample, w = t.width * s, h = t.height * s;
+        const std::vector<float> rgba = readRgba(t.compositeFb.id(), 0, 0, w, h);
+        LuxImage out;
+        out.width = t.width;
+        out.height = t.height;
+        out.lux.resize(size_t(t.width) * size_t(t.height));
+        out.coverage.resize(out.lux.size());
+        for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x) {
+                double lux = 0, seen = 0;
+                for (int dy = 0; dy < s; ++dy)
+                    for (int dx = 0; dx < s; ++dx) {
+                        // GL rows start at the bottom.
+                        const float* p = &rgba[(size_t(h - 1 - (y * s + dy)) * size_t(w) + size_t(x * s + dx)) * 4];
+                        ML_ASSERT(std::isfinite(p[0]), "non-finite lux at pixel ", x, ",", y);
+                        lux += p[0];
+                        seen += p[3];
+                    }
+                out.lux[out.index(x, y)] = seen > 0 ? float(lux / seen) : 0.0f;
+                out.coverage[out.index(x, y)] = float(seen / double(s * s));
+            }
+        return out;
+    }
+
     ImageRgb readPixels() {
         resolvePixels();
         return toImage(readRgba(t.pixelsFb.id(), 0, 0, t.width, t.height), t.width, t.height);
@@ -620,7 +653,7 @@ struct Compositor::Impl {
         int count = 0;
         for (size_t i = 0; i < covered.size(); ++i)
             if (covered[i]) {
-                sum += illuminanceLux(Rgb(e[4 * i], e[4 * i + 1], e[4 * i + 2]), efficacy);
+                sum += photometry.luminous(Rgb(e[4 * i], e[4 * i + 1], e[4 * i + 2]));
                 ++count;
             }
         if (count == 0) return std::nullopt;
@@ -645,6 +678,15 @@ ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMe
     meshes.upload(direct, indirect);
     impl_->compose(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
     return impl_->readImage();
+}
+
+LuxImage Compositor::renderIlluminance(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
+                                      const std::vector<IrradianceMeshCopy>& indirect, CompositorSettings settings) {
+    GpuCacheMeshes meshes(impl_->gl, impl_->origin);
+    meshes.upload(direct, indirect);
+    settings.quantity = CompositeQuantity::Illuminance;
+    impl_->compose(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
+    return impl_->readIlluminanceImage();
 }
 
 void Compositor::compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,

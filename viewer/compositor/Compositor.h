@@ -17,7 +17,9 @@
 #include "cache/IrradianceCache.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
+#include "core/image/FalseColour.h"
 #include "core/image/Image.h"
+#include "core/image/Photometry.h"
 
 #include <cstdint>
 #include <memory>
@@ -35,7 +37,7 @@ enum class CompositeQuantity {
     // Kd, the diffuse reflectance.
     Reflectance,
     // Illuminance in lux (lm·m⁻²), the same value in all three channels:
-    // efficacy × the Rec. 709 luminance of Σ_l w_l E_l + w_ind Σ_b E_b.
+    // CompositorSettings::photometry applied to Σ_l w_l E_l + w_ind Σ_b E_b.
     Illuminance,
 };
 
@@ -46,9 +48,9 @@ struct CompositorSettings {
     // pixel is the average radiance over its area. The viewer uses 1 or 2.
     int supersample = 4;
     CompositeQuantity quantity = CompositeQuantity::Radiance;
-    // Lumens per watt of irradiance, CompositeQuantity::Illuminance only;
-    // typical 179 (RADIANCE's equal-energy white, see core/image/Illuminance.h).
-    double efficacy = 179.0;
+    // Irradiance to lux, CompositeQuantity::Illuminance only: efficacy and
+    // luminance weights (core/image/Photometry.h), RADIANCE's by default.
+    Photometry photometry;
     void validate() const;
 };
 
@@ -114,6 +116,12 @@ public:
     // its sub-pixels that see a surface, whatever share of the pixel they
     // cover; none off every surface.
     std::optional<double> readIlluminance(int x, int y);
+    // Illuminance per pixel (`render --quantity lux`): `settings.quantity`
+    // is taken as CompositeQuantity::Illuminance; each pixel holds the mean
+    // lux of its sub-pixels that see a surface and the share they cover, as
+    // display() maps them.
+    LuxImage renderIlluminance(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
+                               const std::vector<IrradianceMeshCopy>& indirect, CompositorSettings settings);
     // The last composite box-filtered on the CPU exactly as render() does:
     // for images that must equal render's output bit for bit.
     ImageRgb readImage();

@@ -10,7 +10,7 @@ layout(binding = 1) uniform sampler2D uIrradiance;  // Σ weighted cached irradi
 // what its emitting faces show.
 layout(std430, binding = 0) readonly buffer LightEmissionBuffer { vec4 uLightEmission[]; };
 
-uniform float uEfficacy;   // lm/W
+uniform vec3 uLuxFactors;  // lm/W per channel: Photometry::factors(), efficacy × luminance weights
 
 // rgb: the quantity; a: 1 where a surface is seen, else 0 (and rgb 0).
 vec4 compositeValue(ivec2 p) {
@@ -21,7 +21,7 @@ vec4 compositeValue(ivec2 p) {
 #else
     vec3 e = texelFetch(uIrradiance, p, 0).rgb;
 #if QUANTITY == 2
-    return vec4(vec3(uEfficacy * dot(e, kLuminance)) * seen, seen);
+    return vec4(vec3(dot(e, uLuxFactors)) * seen, seen);
 #else
     vec3 le = s.a >= 2.0 ? uLightEmission[max(int(s.a) - 2, 0)].rgb : vec3(0.0);
     return vec4((s.rgb * kInvPi * e + le) * seen, seen);

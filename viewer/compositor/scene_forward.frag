@@ -7,7 +7,7 @@ flat in int vLight;
 
 layout(binding = 1) uniform sampler2D uIrradiance;  // Σ weighted cached irradiance, W·m⁻²
 layout(std430, binding = 0) readonly buffer LightEmissionBuffer { vec4 uLightEmission[]; };
-uniform float uEfficacy;   // lm/W
+uniform vec3 uLuxFactors;  // lm/W per channel: Photometry::factors(), efficacy × luminance weights
 
 layout(location = 0) out vec4 outColor;
 
@@ -17,7 +17,7 @@ void main() {
 #else
     vec3 e = texelFetch(uIrradiance, ivec2(gl_FragCoord.xy), 0).rgb;
 #if QUANTITY == 2
-    vec3 value = vec3(uEfficacy * dot(e, kLuminance));
+    vec3 value = vec3(dot(e, uLuxFactors));
 #else
     // Emitters radiate from their front (counter-clockwise) face only.
     vec3 le = gl_FrontFacing && vLight >= 0 ? uLightEmission[max(vLight, 0)].rgb : vec3(0.0);

@@ -1,6 +1,7 @@
 #include "Ui.h"
 
 #include "core/Error.h"
+#include "core/image/FalseColour.h"
 
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
@@ -41,7 +42,7 @@ std::string formatCount(double n) {
 void luxLegend(UiModel& m) {
     const DisplayState& d = *m.display;
     ImGuiIO& io = ImGui::GetIO();
-    const float barWidth = 22, barHeight = std::clamp(io.DisplaySize.y * 0.45f, 120.0f, 360.0f);
+    const float barWidth = 22, barHeight = float(legendBarHeight(io.DisplaySize.y));
     const ImGuiStyle& style = ImGui::GetStyle();
     // A size given, not fitted: a fitted window stays hidden in its first
     // frame, and a screenshot right after switching to lux needs the legend.
@@ -63,15 +64,13 @@ void luxLegend(UiModel& m) {
         const ImU32 bottom = colourU32(falseColour(1.0 - double(i + 1) / steps));
         draw->AddRectFilledMultiColor(ImVec2(p.x, y0), ImVec2(p.x + barWidth, y1), top, top, bottom, bottom);
     }
-    const std::vector<double> levels = luxLevels(d.luxMin, d.luxMax);
-    // Label every level when they fit, else every third (the decades).
-    const bool all = levels.size() * ImGui::GetTextLineHeight() * 1.1f < barHeight;
-    for (double lux : levels) {
-        if (!all && std::abs(std::fmod(luxLevelIndex(lux), 3.0)) > 1e-6) continue;
-        const float y = p.y + barHeight * float(1.0 - falseColourPosition(lux, d.luxMin, d.luxMax));
+    // The levels and labels of the CPU legend (render --quantity lux): FalseColour.h.
+    for (const LegendTick& t : legendTicks(d.luxMin, d.luxMax, barHeight, ImGui::GetTextLineHeight())) {
+        if (!t.labelled) continue;
+        const float y = p.y + barHeight * float(t.position);
         draw->AddLine(ImVec2(p.x + barWidth, y), ImVec2(p.x + barWidth + 6, y), IM_COL32(255, 255, 255, 255));
         draw->AddText(ImVec2(p.x + barWidth + 9, y - ImGui::GetTextLineHeight() * 0.5f), IM_COL32(255, 255, 255, 255),
-                      formatLux(lux).c_str());
+                      formatLux(t.lux).c_str());
     }
     ImGui::Dummy(ImVec2(barWidth + 70, barHeight));
     ImGui::Text("%s .. %s lx%s", formatLux(d.luxMin).c_str(), formatLux(d.luxMax).c_str(), d.luxAuto ? " (auto)" : "");
@@ -79,7 +78,8 @@ void luxLegend(UiModel& m) {
         ImGui::Text("cursor: %.4g lx", *m.cursorLux);
     else
         ImGui::TextDisabled("cursor: -");
-    ImGui::TextDisabled("%.0f lm/W%s", m.efficacy, d.contours ? ", 1-2-5 lines" : "");
+    ImGui::TextDisabled("%.0f lm/W, %s%s", m.photometry.efficacy, m.photometry.name.c_str(),
+                        d.contours ? ", 1-2-5 lines" : "");
     ImGui::End();
 }
 
@@ -219,12 +219,12 @@ UiRequests Ui::build(UiModel& m) {
             LightControl& c = lights[l];
             r.lightsChanged |= ImGui::Checkbox("##on", &c.on);
             ImGui::SameLine();
-            ImGui::Text("%zu '%s': %.4g lm", l, info.name.c_str(), m.efficacy * luminance(info.powerW * c.weight()));
+            ImGui::Text("%zu '%s': %.4g lm", l, info.name.c_str(), m.photometry.luminous(info.powerW * c.weight()));
             if (ImGui::IsItemHovered())
                 ImGui::SetTooltip("As in the scene: Ke (%.3g, %.3g, %.3g) W/sr/m2, area %.4g m2,\n"
                                   "power (%.3g, %.3g, %.3g) W, %.4g lm at %.0f lm/W",
                                   info.radiance.r, info.radiance.g, info.radiance.b, info.areaM2, info.powerW.r,
-                                  info.powerW.g, info.powerW.b, info.lumens, m.efficacy);
+                                  info.powerW.g, info.powerW.b, info.lumens, m.photometry.efficacy);
             float intensity = float(c.intensity);
             if (ImGui::SliderFloat("intensity", &intensity, 0.0f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic)) {
                 c.intensity = intensity;

@@ -11,6 +11,7 @@
 
 #include "DisplayState.h"
 #include "core/image/Illuminance.h"
+#include "core/image/Photometry.h"
 
 #include <optional>
 #include <string>
@@ -26,7 +27,7 @@ struct UiLightInfo {
     Rgb radiance{0.0};  // Ke, W·sr⁻¹·m⁻²
     double areaM2 = 0;  // area in m², from the scene's unit
     Rgb powerW{0.0};    // Φ = π Ke A, W per channel
-    double lumens = 0;  // efficacy × luminance(Φ)
+    double lumens = 0;  // Photometry::luminous(Φ)
 };
 
 struct UiStats {
@@ -56,7 +57,7 @@ struct UiModel {
     Camera camera;
     double speed = 1;  // scene units per second
     LengthUnit unit = LengthUnit::Metre;
-    double efficacy = kDefaultEfficacy;
+    Photometry photometry;  // lux and lumens
     int supersample = 1;
     std::vector<std::pair<std::string, Rgb>> meshColours;  // wireframe legend
     std::optional<double> cursorLux;                      // under the mouse, lux mode

@@ -3,7 +3,6 @@
 #include "FrameMeter.h"
 #include "FrameStatistics.h"
 #include "GlfwWindow.h"
-#include "InterruptGuard.h"
 #include "Screenshot.h"
 #include "Ui.h"
 #include "ViewRefinement.h"
@@ -12,6 +11,7 @@
 #include "WireframeColours.h"
 #include "core/Error.h"
 #include "core/image/ToneMap.h"
+#include "core/io/InterruptGuard.h"
 #include "viewer/compositor/Compositor.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
 
@@ -126,7 +126,7 @@ struct ViewSession::Impl : ScriptHost {
             const double area = l.area * mpu * mpu;
             const Rgb power = kPi * l.radiance * area;
             lightPowers.push_back(power);
-            lightInfo.push_back({l.name, l.radiance, area, power, illuminanceLux(power, settings.efficacy)});
+            lightInfo.push_back({l.name, l.radiance, area, power, settings.photometry.luminous(power)});
         }
         // Before the window: a cache that cannot be resumed is refused first.
         std::unique_ptr<ProgressiveSession> session = ViewRefinement::makeSession(scene, settings);
@@ -277,7 +277,7 @@ struct ViewSession::Impl : ScriptHost {
         m.camera = walk.camera();
         m.speed = walk.speed();
         m.unit = settings.unit;
-        m.efficacy = settings.efficacy;
+        m.photometry = settings.photometry;
         m.supersample = settings.supersample;
         m.meshColours = meshLegend(scene, uploader->front());
         if (refinement->session().cache().hasSharedMesh())
@@ -309,7 +309,7 @@ struct ViewSession::Impl : ScriptHost {
         cs.height = fbHeight;
         cs.supersample = settings.supersample;
         cs.quantity = q;
-        cs.efficacy = settings.efficacy;
+        cs.photometry = settings.photometry;
         return cs;
     }
 

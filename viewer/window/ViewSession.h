@@ -11,9 +11,9 @@
 // changed, at most every 0.1 s), so what it sees is refined first and no
 // finer than its pixels.
 //
-// Ending. Closing the window, `quit` in a script or Ctrl-C (SIGINT sets a
-// flag the frame loop checks; another Ctrl-C a second later ends the
-// process at once)
+// Ending. Closing the window, `quit` in a script or Ctrl-C (SIGINT or
+// SIGTERM sets a flag the frame loop checks; another one a quarter second
+// or more later ends the process at once: core/io/InterruptGuard.h)
 // stop the worker, which finishes its round, and join it. A worker that
 // fails leaves its message in the window and on stderr; the window goes on
 // showing the last snapshot (a script ends with exit status 1).
@@ -25,6 +25,7 @@
 #include "cache/IrradianceCache.h"
 #include "core/Camera.h"
 #include "core/image/Illuminance.h"
+#include "core/image/Photometry.h"
 #include "gpu_sampling/SamplerFactory.h"
 
 #include <memory>
@@ -45,7 +46,7 @@ struct ViewSettings {
     WorkerSettings worker;  // maxSamples: the --samples budget
     std::string cachePath;  // resumed from if it exists; saved at the end and by "save cache"
     LengthUnit unit = LengthUnit::Metre;
-    double efficacy = kDefaultEfficacy;  // lm/W
+    Photometry photometry;  // lux, lumens: --photometry, --efficacy
     DisplayState display;
     std::optional<ViewScript> script;    // resolved against the scene
     double scriptStep = 0;  // > 0: script time advances this much per frame instead of with the clock

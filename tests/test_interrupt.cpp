@@ -1,0 +1,199 @@
+// Nothing lost on Ctrl-C: `render`, walkthroughs and `reference` run as
+// child processes and are sent SIGINT or SIGTERM while they work. The first
+// signal writes what is done (whole, atomically) and exits 130; a second one
+// exits 130 at once, leaving no partial or temporary file.
+#include "RunCommand.h"
+#include "TempDirTest.h"
+#include "core/image/Image.h"
+
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace ml;
+using test::CommandResult;
+using test::runMeshlight;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The meshlight binary started with `args`, its output going to `log`.
+class Child {
+public:
+    Child(const std::vector<std::string>& args, const std::string& log) : log_(log) {
+        pid_ = ::fork();
+        if (pid_ == 0) {
+            const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            ::dup2(fd, STDOUT_FILENO);
+            ::dup2(fd, STDERR_FILENO);
+            std::vector<char*> argv = {const_cast<char*>(MESHLIGHT_BINARY)};
+            for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+            argv.push_back(nullptr);
+            ::execv(MESHLIGHT_BINARY, argv.data());
+            ::_exit(127);
+        }
+    }
+    ~Child() {
+        if (pid_ > 0 && !exited_) {
+            ::kill(pid_, SIGKILL);
+            ::waitpid(pid_, nullptr, 0);
+        }
+    }
+    void signal(int s) const { ::kill(pid_, s); }
+    // The exit status, or -1 when killed by a signal or still running after
+    // `seconds` (then it is killed).
+    int wait(double seconds) {
+        const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+        int status = 0;
+        while (::waitpid(pid_, &status, WNOHANG) == 0) {
+            if (Clock::now() > deadline) return -1;  // the destructor kills it
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        exited_ = true;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    std::string output() const {
+        std::ifstream in(log_);
+        std::stringstream s;
+        s << in.rdbuf();
+        return s.str();
+    }
+
+private:
+    std::string log_;
+    pid_t pid_ = -1;
+    bool exited_ = false;
+};
+
+void sleepFor(double seconds) { std::this_thread::sleep_for(std::chrono::duration<double>(seconds)); }
+
+class Interrupt : public test::TempDirTest {
+protected:
+    // Runs meshlight with `args`, sends it SIGINT after `seconds` and
+    // returns what it printed; a failure unless it exits with status 130.
+    std::string interruptedAfter(double seconds, const std::vector<std::string>& args) const {
+        Child child(args, path("log.txt"));
+        sleepFor(seconds);
+        child.signal(SIGINT);
+        EXPECT_EQ(child.wait(30), 130) << child.output();
+        return child.output();
+    }
+    // Every entry of the directory whose name marks a temporary (AtomicOutput's ".NAME.tmp-PID-N").
+    std::vector<std::string> temporaries() const {
+        std::vector<std::string> found;
+        for (const auto& e : fs::recursive_directory_iterator(path("")))
+            if (e.path().filename().string().find(".tmp-") != std::string::npos)
+                found.push_back(e.path().filename().string());
+        return found;
+    }
+    // A linear image whose every value is finite and not negative.
+    void expectValidImage(const std::string& file) const {
+        const ImageRgb image = readImageLinear(file);  // refuses non-finite pixels
+        EXPECT_GT(image.width, 0);
+        float lowest = 0, highest = 0;
+        for (float v : image.data) {
+            lowest = std::min(lowest, v);
+            highest = std::max(highest, v);
+        }
+        EXPECT_GE(lowest, 0.0f) << file;
+        EXPECT_GT(highest, 0.0f) << file << ": black";
+    }
+};
+
+}  // namespace
+
+TEST_F(Interrupt, RenderWritesWhatIsCachedAndTheCacheResumes) {
+    const std::string output = interruptedAfter(3, {"render", "cornell", "--time", "60", "--width", "128", "--height",
+                                                    "128", "--cache", path("c.bin"), "--out", path("o.exr")});
+    EXPECT_NE(output.find("interrupted: wrote " + path("o.exr") + " and " + path("c.bin") + " (what was cached after"),
+              std::string::npos)
+        << output;
+    expectValidImage(path("o.exr"));
+    ASSERT_TRUE(fs::exists(path("c.bin")));
+    EXPECT_TRUE(temporaries().empty());
+    const CommandResult resumed = runMeshlight("render cornell --width 32 --height 32 --cache " + path("c.bin") +
+                                               " --samples 1 --out " + path("r.exr"));
+    ASSERT_EQ(resumed.status, 0) << resumed.output;
+    EXPECT_NE(resumed.output.find("resumed from " + path("c.bin")), std::string::npos) << resumed.output;
+}
+
+TEST_F(Interrupt, SecondSignalExitsAtOnceAndLeavesNoTemporary) {
+    // A large image, so the composite and the writes take a while after the
+    // first signal; the second comes while they run.
+    Child render({"render", "cornell", "--time", "60", "--width", "1024", "--height", "1024", "--supersample", "2",
+                  "--cache", path("c.bin"), "--out", path("o.exr")},
+                 path("log.txt"));
+    sleepFor(3);
+    render.signal(SIGINT);
+    sleepFor(0.4);  // later than InterruptGuard::kSecondSignalSeconds: a second request
+    const auto second = Clock::now();
+    render.signal(SIGINT);
+    ASSERT_EQ(render.wait(30), 130) << render.output();
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - second).count(), 1.0) << render.output();
+    EXPECT_TRUE(temporaries().empty()) << testing::PrintToString(temporaries());
+    EXPECT_EQ(render.output().find("interrupted: wrote"), std::string::npos) << render.output();
+    // What is there is whole: an image written before the second signal is valid.
+    if (fs::exists(path("o.exr"))) expectValidImage(path("o.exr"));
+}
+
+TEST_F(Interrupt, SignalsMicrosecondsApartAreOneRequest) {
+    // `timeout` signals the process and then its group: one request.
+    Child render({"render", "cornell", "--time", "60", "--width", "64", "--height", "64", "--out", path("o.exr")},
+                 path("log.txt"));
+    sleepFor(3);
+    render.signal(SIGTERM);
+    render.signal(SIGTERM);
+    ASSERT_EQ(render.wait(30), 130) << render.output();
+    expectValidImage(path("o.exr"));
+}
+
+TEST_F(Interrupt, WalkthroughKeepsTheFramesDoneAndWritesTheOneUnderWay) {
+    std::ofstream(path("path.csv")) << "278,273,-800,278,273,0,0,1,0,39\n278,273,-700,278,273,0,0,1,0,39\n"
+                                       "278,273,-600,278,273,0,0,1,0,39\n278,273,-500,278,273,0,0,1,0,39\n"
+                                       "278,273,-400,278,273,0,0,1,0,39\n";
+    const std::string output =
+        interruptedAfter(3.5, {"render", "cornell", "--time", "1.5", "--width", "48", "--height", "48",
+                               "--camera-path", path("path.csv"), "--out", path("view_##.exr")});
+    // The frames written are 00 .. k with no gap, k the one refined at the
+    // interrupt (not the last: five frames take 7.5 s).
+    int written = 0;
+    while (written < 5 && fs::exists(path(concat("view_0", written, ".exr")))) ++written;
+    EXPECT_GE(written, 1) << output;
+    EXPECT_LT(written, 5) << output;
+    for (int k = written; k < 5; ++k) EXPECT_FALSE(fs::exists(path(concat("view_0", k, ".exr")))) << k;
+    for (int k = 0; k < written; ++k) expectValidImage(path(concat("view_0", k, ".exr")));
+    EXPECT_NE(output.find(concat("interrupted: wrote ", path(concat("view_0", written - 1, ".exr")))),
+              std::string::npos)
+        << output;
+}
+
+TEST_F(Interrupt, ReferenceWritesWholePassesWithTheirCount) {
+    const int pass = 4;
+    const std::string output =
+        interruptedAfter(2.5, {"reference", "cornell", "--spp", "100000", "--pass", std::to_string(pass), "--width",
+                               "64", "--height", "64", "--out", path("ref.exr")});
+    expectValidImage(path("ref.exr"));
+    ASSERT_TRUE(fs::exists(path("ref.noise.exr")));
+    const std::optional<std::string> spp = readImageAttribute(path("ref.exr"), "meshlight:spp");
+    ASSERT_TRUE(spp) << "no meshlight:spp in ref.exr";
+    const int n = std::stoi(*spp);
+    EXPECT_GT(n, 0);
+    EXPECT_LT(n, 100000);
+    EXPECT_EQ(n % pass, 0) << n;
+    EXPECT_EQ(readImageAttribute(path("ref.noise.exr"), "meshlight:spp"), spp);
+    EXPECT_NE(output.find(concat("the ", n, " of 100000 samples per pixel")), std::string::npos) << output;
+    EXPECT_TRUE(temporaries().empty());
+}
