@@ -75,8 +75,8 @@ struct Compositor::Impl {
     struct Targets {
         int width = 0, height = 0, supersample = 0;  // pixels, sub-pixels per side
         // Sub-pixel targets.
-        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth, occluderDepth;
-        GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb, occluderFb;
+        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth;
+        GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb;
         // Pixel targets: the box-filtered composite; the forward pass's image and depth.
         GlTexture pixels, forwardColour, forwardDepth;
         GlFramebuffer pixelsFb, forwardFb;
@@ -213,8 +213,6 @@ struct Compositor::Impl {
         t.sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
         t.irradianceMesh = makeTexture2D(gl, GL_RGBA32F, w, h);
         t.cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        t.occluderDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        t.occluderFb = makeFramebuffer(gl, {}, t.occluderDepth.id(), "compositor");
         t.surfaceFb = makeFramebuffer(gl, {t.surface.id()}, t.sceneDepth.id(), "compositor");
         t.irradianceFb = makeFramebuffer(gl, {t.irradianceSum.id()}, t.cacheDepth.id(), "compositor");
         t.irradianceMeshFb = makeFramebuffer(gl, {t.irradianceMesh.id()}, t.cacheDepth.id(), "compositor");
@@ -270,31 +268,17 @@ struct Compositor::Impl {
     // drawn wins, so a sub-pixel adds one of them only. On llvmpipe the cost
     // of a large cache is per triangle: one draw, not a depth pass and then
     // a shading pass.
-    //
-    // A mesh that keeps only some of the scene's faces (`partial`: a light's
-    // own mesh where lights share) starts from the scene's surfaces as
-    // occluders (drawOccluders), not from an empty depth buffer: otherwise
-    // where it lacks the face in view it would add what it keeps behind it
-    // (the wall behind a partition it does not cover).
-    void drawIrradianceMesh(const GpuCacheMeshes::Mesh& mesh, const Rgb& weight, bool partial, bool& first) {
+    void drawIrradianceMesh(const GpuCacheMeshes::Mesh& mesh, const Rgb& weight, bool& first) {
         if (mesh.triangleCount == 0 || weight == Rgb(0.0)) return;  // nothing to add
         const float zero[4] = {0, 0, 0, 0};
         const float farDepth = 0.0f;  // reversed depth
-        const GLuint target = first ? t.irradianceFb.id() : t.irradianceMeshFb.id();
-        gl.BindFramebuffer(GL_FRAMEBUFFER, target);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, first ? t.irradianceFb.id() : t.irradianceMeshFb.id());
         if (!first) gl.ClearBufferfv(GL_COLOR, 0, zero);
-        if (partial) {
-            const int w = t.width * t.supersample, h = t.height * t.supersample;
-            gl.BlitNamedFramebuffer(t.occluderFb.id(), target, 0, 0, w, h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-        } else {
-            gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
-        }
+        gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
         gl.Enable(GL_DEPTH_TEST);
         gl.DepthFunc(GL_GREATER);
         gl.DepthMask(GL_TRUE);
-        irradianceProgram.use();
-        gl.UniformMatrix4fv(irradianceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
-        gl.Uniform3f(irradianceProgram.uniform("uWeight"), float(weight.r), float(weight.g), float(weight.b));
+        useIrradianceProgram(weight);
         gl.BindVertexArray(mesh.vertexArray());
         drawnTriangles += drawTriangles(mesh);
         gl.Disable(GL_DEPTH_TEST);
@@ -312,19 +296,48 @@ struct Compositor::Impl {
         first = false;
     }
 
-    // The scene's surfaces into occluderDepth, a hair behind their depth
-    // (occluder.frag), for the partial meshes of drawIrradianceMesh.
-    void drawOccluders() {
+    void useIrradianceProgram(const Rgb& weight) {
+        irradianceProgram.use();
+        gl.UniformMatrix4fv(irradianceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
+        gl.Uniform3f(irradianceProgram.uniform("uWeight"), float(weight.r), float(weight.g), float(weight.b));
+    }
+
+    // The lights' own meshes where lights share (each keeps only some of the
+    // scene's faces), added straight into the sum. A mesh's own depth test
+    // would let it add, where it lacks the face in view, what it keeps
+    // behind it (the wall behind a partition it does not cover); so the
+    // scene's own surfaces go first into the depth buffer, a hair behind
+    // their depth (occluder.frag), and the meshes are tested against them
+    // without writing depth: each adds only on the surface in view. One
+    // depth pass of the scene's triangles, then one draw per mesh.
+    void drawPartialMeshes(const GpuCacheMeshes& meshes, const LightWeights& weights, bool& first) {
         const float farDepth = 0.0f;  // reversed depth
-        gl.BindFramebuffer(GL_FRAMEBUFFER, t.occluderFb.id());
+        gl.BindFramebuffer(GL_FRAMEBUFFER, t.irradianceFb.id());
         gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
         gl.Enable(GL_DEPTH_TEST);
         gl.DepthFunc(GL_GREATER);
+        gl.DepthMask(GL_TRUE);
+        gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
         occluderProgram.use();
         gl.UniformMatrix4fv(occluderProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
         gl.BindVertexArray(sceneVao.id());
         gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+        gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        gl.DepthMask(GL_FALSE);
+        gl.Enable(GL_BLEND);
+        gl.BlendFunc(GL_ONE, GL_ONE);
+        gl.BlendEquation(GL_FUNC_ADD);
+        for (size_t l = 0; l < weights.light.size(); ++l) {
+            const GpuCacheMeshes::Mesh& mesh = meshes.direct(l);
+            if (mesh.triangleCount == 0 || weights.light[l] == Rgb(0.0)) continue;
+            useIrradianceProgram(weights.light[l]);
+            gl.BindVertexArray(mesh.vertexArray());
+            drawnTriangles += drawTriangles(mesh);
+        }
+        gl.Disable(GL_BLEND);
+        gl.DepthMask(GL_TRUE);
         gl.Disable(GL_DEPTH_TEST);
+        first = false;
     }
 
     // Left, right, bottom, top and near planes of the view (the projection
@@ -403,14 +416,13 @@ struct Compositor::Impl {
         bool first = true;
         // Each light's own mesh, then the mesh the lights share, if any:
         // with a shared mesh, the lights' own meshes keep only some faces.
-        const bool sharing = meshes.directCount() > scene.lights.size();
-        if (sharing) drawOccluders();
-        for (size_t l = 0; l < meshes.directCount(); ++l) {
-            const bool own = l < weights.light.size();
-            drawIrradianceMesh(meshes.direct(l), own ? weights.light[l] : weights.shared, sharing && own, first);
+        if (meshes.directCount() > scene.lights.size()) {
+            drawPartialMeshes(meshes, weights, first);
+            drawIrradianceMesh(meshes.direct(scene.lights.size()), weights.shared, first);
+        } else {
+            for (size_t l = 0; l < meshes.directCount(); ++l) drawIrradianceMesh(meshes.direct(l), weights.light[l], first);
         }
-        for (size_t b = 0; b < meshes.indirectCount(); ++b)
-            drawIrradianceMesh(meshes.indirect(b), weights.indirect, false, first);
+        for (size_t b = 0; b < meshes.indirectCount(); ++b) drawIrradianceMesh(meshes.indirect(b), weights.indirect, first);
         checkGl(gl, "compositing the irradiance");
         composed = true;
         surfaced = composited = resolved = forwarded = false;
