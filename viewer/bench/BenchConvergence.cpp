@@ -1,6 +1,7 @@
 #include "BenchConvergence.h"
 
 #include "BenchRun.h"
+#include "SessionCheckpoints.h"
 #include "BenchTable.h"
 #include "ExactDirectImage.h"
 #include "Gnuplot.h"
@@ -329,16 +330,6 @@ struct StillResult {
     MemoryResult memory;
 };
 
-// Waits for the worker's first snapshot (the time it takes counts).
-const CacheSnapshot* firstSnapshot(ProgressiveSession& session, CacheWorker::Reader& reader) {
-    for (;;) {
-        session.rethrowIfFailed();
-        if (const CacheSnapshot* s = reader.acquire()) return s;
-        ML_ASSERT(!session.finished(), "the cache worker ended without publishing a snapshot");
-        session.waitForVersion(1, 0.05);
-    }
-}
-
 // Direct light only, sampled as `choice` says, seeded with `seed`.
 std::unique_ptr<ProgressiveSession> directSession(const Scene& scene, const DirectChoice& choice, uint32_t seed) {
     SessionSettings settings;
@@ -384,11 +375,7 @@ StillResult runStill(const Scene& scene, const Workload& work, const DirectChoic
         session->start(RefinementCamera{camera, size, size});
         CacheWorker::Reader reader = session->reader();
         for (double due : work.checkpoints) {
-            for (double left; (left = due - secondsSince(start)) > 0;) {
-                session->rethrowIfFailed();
-                std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.05)));
-            }
-            const CacheSnapshot* s = firstSnapshot(*session, reader);
+            const CacheSnapshot* s = snapshotAt(*session, reader, start, due);
             MeshlightPoint p;
             p.checkpoint = due;
             p.seconds = secondsSince(start);

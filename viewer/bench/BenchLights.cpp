@@ -1,6 +1,7 @@
 #include "BenchLights.h"
 
 #include "BenchRun.h"
+#include "SessionCheckpoints.h"
 #include "BenchStatistics.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
@@ -305,16 +306,6 @@ struct SceneResult {
     }
 };
 
-// Waits for the worker's first snapshot (the time it takes counts).
-const CacheSnapshot* firstSnapshot(ProgressiveSession& session, CacheWorker::Reader& reader) {
-    for (;;) {
-        session.rethrowIfFailed();
-        if (const CacheSnapshot* s = reader.acquire()) return s;
-        ML_ASSERT(!session.finished(), "the cache worker ended without publishing a snapshot");
-        session.waitForVersion(1, 0.05);
-    }
-}
-
 std::string fileLabel(const std::string& kind, const OfficeVariant& office, const char* extension) {
     return concat("lights_", kind, "_", office.label, extension);
 }
@@ -366,11 +357,7 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
         session->start(RefinementCamera{camera, work.width, work.height});
         CacheWorker::Reader reader = session->reader();
         for (double due : work.checkpoints) {
-            for (double left; (left = due - secondsSince(start)) > 0;) {
-                session->rethrowIfFailed();
-                std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.05)));
-            }
-            const CacheSnapshot* s = firstSnapshot(*session, reader);
+            const CacheSnapshot* s = snapshotAt(*session, reader, start, due);
             Taken t;
             t.point.seconds = secondsSince(start);
             t.point.estimatedError = s->estimatedError;
