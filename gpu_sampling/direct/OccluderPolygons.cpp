@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
+#include <tuple>
 
 namespace ml {
 
@@ -34,11 +34,28 @@ OccluderPolygons::OccluderPolygons(const std::vector<Triangle3>& triangles, cons
     : triangles_(triangles), lightId_(lightId), quadCorner_(triangles.size(), Vec3(0.0)),
       quadAfter_(triangles.size(), int8_t(-1)) {
     ML_ASSERT(lightId.size() == triangles.size(), "a light id per triangle");
-    // Each edge's triangles and the corner opposite it in each.
-    std::map<EdgeKey, std::vector<std::pair<uint32_t, int>>> edges;
+    // Every triangle's edges, sorted so that the uses of one edge are
+    // neighbours (in triangle order); run[3i + k]: the uses of triangle i's
+    // edge k. A sorted array rather than a map: one allocation, for scenes of
+    // millions of triangles.
+    struct EdgeUse {
+        EdgeKey key;
+        uint32_t tri;
+        int edge;
+    };
+    std::vector<EdgeUse> uses;
+    uses.reserve(3 * triangles.size());
     for (uint32_t i = 0; i < triangles.size(); ++i)
         for (int k = 0; k < 3; ++k)
-            edges[edgeKey(triangles[i][size_t(k)], triangles[i][size_t((k + 1) % 3)])].push_back({i, (k + 2) % 3});
+            uses.push_back({edgeKey(triangles[i][size_t(k)], triangles[i][size_t((k + 1) % 3)]), i, k});
+    std::sort(uses.begin(), uses.end(), [](const EdgeUse& a, const EdgeUse& b) {
+        return std::tie(a.key, a.tri, a.edge) < std::tie(b.key, b.tri, b.edge);
+    });
+    std::vector<std::pair<uint32_t, uint32_t>> run(uses.size());  // [begin, end) in `uses`
+    for (size_t begin = 0, end; begin < uses.size(); begin = end) {
+        for (end = begin + 1; end < uses.size() && uses[end].key == uses[begin].key;) ++end;
+        for (size_t u = begin; u < end; ++u) run[3 * size_t(uses[u].tri) + size_t(uses[u].edge)] = {uint32_t(begin), uint32_t(end)};
+    }
     for (uint32_t i = 0; i < triangles.size(); ++i) {
         const Triangle3& t = triangles[i];
         const Vec3 area = glm::cross(t[1] - t[0], t[2] - t[0]);
@@ -50,9 +67,11 @@ OccluderPolygons::OccluderPolygons(const std::vector<Triangle3>& triangles, cons
             // The edge from corner k to k + 1; the neighbour's far corner d
             // goes between them: t[k], d, t[k+1], t[k+2].
             const Vec3 &a = t[size_t(k)], &b = t[size_t((k + 1) % 3)], &c = t[size_t((k + 2) % 3)];
-            for (const auto& [j, opposite] : edges[edgeKey(a, b)]) {
+            const auto [begin, end] = run[3 * size_t(i) + size_t(k)];
+            for (uint32_t u = begin; u < end; ++u) {
+                const uint32_t j = uses[u].tri;
                 if (j == i || lightId[j] != lightId[i]) continue;
-                const Vec3 d = triangles[j][size_t(opposite)];
+                const Vec3 d = triangles[j][size_t((uses[u].edge + 2) % 3)];  // the corner opposite the edge
                 if (std::abs(glm::dot(d - a, n)) > 1e-9 * size) continue;  // not in the plane
                 if (!(turnsLeft(c, a, d, n) && turnsLeft(a, d, b, n) && turnsLeft(d, b, c, n) && turnsLeft(b, c, a, n)))
                     continue;  // the union is not convex
