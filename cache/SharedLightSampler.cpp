@@ -9,10 +9,7 @@
 namespace ml {
 
 Rgb unoccludedIrradiance(const AreaLight& light, const Vec3& x, const Vec3& n) {
-    double csa = 0;
-    for (const Triangle3& t : light.geometry)
-        if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0) csa += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
-    return light.radiance * csa;
+    return light.radiance * unoccludedCosineSolidAngle(light, x, n);
 }
 
 SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const LightCoverage> coverage,

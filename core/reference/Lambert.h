@@ -12,6 +12,7 @@
 #pragma once
 
 #include "core/Math.h"
+#include "core/Scene.h"
 
 #include <vector>
 
@@ -27,6 +28,11 @@ namespace ml {
 // part above the receiver's horizon counts. Returns 0 when x lies in the
 // polygon's plane (within 1e-12 of the polygon's size), boundary included.
 double cosineSolidAngle(const Vec3& x, const Vec3& n, const std::vector<Vec3>& polygon);
+
+// cosineSolidAngle summed over the light's triangles whose emitting (CCW)
+// side faces x: the irradiance at x from the light with nothing in the way,
+// per unit of its radiance.
+double unoccludedCosineSolidAngle(const AreaLight& light, const Vec3& x, const Vec3& n);
 
 // Solid angle (sr, in [0, 2π]) that the planar simple polygon subtends at x,
 // either orientation; 0 when x lies in its plane.

@@ -846,10 +846,7 @@ struct DirectLightSampler::Impl {
         }
         // Lambert at the receiver itself, not the lifted eye: where nothing
         // occludes, the control variate is then exact, with no bias from the lift.
-        double exactUnoccluded = 0;
-        for (const Triangle3& t : light.geometry)
-            if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0)
-                exactUnoccluded += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
+        const double exactUnoccluded = unoccludedCosineSolidAngle(light, x, n);
         p.exactUnoccluded = exactUnoccluded;
         p.result.frusta = uint32_t(p.frusta.size());
 

@@ -29,10 +29,7 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
     if (pieces.empty()) return result;
 
     // Lambert at the receiver itself, as the raster sampler's control variate.
-    double exactUnoccluded = 0;
-    for (const Triangle3& t : light.geometry)
-        if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0)
-            exactUnoccluded += cosineSolidAngle(x, n, {t[0], t[1], t[2]});
+    const double exactUnoccluded = unoccludedCosineSolidAngle(light, x, n);
 
     const std::vector<SamplingFrustum> frusta =
         samplingFrusta(light, pieces, eye, settings_.maxHalfAngleDegrees);
