@@ -118,7 +118,7 @@ bool litFromBehind(const Scene& scene, const Mesh& m, size_t t) {
     const Vec3 n = glm::normalize(m.areaNormal(t));
     const double eps = 1e-6 * scene.bounds.diagonal();
     
-    for (const AreaLight& light : scene.lights)
+    for (const Light& light : scene.lights)
         for (const Triangle3& lt : light.geometry) {
             const Vec3 ln = glm::cross(lt[1] - lt[0], lt[2] - lt[0]);
             if (!(glm::dot(ln, n) > 0)) continue;  // emits away from the plane's back
@@ -236,7 +236,7 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     s.sceneFingerprint = detail::sceneFingerprint(scene);
     s.insetBorders = layout.insetBorders;
-    for (const AreaLight& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
+    for (const Light& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
     const double maxEdge = settings.maxEdgeFraction * s.diagonal;

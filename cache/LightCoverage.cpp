@@ -9,8 +9,22 @@ namespace ml {
 
 namespace {
 
-// B_l(p) of LightCoverage.h, up to the common factor 1/π.
-double bound(const AreaLight& light, const Vec3& p) {
+// B_l(p) of LightCoverage.h, up to the common factor 1/π. A punctual light's
+// is π times its unoccluded irradiance on a surface facing it: its intensity
+// toward p over the squared distance (in metres), or a directional light's
+// irradiance, the same everywhere.
+double largest(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
+
+double bound(const Light& light, const Vec3& p) {
+    if (light.kind == LightKind::Directional) return kPi * largest(light.emission.intensity);
+    if (light.kind == LightKind::Point) {
+        const PunctualEmission& e = light.emission;
+        const Vec3 v = p - e.position;
+        const double d = glm::length(v);
+        const double i = largest(d > 0 ? e.intensityToward(v / d) : e.intensity);
+        const double m = std::max(d, e.minDistance) * e.metresPerUnit;
+        return kPi * i / (m * m);
+    }
     const double power = std::max({light.power().r, light.power().g, light.power().b});
     if (!(power > 0)) return 0;
     const Vec3 v = p - light.centroid;

@@ -13,7 +13,9 @@
 // from its power, distance and orientation only (no visibility):
 //   B_l(p) = Φ_l · max(0, (N_l·v + r_l) / (|v| + r_l)) / (π (|v|² + r_l²)),
 // v = p − centroid, r_l = √(A_l/π) the light's radius, N_l its normal (a
-// non-planar light counts as facing every way); share s_l = B_l / max(Σ_k
+// non-planar light counts as facing every way), and for a punctual light
+// π I_l(ω)/(s d)² (its intensity toward p, s metres per unit) or π E⊥ for a
+// directional one; share s_l = B_l / max(Σ_k
 // B_k, a quarter of the mean of Σ_k B_k over the scene): where little direct
 // light arrives at all, no light needs a mesh of its own;
 // w_l = 1 where s_l ≥ τ, 0 below τ/2, linear in between (τ =

@@ -8,7 +8,8 @@
 
 namespace ml {
 
-Rgb unoccludedIrradiance(const AreaLight& light, const Vec3& x, const Vec3& n) {
+Rgb unoccludedIrradiance(const Light& light, const Vec3& x, const Vec3& n) {
+    if (light.punctual()) return punctualIncidence(light, x, n).irradiance;
     return light.radiance * unoccludedCosineSolidAngle(light, x, n);
 }
 

@@ -55,6 +55,6 @@ private:
 // U_l at x: light l's irradiance with nothing in the way, from the light's
 // triangles whose emitting side faces x, Lambert's formula at x itself (as
 // the light sampler's control variate computes it).
-Rgb unoccludedIrradiance(const AreaLight& light, const Vec3& x, const Vec3& n);
+Rgb unoccludedIrradiance(const Light& light, const Vec3& x, const Vec3& n);
 
 }  // namespace ml

@@ -4,6 +4,7 @@
 #include "Error.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 namespace ml {
@@ -18,10 +19,10 @@ struct Vec3Less {
     }
 };
 
-AreaLight makeLight(const Scene& scene, uint32_t meshIndex, uint32_t material,
+Light makeLight(const Scene& scene, uint32_t meshIndex, uint32_t material,
                     const std::vector<uint32_t>& tris) {
     const Mesh& mesh = scene.meshes[meshIndex];
-    AreaLight light;
+    Light light;
     light.mesh = meshIndex;
     light.material = material;
     light.triangles = tris;
@@ -113,6 +114,48 @@ std::map<uint32_t, std::vector<uint32_t>> connectedEmitters(const Scene& scene, 
     return groups;
 }
 
+// Checks a punctual light and fills what it takes from the scene.
+void finalizePunctual(const Scene& scene, Light& l) {
+    PunctualEmission& e = l.emission;
+    const SourceLocation at{scene.name, 0};
+    const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    if (!finite(e.position)) throwInputError(at, "light '", l.name, "': its position is not finite");
+    const double axisLength = glm::length(e.axis);
+    if (!finite(e.axis) || !(axisLength > 0)) throwInputError(at, "light '", l.name, "': its direction is zero or not finite");
+    e.axis /= axisLength;
+    // The reference half-plane (C0) made perpendicular to the axis; any
+    // perpendicular when it was given along the axis or not at all.
+    Vec3 r = e.reference - glm::dot(e.reference, e.axis) * e.axis;
+    if (!finite(r) || glm::length(r) < 1e-9) {
+        Vec3 b;
+        orthonormalBasis(e.axis, r, b);
+    }
+    e.reference = glm::normalize(r);
+    for (double c : {e.intensity.r, e.intensity.g, e.intensity.b})
+        if (!std::isfinite(c) || c < 0) throwInputError(at, "light '", l.name, "': intensity ", c, " is not a finite non-negative number");
+    if (e.profile.shape == IntensityProfile::Shape::Table && !e.profile.table)
+        throwInputError(at, "light '", l.name, "': a table profile without a table");
+    if (e.profile.shape == IntensityProfile::Shape::Spot &&
+        !(e.profile.cosOuter < e.profile.cosInner && e.profile.cosOuter >= -1 && e.profile.cosInner <= 1))
+        throwInputError(at, "light '", l.name, "': spot cones are not 0 <= inner < outer <= 180 degrees");
+    if (!(scene.metresPerUnit > 0) || !std::isfinite(scene.metresPerUnit))
+        throwInputError(at, "metres per scene unit ", scene.metresPerUnit, " is not a positive number");
+    const double diagonal = scene.bounds.empty() ? 1.0 : scene.bounds.diagonal();
+    e.metresPerUnit = scene.metresPerUnit;
+    e.minDistance = kPunctualMinDistance * diagonal;
+    e.sceneRadius = 0.5 * diagonal;
+    l.area = 0;
+    l.planar = false;
+    l.normal = e.axis;
+    l.bounds = Bounds3{};
+    if (l.kind == LightKind::Point) {
+        l.centroid = e.position;
+        l.bounds.extend(e.position);
+    } else {
+        l.centroid = scene.bounds.empty() ? Vec3(0.0) : scene.bounds.center();
+    }
+}
+
 }  // namespace
 
 void Scene::finalize() {
@@ -120,6 +163,9 @@ void Scene::finalize() {
     for (const Mesh& m : meshes)
         for (const Vec3& p : m.positions) bounds.extend(p);
 
+    std::vector<Light> punctual;
+    for (Light& l : lights)
+        if (l.punctual()) punctual.push_back(std::move(l));
     lights.clear();
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
         const Mesh& mesh = meshes[mi];
@@ -136,7 +182,7 @@ void Scene::finalize() {
         std::map<uint32_t, int> seen;
         for (auto& [root, tris] : groups) {
             const uint32_t mat = mesh.materials[tris.front()];
-            AreaLight light = makeLight(*this, mi, mat, tris);
+            Light light = makeLight(*this, mi, mat, tris);
             light.name = materials[mat].name;
             if (perMaterial[mat] > 1) light.name += "#" + std::to_string(seen[mat]++);
             if (!(light.area > 0))
@@ -145,6 +191,19 @@ void Scene::finalize() {
             lights.push_back(std::move(light));
         }
     }
+    for (Light& l : punctual) {
+        finalizePunctual(*this, l);
+        lights.push_back(std::move(l));
+    }
+}
+
+std::string lightGroupOf(const std::string& name) {
+    size_t end = name.size();
+    while (end > 0 && name[end - 1] >= '0' && name[end - 1] <= '9') --end;
+    if (end == name.size() || end < 2) return name;  // no suffix, or nothing before it
+    const char sep = name[end - 1];
+    if (sep == '.' || sep == '_' || sep == ' ' || sep == '#' || sep == '-') return name.substr(0, end - 1);
+    return name;
 }
 
 size_t Scene::triangleCount() const {

@@ -4,6 +4,7 @@
 
 #include "Camera.h"
 #include "Math.h"
+#include "PunctualLight.h"
 
 #include <array>
 #include <cstdint>
@@ -66,35 +67,82 @@ constexpr double kLightPlanarTolerance = 1e-6;
 // this (about 1e-3 radians); see Scene::finalize's two-sided panels.
 constexpr double kLightNormalTolerance = 1e-3;
 
-// A connected set of emissive triangles of one material and one mesh, all
-// facing one way when they lie in one plane (Scene::finalize).
-struct AreaLight {
+// What kind of emitter a light is.
+enum class LightKind {
+    Area,         // emissive triangles of the scene (Ke), sampled by rasterising them from the receiver
+    Point,        // a point with an intensity profile (isotropic, spot cone, photometric table): one shadow ray
+    Directional,  // parallel light from infinitely far (the sun, glTF's directional): one shadow ray
+};
+
+// A light: a connected set of emissive triangles of one material and one
+// mesh, all facing one way when they lie in one plane (Scene::finalize), or
+// a punctual light (point, spot, photometric luminaire, directional) that
+// a loader or a luminaire layout adds to Scene::lights before finalize().
+struct Light {
     std::string name;                 // "<material>" or "<material>#k" when a material makes several
+    LightKind kind = LightKind::Area;
+    std::string group;                // lights that switch together share a group name; empty: its own
+
+    // --- Area lights ----------------------------------------------------------
     uint32_t mesh = 0;                // index into Scene::meshes
     uint32_t material = 0;            // index into Scene::materials
     std::vector<uint32_t> triangles;  // triangle indices in that mesh
     std::vector<Triangle3> geometry;  // the same triangles' world positions, CCW = emitting side
     Rgb radiance{0.0};                // Ke, uniform over the light
-    double area = 0;                  // total area (scene units²)
-    Vec3 centroid{0.0};               // area-weighted centroid
-    Vec3 normal{0.0};                 // unit area-weighted mean normal (emitting side)
-    bool planar = false;              // every triangle in one plane (kLightPlanarTolerance)
-    Bounds3 bounds;
+    double area = 0;                  // total area (scene units²); 0 for punctual lights
+    // Area-weighted centroid (a point light's position; a directional light's
+    // is the scene's centre).
+    Vec3 centroid{0.0};
+    // Unit area-weighted mean normal (emitting side); a punctual light's
+    // axis (PunctualEmission::axis).
+    Vec3 normal{0.0};
+    bool planar = false;              // every triangle in one plane (kLightPlanarTolerance); false for punctual lights
+    Bounds3 bounds;                   // a point light's is its position
 
-    // Power emitted, W·(scene unit)²/m² (Φ = π L A for a Lambertian emitter).
-    Rgb power() const { return kPi * radiance * area; }
+    // --- Punctual lights ------------------------------------------------------
+    PunctualEmission emission;        // kind Point or Directional (PunctualLight.h)
+
+    bool punctual() const { return kind != LightKind::Area; }
+    // Power emitted, W·(scene unit)²/m², the same for every kind so that
+    // lights can be weighed against each other: π L A for a Lambertian area
+    // light; ∫ I dω / s² for a point light (s = metres per unit); for a
+    // directional light, its irradiance times the cross-section of the
+    // scene's bounding sphere (what it can deliver to the scene). Watts are
+    // this × s² (Scene::metresPerUnit).
+    Rgb power() const;
 };
+
+// A punctual light's irradiance at x (unit normal n) with nothing in the way,
+// and where the shadow ray goes (PunctualLight.h). Every part of Meshlight
+// that lights a point with a punctual light calls this.
+PunctualIncidence punctualIncidence(const Light& light, const Vec3& x, const Vec3& n);
+
+// The group a light of this name switches with (Light::group): the name
+// without a numbered suffix, as modelling tools number copies: "Panel.003",
+// "Panel_3", "Panel 3" and "Panel#3" are all in group "Panel"; a name
+// without such a suffix is a group of its own, named as the light.
+std::string lightGroupOf(const std::string& name);
 
 struct Scene {
     std::string name;
     std::vector<Material> materials;
     std::vector<Mesh> meshes;
-    std::vector<AreaLight> lights;   // filled by finalize()
+    // Area lights found by finalize(), then the punctual lights a loader or
+    // a luminaire layout put here before it, in their order.
+    std::vector<Light> lights;
     std::optional<Camera> camera;    // from the file, if it has one
-    Bounds3 bounds;                  // filled by finalize()
+    Bounds3 bounds;                  // filled by finalize(): the triangles' bounds (not the point lights')
+    // Metres per scene unit: how the inverse-square law of punctual lights
+    // (candela, W·sr⁻¹) meets the scene's lengths. 1 for metres (glTF, the
+    // office), 0.001 for the built-in Cornell box (millimetres). Area
+    // lights do not need it: their irradiance is L × a solid angle.
+    double metresPerUnit = 1;
     std::vector<std::string> warnings;
 
-    // Computes bounds and area lights. Call once after the meshes are complete.
+    // Computes bounds and area lights. Call once after the meshes (and any
+    // punctual lights) are complete. Punctual lights already in `lights`
+    // are kept, after the area lights, and checked: a finite position, a
+    // unit axis, finite non-negative intensity (InputError naming the light).
     //
     // A light is a connected set of emissive triangles (sharing a vertex
     // position) of one mesh and one material, with one exception: a

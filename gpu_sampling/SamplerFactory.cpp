@@ -1,6 +1,8 @@
 #include "SamplerFactory.h"
 
 #include "core/Error.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PunctualShadow.h"
 #include "core/reference/ExactIrradiance.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/SliceGather.h"
@@ -55,8 +57,25 @@ struct ConfiguredDirectSampler::Impl {
     std::unique_ptr<GlContext> context;
     std::unique_ptr<DirectLightSampler> sampler;
     std::unique_ptr<ExactDirect> exact;
+    // Punctual lights' shadow rays, whatever the method (PunctualShadow.h):
+    // made only when the scene has such a light.
+    std::unique_ptr<EmbreeScene> rays;
     DirectPhaseTimes totals;
-    Impl(const Scene& s, const DirectChoice& c) : scene(s), choice(c) {}
+    Impl(const Scene& s, const DirectChoice& c) : scene(s), choice(c) {
+        for (const Light& l : s.lights)
+            if (l.punctual()) {
+                rays = std::make_unique<EmbreeScene>(s);
+                break;
+            }
+    }
+    bool punctual(size_t light) const { return scene.lights[light].punctual(); }
+    // One shadow ray: exact, so every method answers a punctual light alike.
+    VertexSample samplePunctual(size_t light, const Vec3& x, const Vec3& n) const {
+        const PunctualSample p = punctualIrradiance(*rays, light, x, n);
+        // Visibility 1 where the light does not reach x at all (no shadow
+        // boundary passes there), as for area lights.
+        return {p.irradiance, p.lit && !p.visible ? 0.0 : 1.0, false};
+    }
 };
 
 ConfiguredDirectSampler::ConfiguredDirectSampler(const Scene& scene, const DirectChoice& choice)
@@ -89,6 +108,7 @@ VertexSample vertexSample(const DirectSample& s) {
 }  // namespace
 
 VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const Vec3& n, uint32_t seed) {
+    if (impl_->punctual(light)) return impl_->samplePunctual(light, x, n);
     if (impl_->exact) {
         const double unoccluded = impl_->exact->unoccludedCosineSolidAngle(light, x, n);
         const double visible = impl_->exact->cosineSolidAngle(light, x, n);
@@ -103,6 +123,10 @@ VertexSample ConfiguredDirectSampler::sample(size_t light, const Vec3& x, const 
 
 bool ConfiguredDirectSampler::sampleWithoutGpu(size_t light, const Vec3& x, const Vec3& n, uint32_t seed,
                                                VertexSample& out) {
+    if (impl_->punctual(light)) {
+        out = impl_->samplePunctual(light, x, n);
+        return true;
+    }
     if (impl_->exact) return false;  // every pair costs CGAL's exact visibility
     impl_->context->use();
     DirectSample s;
@@ -120,12 +144,30 @@ void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requ
     }
     // The GPU sampler answers CPU and unlit pairs at once and draws the
     // others' images several at a time (DirectLightSampler::sampleBatch).
+    // Punctual lights' pairs take their shadow ray here; the rest go to the
+    // GPU sampler together.
+    results.resize(requests.size());
+    std::vector<SampleRequest> area;
+    std::vector<size_t> areaIndex;
+    for (size_t i = 0; i < requests.size(); ++i) {
+        const SampleRequest& r = requests[i];
+        if (impl_->punctual(r.mesh))
+            asBatchRequest(i, [&] { results[i] = impl_->samplePunctual(r.mesh, r.x, r.n); });
+        else {
+            area.push_back(r);
+            areaIndex.push_back(i);
+        }
+    }
+    if (area.empty()) return;
     impl_->context->use();
     std::vector<DirectSample> samples;
-    impl_->sampler->sampleBatch(requests, samples);
+    try {
+        impl_->sampler->sampleBatch(area.size() == requests.size() ? requests : area, samples);
+    } catch (const SampleBatchError& e) {
+        throw SampleBatchError(areaIndex[e.index()], e.what());
+    }
     impl_->totals += impl_->sampler->lastTimes();
-    results.resize(requests.size());
-    for (size_t i = 0; i < requests.size(); ++i) results[i] = vertexSample(samples[i]);
+    for (size_t k = 0; k < area.size(); ++k) results[areaIndex[k]] = vertexSample(samples[k]);
 }
 
 // --- The indirect gather -----------------------------------------------------------

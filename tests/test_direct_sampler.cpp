@@ -90,7 +90,7 @@ double sampleValue(DirectLightSampler& s, const Vec3& x, const Vec3& n, uint32_t
 
 // The bench light as one convex polygon (its two triangles (a,b,c), (a,c,d)).
 std::vector<Vec3> benchLightPolygon() {
-    const AreaLight& light = benchScene().lights[0];
+    const Light& light = benchScene().lights[0];
     return {light.geometry[0][0], light.geometry[0][1], light.geometry[0][2], light.geometry[1][2]};
 }
 
@@ -192,7 +192,7 @@ void addFrustumBound(const SamplingFrustum& f, const std::vector<Vec3>& lightPol
 // The frusta the sampler uses at (x, n) for the bench light (same eye, same
 // alignment edge, same split angle), and the bound over all of them.
 std::vector<SamplingFrustum> benchFrusta(const Vec3& x, const Vec3& n) {
-    const AreaLight& light = benchScene().lights[0];
+    const Light& light = benchScene().lights[0];
     const Vec3 eye = eyePoint(x, n);
     return fitFrusta(visibleLightPieces(light, eye, n), eye, light.geometry[0][1] - light.geometry[0][0],
                      DirectSamplerSettings{}.maxHalfAngleDegrees);
@@ -1197,7 +1197,7 @@ void expectOrthonormalBasis(const SamplingFrustum& f) {
 }
 
 TEST(LightFrustum, OneFittedWindowHoldsEveryLightCornerFromTheBench) {
-    const AreaLight& light = benchScene().lights[0];
+    const Light& light = benchScene().lights[0];
     const Vec3 align = light.geometry[0][1] - light.geometry[0][0];
     for (const ReceiverPoint& r : makeBenchReceivers(20)) {
         const Vec3 eye = eyePoint(r.position, r.normal);
@@ -1236,7 +1236,7 @@ TEST(LightFrustum, AReceiverNextToABigLightGetsCubeFacesAndStillSumsToLambert) {
     // 1e-3 below the 1 × 1 light, off its centre: the light fills nearly the
     // whole upper hemisphere, beyond any single frustum's 60° half-angle.
     const Vec3 x(0.1, 1.0 - 1e-3, 0.05);
-    const AreaLight& light = benchScene().lights[0];
+    const Light& light = benchScene().lights[0];
     const Vec3 eye = eyePoint(x, kUp);
     const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, kUp);
     const std::vector<SamplingFrustum> frusta = benchFrusta(x, kUp);

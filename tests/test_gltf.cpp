@@ -195,7 +195,7 @@ TEST_F(Gltf, TranslationRotationScalePlaceTheQuad) {
         for (int k = 0; k < 3; ++k) expectClose(m.triangle(t)[k], corners[quad[t][k]], 1e-9);
     for (const Vec3& n : m.normals) expectClose(n, Vec3(0, 0, 1), 1e-12);
     EXPECT_NEAR(m.area(0) + m.area(1), 6, 1e-9);
-    EXPECT_TRUE(hasWarning(scene, "no emissive surface: the image will be black")) << joined(scene.warnings);
+    EXPECT_TRUE(hasWarning(scene, "no emissive surface and no light: the image will be black")) << joined(scene.warnings);
 }
 
 TEST_F(Gltf, MirroringNodeKeepsCounterClockwiseFrontFaces) {
@@ -320,7 +320,7 @@ TEST_F(Gltf, DoubleSidedEmitterEmitsBothWays) {
     ASSERT_EQ(scene.meshes.size(), 2u);
     EXPECT_EQ(scene.meshes[1].name, "quad (back)");
     ASSERT_EQ(scene.lights.size(), 2u);
-    for (const AreaLight& l : scene.lights) {
+    for (const Light& l : scene.lights) {
         EXPECT_NEAR(l.area, 1, 1e-12);
         EXPECT_TRUE(l.planar);
         EXPECT_EQ(l.radiance, Rgb(1.0));
@@ -390,8 +390,73 @@ TEST_F(Gltf, FirstPerspectiveCameraBecomesTheScenesCamera) {
     EXPECT_NEAR(scene.camera->fovYDegrees, 0.5 * 180 / kPi, 1e-12);
     EXPECT_NO_THROW(scene.camera->validate());
     EXPECT_TRUE(hasWarning(scene, "cameras[0] '': orthographic camera not supported; ignored")) << joined(scene.warnings);
-    EXPECT_TRUE(hasWarning(scene, "KHR_lights_punctual light 0 'bulb' (point) is not rendered")) << joined(scene.warnings);
-    EXPECT_TRUE(hasWarning(scene, "no emissive surface: the image will be black"));
+    ASSERT_EQ(scene.lights.size(), 1u);  // the point light at the origin
+    EXPECT_EQ(scene.lights[0].kind, LightKind::Point);
+    EXPECT_EQ(scene.lights[0].name, "bulb");
+}
+
+// KHR_lights_punctual: placed by the node's world transform, shining along
+// its −Z; candela (lux for directional) to W·sr⁻¹ (W·m⁻²) by 179 lm/W.
+TEST_F(Gltf, PunctualLightsArePlacedAimedAndConvertedFromCandela) {
+    GltfFile f = quadScene();
+    f.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    f.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "bulb"}, {"type", "point"}, {"intensity", 1790}, {"color", {1, 0.5, 0.25}}},
+         {{"name", "spot"}, {"type", "spot"}, {"intensity", 179}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}}},
+         {{"name", "sun"}, {"type", "directional"}, {"intensity", 358}, {"range", 5}}});
+    // −90° about x takes a node's −z to −y: aimed down.
+    const json downX = {-std::sin(kPi / 4), 0, 0, std::cos(kPi / 4)};  // −90° about x: −z -> −y
+    const int parent = f.add("nodes", {{"translation", {0, 1, 0}}, {"children", json::array()}});
+    const int bulb = f.add("nodes", {{"name", "Panel.001"}, {"translation", {0.5, 1, 0.5}},
+                                     {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    const int spot = f.add("nodes", {{"name", "Panel.002"}, {"rotation", downX},
+                                     {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
+    const int sun = f.add("nodes", {{"rotation", downX}, {"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}});
+    f.doc["nodes"][parent]["children"] = {bulb, spot};
+    f.setRoots({0, parent, sun});
+    const Scene scene = loadGltf(f.writeGltf(path("lights.gltf")));
+    ASSERT_EQ(scene.lights.size(), 3u);
+    const Light& b = scene.lights[0];
+    EXPECT_EQ(b.kind, LightKind::Point);
+    EXPECT_EQ(b.name, "Panel.001");
+    EXPECT_EQ(b.group, "Panel");
+    expectClose(b.emission.position, Vec3(0.5, 2, 0.5), 1e-12);
+    expectClose(b.emission.intensity, Vec3(10, 5, 2.5), 1e-12);  // 1790 cd × colour / 179
+    EXPECT_EQ(b.emission.profile.shape, IntensityProfile::Shape::Isotropic);
+    const Light& s = scene.lights[1];
+    EXPECT_EQ(s.group, "Panel");
+    expectClose(s.emission.position, Vec3(0, 1, 0), 1e-12);
+    expectClose(s.emission.axis, Vec3(0, -1, 0), 1e-12);
+    EXPECT_EQ(s.emission.profile.shape, IntensityProfile::Shape::Spot);
+    EXPECT_NEAR(s.emission.profile.cosInner, std::cos(0.2), 1e-15);
+    EXPECT_NEAR(s.emission.profile.cosOuter, std::cos(0.5), 1e-15);
+    expectClose(s.emission.intensity, Vec3(1, 1, 1), 1e-12);
+    const Light& d = scene.lights[2];
+    EXPECT_EQ(d.kind, LightKind::Directional);
+    expectClose(d.emission.axis, Vec3(0, -1, 0), 1e-12);
+    expectClose(d.emission.intensity, Vec3(2, 2, 2), 1e-12);  // 358 lx / 179
+    EXPECT_TRUE(hasWarning(scene, "range 5 m ignored")) << joined(scene.warnings);
+    EXPECT_EQ(scene.metresPerUnit, 1.0);
+}
+
+TEST_F(Gltf, BadPunctualLightsNameTheField) {
+    auto withLight = [&](json light, const std::string& name) {
+        GltfFile f = quadScene();
+        f.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+        f.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array({std::move(light)});
+        const int node = f.add("nodes", {{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+        f.setRoots({0, node});
+        return f.writeGltf(path(name));
+    };
+    EXPECT_NE(loadError(withLight({{"type", "area"}}, "type.gltf")).find("KHR_lights_punctual.lights[0].type 'area' is not"),
+              std::string::npos);
+    EXPECT_NE(loadError(withLight({{"type", "spot"}, {"spot", {{"innerConeAngle", 0.6}, {"outerConeAngle", 0.5}}}}, "cone.gltf"))
+                  .find("KHR_lights_punctual.lights[0].spot: cone angles"),
+              std::string::npos);
+    EXPECT_NE(loadError(withLight({{"type", "point"}, {"intensity", -1}}, "negative.gltf")).find(".intensity -1 is not"),
+              std::string::npos);
+    EXPECT_NE(loadError(withLight({{"type", "point"}, {"color", {1, 1}}}, "colour.gltf")).find(".color has 2 values"),
+              std::string::npos);
 }
 
 // --- .glb ---------------------------------------------------------------------------

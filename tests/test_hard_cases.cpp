@@ -99,7 +99,7 @@ Vec3 eyeOf(const Scene& scene, const DirectSamplerSettings& s, const Vec3& x, co
 
 std::vector<SamplingFrustum> frustaOf(const Scene& scene, const DirectSamplerSettings& s, const Vec3& x,
                                       const Vec3& n) {
-    const AreaLight& light = scene.lights[0];
+    const Light& light = scene.lights[0];
     const Vec3 eye = eyeOf(scene, s, x, n);
     return fitFrusta(visibleLightPieces(light, eye, glm::normalize(n)), eye,
                      light.geometry[0][1] - light.geometry[0][0], s.maxHalfAngleDegrees);
@@ -135,7 +135,7 @@ struct Bound {
 // sampler's own frusta (see the top of this file).
 Bound samplingBound(const Scene& scene, const DirectSamplerSettings& s, const Vec3& x, const Vec3& nIn) {
     const Vec3 n = glm::normalize(nIn);
-    const AreaLight& light = scene.lights[0];
+    const Light& light = scene.lights[0];
     const double diag = scene.bounds.diagonal();
     const Vec3 eye = eyeOf(scene, s, x, n);
     const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, n);

@@ -115,7 +115,7 @@ TEST(ObjLoader, QuadLight) {
     EXPECT_EQ(lamp.ke, Rgb(10, 8, 6));
 
     ASSERT_EQ(scene.lights.size(), 1u);
-    const AreaLight& light = scene.lights[0];
+    const Light& light = scene.lights[0];
     EXPECT_EQ(light.name, "lamp");
     EXPECT_EQ(light.radiance, Rgb(10, 8, 6));
     EXPECT_NEAR(light.area, 0.5, 1e-15);
@@ -747,7 +747,7 @@ TEST(CornellBox, Geometry) {
 TEST(CornellBox, OneLightFacingDown) {
     const Scene scene = makeCornellBox();
     ASSERT_EQ(scene.lights.size(), 1u);
-    const AreaLight& light = scene.lights[0];
+    const Light& light = scene.lights[0];
     EXPECT_EQ(scene.meshes[light.mesh].name, "light");
     EXPECT_NEAR(light.area, 130.0 * 105.0, 1e-9);
     EXPECT_EQ(light.normal, Vec3(0, -1, 0));
@@ -777,7 +777,7 @@ TEST(ObjLoader, McGuireCornellBox) {
     EXPECT_TRUE(scene.warnings.empty()) << joined(scene.warnings);
     EXPECT_EQ(scene.triangleCount(), 36u);
     ASSERT_EQ(scene.lights.size(), 1u);
-    const AreaLight& light = scene.lights[0];
+    const Light& light = scene.lights[0];
     EXPECT_EQ(light.name, "light");
     EXPECT_EQ(light.radiance, Rgb(17, 12, 4));
     EXPECT_EQ(light.triangles.size(), 2u);

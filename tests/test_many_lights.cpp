@@ -134,7 +134,7 @@ TEST(SharedLights, ARoomOfAHundredSmallLightsKeepsTheirPower) {
     const Scene scene = emptyOffice(10, 10, 0.1);
     ASSERT_EQ(scene.lights.size(), 100u);
     Rgb power(0.0);
-    for (const AreaLight& l : scene.lights) power += l.power();  // Φ = π L A, W (the office is in metres)
+    for (const Light& l : scene.lights) power += l.power();  // Φ = π L A, W (the office is in metres)
     for (double share : {0.05, 0.0}) {
         CacheSettings cs;
         cs.lightShare = share;

@@ -19,7 +19,7 @@ double relativeError(double actual, double expected) { return std::abs(actual - 
 
 Rgb totalPower(const Scene& scene) {
     Rgb sum(0.0);
-    for (const AreaLight& light : scene.lights) sum += light.power();
+    for (const Light& light : scene.lights) sum += light.power();
     return sum;
 }
 
@@ -75,7 +75,7 @@ TEST(Office, DefaultHasTwelveDownwardPanelsJustBelowTheCeiling) {
     EXPECT_EQ(scene.name, "office");
     ASSERT_EQ(scene.lights.size(), 12u);
     const double panelY = settings.height - 0.02;
-    for (const AreaLight& light : scene.lights) {
+    for (const Light& light : scene.lights) {
         SCOPED_TRACE(light.name);
         EXPECT_LT(relativeError(light.area, 0.36), 1e-12) << light.area;
         EXPECT_TRUE(light.planar);
@@ -129,7 +129,7 @@ TEST(Office, TotalPowerDoesNotDependOnThePanels) {
         ASSERT_EQ(scene.lights.size(), size_t(l.nx * l.nz));
         const Rgb power = totalPower(scene);
         for (int c = 0; c < 3; ++c) EXPECT_LT(relativeError(power[c], defaultPower[c]), 1e-12) << power[c];
-        for (const AreaLight& light : scene.lights)
+        for (const Light& light : scene.lights)
             EXPECT_LT(relativeError(light.area, l.size * l.size), 1e-12);
         if (l.size == 0.6) {
             // For 0.6 m panels the radiance is the reference's × 12 / (NX · NZ).
@@ -224,7 +224,7 @@ TEST(Office, FloorGetsAFewHundredLux) {
     for (const OfficeSettings& s : {OfficeSettings{}, withPanels(8, 6, 0.6), withPanels(16, 12, 0.4)}) {
         const Scene scene = makeOfficeScene(s);
         Rgb e(0.0);
-        for (const AreaLight& light : scene.lights)
+        for (const Light& light : scene.lights)
             for (const Triangle3& t : light.geometry)
                 e += light.radiance * cosineSolidAngle(Vec3(0.0), Vec3(0.0, 1.0, 0.0), {t[0], t[1], t[2]});
         const double lux = luminance(e);

@@ -62,7 +62,7 @@ TEST(RayTracedSampler, ControlVariateIsLambertWhereNothingOccludes) {
     for (const ReceiverPoint& r : makeBenchReceivers(20))
         if (clearOfPenumbra(r.position, 0.02)) receivers.push_back(r);
     ASSERT_GE(receivers.size(), 100u);
-    const AreaLight& light = benchScene().lights[0];
+    const Light& light = benchScene().lights[0];
     const std::vector<Vec3> polygon = {light.geometry[0][0], light.geometry[0][1], light.geometry[0][2],
                                        light.geometry[1][2]};
     for (size_t i = 0; i < receivers.size(); ++i) {

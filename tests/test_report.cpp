@@ -210,7 +210,7 @@ TEST(ScalingScene, LightGridKeepsTotalPower) {
         const Scene s = makeCornellLightGrid(n);
         ASSERT_EQ(s.lights.size(), size_t(n));
         Rgb power(0.0);
-        for (const AreaLight& l : s.lights) {
+        for (const Light& l : s.lights) {
             power += l.power();
             EXPECT_NEAR(l.area, 1600.0, 1e-9);
             EXPECT_LT(l.normal.y, -0.999);

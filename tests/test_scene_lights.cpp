@@ -91,11 +91,11 @@ Mesh sphere(double r, int rings, int segments) {
 TEST(SceneLights, TwoCoincidentOppositeQuadsMakeTwoPlanarLights) {
     const Scene scene = lampScene(twoSidedPanel());
     ASSERT_EQ(scene.lights.size(), 2u);
-    const AreaLight& down = scene.lights[0];
-    const AreaLight& up = scene.lights[1];
+    const Light& down = scene.lights[0];
+    const Light& up = scene.lights[1];
     EXPECT_EQ(down.name, "lamp#0");
     EXPECT_EQ(up.name, "lamp#1");
-    for (const AreaLight* l : {&down, &up}) {
+    for (const Light* l : {&down, &up}) {
         EXPECT_TRUE(l->planar) << l->name;
         EXPECT_DOUBLE_EQ(l->area, 6.0) << l->name;
         EXPECT_EQ(l->triangles.size(), 2u) << l->name;
@@ -118,7 +118,7 @@ TEST(SceneLights, TwoSidedPanelsSplitTheSameWayEveryTime) {
     const Scene scene = lampScene(m);
     ASSERT_EQ(scene.lights.size(), 4u);
     std::vector<std::string> names;
-    for (const AreaLight& l : scene.lights) {
+    for (const Light& l : scene.lights) {
         EXPECT_TRUE(l.planar) << l.name;
         EXPECT_DOUBLE_EQ(l.area, 6.0) << l.name;
         names.push_back(l.name);
@@ -148,7 +148,7 @@ TEST(SceneLights, SharedCornersOfBothSidesStillSplit) {
     ASSERT_EQ(scene.lights.size(), 2u);
     EXPECT_EQ(scene.lights[0].normal, kUp);
     EXPECT_EQ(scene.lights[1].normal, -kUp);
-    for (const AreaLight& l : scene.lights) {
+    for (const Light& l : scene.lights) {
         EXPECT_TRUE(l.planar);
         EXPECT_DOUBLE_EQ(l.area, 6.0);
     }
@@ -180,7 +180,7 @@ TEST(SceneLights, TessellatedSphereStaysOneLight) {
     const double r = 0.5;
     const Scene scene = lampScene(sphere(r, 16, 32));
     ASSERT_EQ(scene.lights.size(), 1u);
-    const AreaLight& l = scene.lights[0];
+    const Light& l = scene.lights[0];
     EXPECT_FALSE(l.planar);
     EXPECT_EQ(l.triangles.size(), scene.meshes[0].triangles.size());
     // Within the tessellation's shortfall of the sphere's area (about 1%).
@@ -206,7 +206,7 @@ TEST(SceneLights, BuiltInScenesKeepTheirLights) {
     const Scene office = makeOfficeScene();
     ASSERT_EQ(office.lights.size(), 12u);
     std::set<std::string> names;
-    for (const AreaLight& l : office.lights) {
+    for (const Light& l : office.lights) {
         EXPECT_TRUE(l.planar) << l.name;
         names.insert(l.name);
     }

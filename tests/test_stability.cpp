@@ -527,7 +527,7 @@ void expectCacheCoversTheScene(const Scene& scene, const IrradianceMeshCopy& vie
         for (size_t t = 0; t < m.triangles.size(); ++t) sceneTriangles.push_back(m.triangle(t));
     for (const Mesh& m : scene.meshes) {
         bool isLight = false;
-        for (const AreaLight& l : scene.lights) isLight = isLight || &scene.meshes[l.mesh] == &m;
+        for (const Light& l : scene.lights) isLight = isLight || &scene.meshes[l.mesh] == &m;
         if (isLight) continue;  // what the cache keeps of a light is its own affair
         for (size_t t = 0; t < m.triangles.size(); ++t) {
             const Triangle3 p = m.triangle(t);

@@ -17,6 +17,7 @@
 #include "TextureMean.h"
 
 #include "core/Error.h"
+#include "core/image/Photometry.h"
 #include "core/MeshUtil.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -234,7 +235,7 @@ private:
     void traverse();
     Mat4 localTransform(int node) const;
     void readCamera(int node, const Mat4& world);
-    void noteLight(int node);
+    void readLight(int node, const Mat4& world);
 
     // Accessors and primitives
     struct ByteRange {
@@ -286,7 +287,8 @@ private:
 
     std::optional<Camera> camera_;  // target set once the scene's size is known
     Vec3 cameraForward_{0.0};       // unit
-    std::set<int> notedLights_;
+    std::vector<Light> punctual_;  // KHR_lights_punctual, in traversal order
+    std::set<int> rangeWarned_;
 
     size_t pointsAndLines_ = 0;
     std::string firstPointsAndLines_;
@@ -317,12 +319,23 @@ Scene GltfReader::read() {
              " of points or lines skipped (first ", firstPointsAndLines_, ")");
     chooseMaterials();
     buildMeshes();
+    scene_.metresPerUnit = 1;  // glTF's unit
+    for (Light& l : punctual_) {
+        // Names as unique as probe columns and the viewer's panel need.
+        std::string name = l.name;
+        for (int k = 1; std::any_of(scene_.lights.begin(), scene_.lights.end(),
+                                    [&](const Light& o) { return o.name == name; });
+             ++k)
+            name = concat(l.name, "#", k);
+        l.name = name;
+        scene_.lights.push_back(std::move(l));
+    }
     scene_.finalize();
     if (camera_) {  // looking half the scene's size ahead: only the direction matters
         camera_->target = camera_->position + 0.5 * scene_.bounds.diagonal() * cameraForward_;
         scene_.camera = camera_;
     }
-    if (scene_.lights.empty()) warn("no emissive surface: the image will be black");
+    if (scene_.lights.empty()) warn("no emissive surface and no light: the image will be black");
     return std::move(scene_);
 }
 
@@ -450,7 +463,7 @@ void GltfReader::traverse() {
             instances_.push_back({p.node, node.mesh, world});
         }
         if (node.camera != -1) readCamera(p.node, world);
-        noteLight(p.node);
+        readLight(p.node, world);
         if (node.skin >= 0) warnOnce("skin", at, ": skins are not supported; the rest pose is used");
         for (auto c = node.children.rbegin(); c != node.children.rend(); ++c)
             stack.push_back({*c, world, at + ".children"});
@@ -510,7 +523,11 @@ void GltfReader::readCamera(int node, const Mat4& world) {
     cameraForward_ = forward / fl;
 }
 
-void GltfReader::noteLight(int node) {
+// KHR_lights_punctual: the light a node carries, placed by the node's world
+// transform (it shines along the node's −Z). Intensity: candela for point
+// and spot lights, lux for directional ones; turned into W·sr⁻¹ and W·m⁻²
+// with K = 179 lm/W (core/PunctualLight.h), times the linear RGB colour.
+void GltfReader::readLight(int node, const Mat4& world) {
     const tg::Node& n = model_.nodes[static_cast<size_t>(node)];
     const auto ext = n.extensions.find("KHR_lights_punctual");
     if (ext == n.extensions.end() || !ext->second.IsObject() || !ext->second.Has("light")) return;
@@ -519,10 +536,47 @@ void GltfReader::noteLight(int node) {
     if (!v.IsNumber()) fail(field, " is not a number");
     const int index = v.GetNumberAsInt();
     const tg::Light& light = element(model_.lights, index, "KHR_lights_punctual.lights", field);
-    if (notedLights_.insert(index).second)
-        warn("KHR_lights_punctual light ", index, " '", light.name, "' (", light.type,
-             ") is not rendered: only emissive surfaces are, so far (point and spot lights come "
-             "in a later change)");
+    const std::string at = item("KHR_lights_punctual.lights", index);
+    Light l;
+    l.name = !n.name.empty() ? n.name : !light.name.empty() ? light.name : concat("light", index);
+    l.group = lightGroupOf(n.name);
+    Rgb colour(1.0);
+    if (!light.color.empty()) {
+        if (light.color.size() != 3) fail(at, ".color has ", light.color.size(), " values, expected 3");
+        colour = Rgb(light.color[0], light.color[1], light.color[2]);
+    }
+    for (double c : {colour.r, colour.g, colour.b})
+        if (!(c >= 0 && std::isfinite(c))) fail(at, ".color ", c, " is not a finite number >= 0");
+    if (!(light.intensity >= 0 && std::isfinite(light.intensity)))
+        fail(at, ".intensity ", light.intensity, " is not a finite number >= 0");
+    const Mat3 m(world);
+    const Vec3 axis = m * Vec3(0, 0, -1), reference = m * Vec3(1, 0, 0);
+    if (!(glm::length(axis) > 0) || !isFinite(axis))
+        fail(item("nodes", node), ": the light's transform is singular");
+    l.emission.axis = glm::normalize(axis);
+    l.emission.reference = reference;
+    l.emission.intensity = colour * (light.intensity / kRadianceEfficacy);
+    if (light.type == "point" || light.type == "spot") {
+        l.kind = LightKind::Point;
+        l.emission.position = Vec3(world[3]);
+        if (light.type == "spot") {
+            const double inner = light.spot.innerConeAngle, outer = light.spot.outerConeAngle;
+            if (!(inner >= 0 && inner < outer && outer <= kPi / 2))
+                fail(at, ".spot: cone angles inner ", inner, " and outer ", outer,
+                     " are not 0 <= inner < outer <= pi/2");
+            l.emission.profile.shape = IntensityProfile::Shape::Spot;
+            l.emission.profile.cosInner = std::cos(inner);
+            l.emission.profile.cosOuter = std::cos(outer);
+        }
+    } else if (light.type == "directional") {
+        l.kind = LightKind::Directional;
+    } else {
+        fail(at, ".type '", light.type, "' is not point, spot or directional");
+    }
+    if (light.range > 0 && rangeWarned_.insert(index).second)
+        warn(at, " '", light.name, "': range ", light.range,
+             " m ignored: light falls off by the inverse-square law at every distance");
+    punctual_.push_back(std::move(l));
 }
 
 // Accessors and primitives ---------------------------------------------------

@@ -1,5 +1,7 @@
 #include "BounceCount.h"
 
+#include "PunctualShadow.h"
+
 #include "EmbreeScene.h"
 #include "core/Error.h"
 #include "core/Random.h"
@@ -79,7 +81,11 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             // from behind), by shadow rays to area-uniform points of each light.
             double e = 0;
             for (size_t l = 0; l < scene.lights.size(); ++l) {
-                const AreaLight& light = scene.lights[l];
+                const Light& light = scene.lights[l];
+                if (light.punctual()) {  // one shadow ray, each side
+                    e += luminance(punctualIrradiance(rt, l, x, n).irradiance + punctualIrradiance(rt, l, x, -n).irradiance);
+                    continue;
+                }
                 double sum = 0;
                 for (int s = 0; s < settings.lightSamples; ++s) {
                     const uint32_t id = uint32_t(i * settings.lightSamples + s);

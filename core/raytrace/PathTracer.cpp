@@ -1,5 +1,7 @@
 #include "PathTracer.h"
 
+#include "PunctualShadow.h"
+
 #include "PhongBsdf.h"
 #include "core/Error.h"
 #include "core/Random.h"
@@ -88,7 +90,7 @@ PathTracer::PathTracer(const EmbreeScene& rays, const PathTracerSettings& settin
     : rays_(rays), scene_(rays.scene()), settings_(settings) {
     settings_.validate();
     double total = 0;
-    for (const AreaLight& l : scene_.lights) {
+    for (const Light& l : scene_.lights) {
         lightProbability_.push_back(luminance(l.power()));
         total += lightProbability_.back();
         std::vector<double> cdf;
@@ -121,7 +123,7 @@ int PathTracer::threadCount() const {
 // A uniform point of light `light` (triangle by area, then uniform in it)
 // and that triangle's unit front normal.
 bool PathTracer::lightPoint(size_t light, double u0, double u1, double u2, Vec3& y, Vec3& normal) const {
-    const AreaLight& l = scene_.lights[light];
+    const Light& l = scene_.lights[light];
     const Triangle3& t = l.geometry[pick(triangleCdf_[light], u0)];
     const double r = std::sqrt(u1);
     y = t[0] + r * (1.0 - u2) * (t[1] - t[0]) + r * u2 * (t[2] - t[0]);
@@ -155,6 +157,13 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
     const double uLight = rng.uniform(), u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
     if (lightCdf_.empty()) return Rgb(0.0);
     const size_t l = pick(lightCdf_, uLight);
+    if (scene_.lights[l].punctual()) {
+        // A delta light: only this strategy can reach it (no MIS).
+        const PunctualSample p = punctualIrradiance(rays_, l, v.position, v.ns, v.ng);
+        if (!p.visible) return Rgb(0.0);
+        const PhongBsdf bsdf(*v.material, v.ns);
+        return bsdf.eval(v.wo, p.toLight) * p.irradiance / lightProbability_[l];
+    }
     Vec3 y, nl;
     if (!lightPoint(l, u0, u1, u2, y, nl)) return Rgb(0.0);
     const Vec3 d = y - v.position;
@@ -166,7 +175,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
     const PhongBsdf bsdf(*v.material, v.ns);
     const Rgb f = bsdf.eval(v.wo, wi);
     if (maxComponent(f) <= 0) return Rgb(0.0);
-    const AreaLight& light = scene_.lights[l];
+    const Light& light = scene_.lights[l];
     const double pLight = lightProbability_[l] * d2 / (cosLight * light.area);
     const Vec3 from = rays_.spawnPoint(v.position, v.ng, wi);
     const Vec3 to = rays_.spawnPoint(y, nl, -wi);
@@ -414,6 +423,10 @@ IrradianceEstimate PathTracer::irradiance(const Vec3& x, const Vec3& nIn, int sa
             // One point of every light, weighed against cosine sampling.
             for (size_t l = 0; l < lights; ++l) {
                 const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                if (scene_.lights[l].punctual()) {  // exact: one shadow ray, every sample alike
+                    perLight[l] += punctualIrradiance(rays_, l, x, n).irradiance;
+                    continue;
+                }
                 Vec3 y, nl;
                 if (!lightPoint(l, u0, u1, u2, y, nl)) continue;
                 const Vec3 d = y - x;

@@ -393,25 +393,25 @@ double exactVisibleCosineSolidAngle(const Vec3& x, const Vec3& n, const std::vec
 ExactDirect::ExactDirect(const Scene& scene) : lights_(scene.lights) {
     std::vector<std::vector<bool>> isLight(scene.meshes.size());
     for (size_t m = 0; m < scene.meshes.size(); ++m) isLight[m].resize(scene.meshes[m].triangles.size());
-    for (const AreaLight& light : lights_)
+    for (const Light& light : lights_)
         for (uint32_t t : light.triangles) isLight[light.mesh][t] = true;
 
     triangles_.reserve(scene.triangleCount());
     for (size_t m = 0; m < scene.meshes.size(); ++m)
         for (size_t t = 0; t < scene.meshes[m].triangles.size(); ++t)
             if (!isLight[m][t]) triangles_.push_back(scene.meshes[m].triangle(t));
-    for (const AreaLight& light : lights_) {
+    for (const Light& light : lights_) {
         lightBegin_.push_back(triangles_.size());
         triangles_.insert(triangles_.end(), light.geometry.begin(), light.geometry.end());
         lightEnd_.push_back(triangles_.size());
     }
 }
 
-const AreaLight& ExactDirect::planarLight(size_t lightIndex) const {
+const Light& ExactDirect::planarLight(size_t lightIndex) const {
     if (lightIndex >= lights_.size())
         throw std::out_of_range(concat("ExactDirect: light ", lightIndex, " requested, the scene has ",
                                        lights_.size()));
-    const AreaLight& light = lights_[lightIndex];
+    const Light& light = lights_[lightIndex];
     if (!light.planar)
         throw InputError(
             concat("light '", light.name, "' is not planar: the exact method needs planar lights"));
@@ -423,7 +423,7 @@ Rgb ExactDirect::irradiance(size_t lightIndex, const Vec3& x, const Vec3& n) con
 }
 
 double ExactDirect::cosineSolidAngle(size_t lightIndex, const Vec3& x, const Vec3& n) const {
-    const AreaLight& light = planarLight(lightIndex);
+    const Light& light = planarLight(lightIndex);
     const Triangle3* all = triangles_.data();
     return visibleCosineSolidAngle(x, n, light.geometry,
                                    {{all, all + lightBegin_[lightIndex]},

@@ -60,9 +60,9 @@ public:
     double unoccludedCosineSolidAngle(size_t lightIndex, const Vec3& x, const Vec3& n) const;
 
 private:
-    const AreaLight& planarLight(size_t lightIndex) const;
+    const Light& planarLight(size_t lightIndex) const;
 
-    std::vector<AreaLight> lights_;
+    std::vector<Light> lights_;
     // Every scene triangle, those of light k at [lightBegin_[k], lightEnd_[k]),
     // so that light k's occluders are the two ranges around its own.
     std::vector<Triangle3> triangles_;

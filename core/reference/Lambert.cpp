@@ -136,7 +136,7 @@ double solidAngle(const Vec3& x, const std::vector<Vec3>& polygon) {
     return std::abs(sum);
 }
 
-double unoccludedCosineSolidAngle(const AreaLight& light, const Vec3& x, const Vec3& n) {
+double unoccludedCosineSolidAngle(const Light& light, const Vec3& x, const Vec3& n) {
     double csa = 0;
     for (const Triangle3& t : light.geometry)
         if (glm::dot(glm::cross(t[1] - t[0], t[2] - t[0]), x - t[0]) > 0) csa += cosineSolidAngle(x, n, {t[0], t[1], t[2]});

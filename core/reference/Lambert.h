@@ -32,7 +32,7 @@ double cosineSolidAngle(const Vec3& x, const Vec3& n, const std::vector<Vec3>& p
 // cosineSolidAngle summed over the light's triangles whose emitting (CCW)
 // side faces x: the irradiance at x from the light with nothing in the way,
 // per unit of its radiance.
-double unoccludedCosineSolidAngle(const AreaLight& light, const Vec3& x, const Vec3& n);
+double unoccludedCosineSolidAngle(const Light& light, const Vec3& x, const Vec3& n);
 
 // Solid angle (sr, in [0, 2π]) that the planar simple polygon subtends at x,
 // either orientation; 0 when x lies in its plane.

@@ -69,6 +69,7 @@ Mesh block(const char* name, const Quad& top) {
 Scene makeCornellBox() {
     Scene scene;
     scene.name = "cornell";
+    scene.metresPerUnit = 0.001;  // millimetres
     scene.materials = {
         Material::diffuse("white", Rgb(0.725, 0.71, 0.68)),
         Material::diffuse("red", Rgb(0.63, 0.065, 0.05)),

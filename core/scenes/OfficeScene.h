@@ -9,7 +9,7 @@
 //   panels     NX × NZ squares, one centred in each cell of an NX × NZ grid
 //              over the ceiling, H − panelDrop high, facing −y; one mesh
 //              "panels" whose quads do not touch, so finalize() makes one
-//              AreaLight per panel ("panel#k", or "panel" alone)
+//              Light per panel ("panel#k", or "panel" alone)
 //   cabinets   boxes 0.45 (x) × 0.8 (z) × 1.2 (y) m in a row centred against
 //              the left wall (x = −W/2, facing the camera), 0.02 m apart
 //   desks      tabletops 1.6 (x) × 0.8 (z) × 0.03 m, top at 0.72 m, on four

@@ -93,7 +93,7 @@ Scene makeCornellLightGrid(int lights) {
         else scene.meshes.push_back(m);
     }
     ML_ASSERT(original && cornell.lights.size() == 1, "the Cornell box should have one light mesh");
-    const AreaLight& light0 = cornell.lights.front();
+    const Light& light0 = cornell.lights.front();
 
     constexpr double kSide = 40.0;      // mm, each light
     constexpr double kRegion = 400.0;   // mm, the square the grid covers

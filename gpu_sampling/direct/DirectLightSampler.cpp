@@ -258,7 +258,7 @@ struct DirectLightSampler::Impl {
             lightOf.resize(lightOf.size() + m.triangles.size(), 0);
         }
         for (size_t l = 0; l < scene.lights.size(); ++l) {
-            const AreaLight& light = scene.lights[l];
+            const Light& light = scene.lights[l];
             for (uint32_t t : light.triangles) lightOf[meshStart[light.mesh] + t] = uint32_t(l + 1);
             maxLightTriangles = std::max(maxLightTriangles, light.triangles.size());
         }
@@ -300,7 +300,7 @@ struct DirectLightSampler::Impl {
     // on the light. The light's projection is known exactly, so only the
     // occluders are rasterised; which samples lie on the light is decided on
     // the CPU (weighAnalytic), at the same jittered points.
-    bool analyticLight(const AreaLight& light) const {
+    bool analyticLight(const Light& light) const {
         return settings.method != DirectMethod::OcclusionQuery && light.planar &&
                settings.estimator == DirectEstimator::ControlVariate;
     }
@@ -310,7 +310,7 @@ struct DirectLightSampler::Impl {
     // Potential occluders of frustum `f` into `out`: its leaves of the BVH
     // (all triangles without cullOccluders) and, where `refine`, whether any
     // of their triangles can hide a sample of the light's `pieces`.
-    void cullFrustum(const AreaLight& light, size_t lightIndex, const SamplingFrustum& f,
+    void cullFrustum(const Light& light, size_t lightIndex, const SamplingFrustum& f,
                      const std::vector<Polygon3>& pieces, const Vec3& n, double nearDistance, bool refine,
                      FrustumCull& out) {
         // Inside the frustum and in front of the light.
@@ -483,7 +483,7 @@ struct DirectLightSampler::Impl {
     // Draws frustum `k` of `p` into target `slot`: its light (unless
     // analytic) and its occluders, with no wait for the GPU.
     void drawImage(Pair& p, size_t k, size_t slot, Clock::time_point& t0) {
-        const AreaLight& light = scene.lights[p.lightIndex];
+        const Light& light = scene.lights[p.lightIndex];
         const SamplingFrustum& f = p.frusta[k];
         const FrustumCull& cull = p.culls[k];
         const Target& target = targets[slot];
@@ -572,7 +572,7 @@ struct DirectLightSampler::Impl {
 
     // Reads target `slot` back and weighs it as frustum `k` of `p`.
     void readAndWeigh(Pair& p, size_t k, size_t slot, Clock::time_point& t0) {
-        const AreaLight& light = scene.lights[p.lightIndex];
+        const Light& light = scene.lights[p.lightIndex];
         const int size = settings.imageSize;
         const bool analytic = analyticLight(light);
         const GLuint fbo = targets[slot].fbo.id();
@@ -828,7 +828,7 @@ struct DirectLightSampler::Impl {
         p.x = x;
         p.seed = seed;
         p.result = DirectSample();
-        const AreaLight& light = scene.lights[lightIndex];
+        const Light& light = scene.lights[lightIndex];
         const Vec3 n = glm::normalize(nIn);
         p.n = n;
         if (!isFinite(x) || !isFinite(n)) throw InputError(concat("non-finite receiver point or normal"));
@@ -896,7 +896,7 @@ struct DirectLightSampler::Impl {
 
     // The light wholly behind one occluder polygon of the pair's frusta
     // (OccluderPolygons), by the sampler's own rules for what occludes.
-    bool hiddenBehindOnePolygon(const Pair& p, const AreaLight& light, const Vec3& eye) {
+    bool hiddenBehindOnePolygon(const Pair& p, const Light& light, const Vec3& eye) {
         OccluderPolygons::Rules rules;
         rules.eye = eye;
         rules.nearDistance = p.nearDistance;
@@ -926,7 +926,7 @@ struct DirectLightSampler::Impl {
     // The estimate of a rasterised pair from its images, summed in frustum order.
     void finishPair(Pair& p) {
         const Clock::time_point tw = Clock::now();
-        const AreaLight& light = scene.lights[p.lightIndex];
+        const Light& light = scene.lights[p.lightIndex];
         DirectSample& result = p.result;
         double lightWeight = 0, occludedWeight = 0;
         for (const ImageResult& r : p.images) {
@@ -1053,7 +1053,7 @@ struct DirectLightSampler::Impl {
     }
 };
 
-double samplingEyeLift(const AreaLight& light, const Vec3& x, double eyeOffset, double sceneSize) {
+double samplingEyeLift(const Light& light, const Vec3& x, double eyeOffset, double sceneSize) {
     const Vec3 outside = glm::max(light.bounds.lo - x, x - light.bounds.hi);
     double distance = glm::length(glm::max(outside, Vec3(0.0)));
     if (light.planar) distance = std::max(distance, std::abs(glm::dot(x - light.centroid, light.normal)));

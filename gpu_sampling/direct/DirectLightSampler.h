@@ -117,7 +117,7 @@ struct DirectSample {
 // but at most 1e-4 of the distance to the light (a lower bound of it: box
 // and plane distance), so next to a light the lift changes the answer by no
 // more than about 1e-4 of it.
-double samplingEyeLift(const AreaLight& light, const Vec3& x, double eyeOffset, double sceneSize);
+double samplingEyeLift(const Light& light, const Vec3& x, double eyeOffset, double sceneSize);
 
 class DirectLightSampler {
 public:

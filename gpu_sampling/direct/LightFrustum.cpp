@@ -18,7 +18,7 @@ Polygon3 clipPolygon(const Polygon3& poly, const Vec3& n, double d) {
     return out.size() >= 3 ? out : Polygon3{};
 }
 
-std::vector<Polygon3> visibleLightPieces(const AreaLight& light, const Vec3& eye, const Vec3& n) {
+std::vector<Polygon3> visibleLightPieces(const Light& light, const Vec3& eye, const Vec3& n) {
     std::vector<Polygon3> pieces;
     for (const Triangle3& t : light.geometry) {
         const Vec3 an = glm::cross(t[1] - t[0], t[2] - t[0]);
@@ -128,7 +128,7 @@ std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, cons
     return frusta;
 }
 
-std::vector<SamplingFrustum> samplingFrusta(const AreaLight& light, const std::vector<Polygon3>& pieces,
+std::vector<SamplingFrustum> samplingFrusta(const Light& light, const std::vector<Polygon3>& pieces,
                                             const Vec3& eye, double maxHalfAngleDegrees) {
     const Triangle3& first = light.geometry[0];
     const Vec3 towards = glm::normalize(light.centroid - eye);

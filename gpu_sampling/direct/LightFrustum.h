@@ -39,7 +39,7 @@ Polygon3 clipPolygon(const Polygon3& poly, const Vec3& n, double d);
 // The parts of the light that can send light to a receiver at `eye` with
 // normal `n`: front-facing triangles, each clipped to the receiver's upper
 // half-space (any part below its horizon contributes nothing).
-std::vector<Polygon3> visibleLightPieces(const AreaLight& light, const Vec3& eye, const Vec3& n);
+std::vector<Polygon3> visibleLightPieces(const Light& light, const Vec3& eye, const Vec3& n);
 
 // Frusta covering `pieces` as seen from `eye`. One frustum when every piece is
 // within `maxHalfAngleDegrees` of their mean direction; otherwise the light is
@@ -58,7 +58,7 @@ std::vector<SamplingFrustum> fitFrusta(const std::vector<Polygon3>& pieces, cons
 // seen obliquely, another edge of that triangle if it at least halves the
 // window. The raster sampler and its ray-traced peer both use this, so they
 // test the same points.
-std::vector<SamplingFrustum> samplingFrusta(const AreaLight& light, const std::vector<Polygon3>& pieces,
+std::vector<SamplingFrustum> samplingFrusta(const Light& light, const std::vector<Polygon3>& pieces,
                                             const Vec3& eye, double maxHalfAngleDegrees);
 
 // A convex piece of the light on a frustum's window plane (depth 1), as

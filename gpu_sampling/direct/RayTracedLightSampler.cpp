@@ -1,5 +1,7 @@
 #include "RayTracedLightSampler.h"
 
+#include "core/raytrace/PunctualShadow.h"
+
 #include "Jitter.h"
 #include "LightFrustum.h"
 #include "core/Error.h"
@@ -20,9 +22,18 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
     const Scene& scene = rays_.scene();
     ML_ASSERT(lightIndex < scene.lights.size(), "light ", lightIndex);
     DirectSample result;
-    const AreaLight& light = scene.lights[lightIndex];
+    const Light& light = scene.lights[lightIndex];
     const Vec3 n = glm::normalize(nIn);
     if (!isFinite(x) || !isFinite(n)) throw InputError(concat("non-finite receiver point or normal"));
+    if (light.punctual()) {
+        // One shadow ray is exact (PunctualShadow.h); the "solid angles"
+        // become the light's visibility, 1 or 0, as a visible fraction.
+        const PunctualSample p = punctualIrradiance(rays_, lightIndex, x, n);
+        result.irradiance = p.irradiance;
+        result.unoccluded = p.lit ? 1 : 0;
+        result.cosineSolidAngle = p.visible ? 1 : 0;
+        return result;
+    }
     const double lift = samplingEyeLift(light, x, settings_.eyeOffset, sceneSize_);
     const Vec3 eye = x + n * lift;
     const std::vector<Polygon3> pieces = visibleLightPieces(light, eye, n);

@@ -66,7 +66,7 @@ void checkScene(const ml::Scene& scene, size_t inputLines) {
             EXPECT(area > 0 && std::isfinite(area), mesh.name, " triangle ", t, " area ", area);
         }
     }
-    for (const AreaLight& light : scene.lights) {
+    for (const Light& light : scene.lights) {
         EXPECT(light.area > 0 && std::isfinite(light.area), light.name);
         EXPECT(light.mesh < scene.meshes.size() && light.material < scene.materials.size(), light.name);
         EXPECT(scene.materials[light.material].emissive() && finiteRgb(light.radiance), light.name);

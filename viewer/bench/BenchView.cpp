@@ -149,7 +149,7 @@ Result runScenario(const Scene& scene, const Scenario& sc, const BenchOptions& o
     const std::string text = sc.lights ? lightScript(changes) : walkScript(s.camera, sc.seconds, sc.paused);
     ViewScript script = parseViewScript(text, "bench-view-" + sc.name + ".txt");
     std::vector<std::string> names;
-    for (const AreaLight& l : scene.lights) names.push_back(l.name);
+    for (const Light& l : scene.lights) names.push_back(l.name);
     resolveViewScript(script, names);
     s.script = std::move(script);
 

@@ -15,7 +15,7 @@ namespace {
 
 // A light seen from everywhere in the scene under less than a sampling
 // pixel's angle casts shadows no softer than a point light's.
-bool actsAsPoint(const AreaLight& light, const Scene& scene, const DirectChoice& choice) {
+bool actsAsPoint(const Light& light, const Scene& scene, const DirectChoice& choice) {
     const double pixelAngle = 2 * std::tan(glm::radians(choice.sampler.maxHalfAngleDegrees)) / choice.sampler.imageSize;
     // The light's size against the smallest distance that matters: 1% of the
     // scene (closer receivers are few).
@@ -59,7 +59,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
     // Many lights: the first few, then a count (their sampling is the same).
     constexpr size_t kListed = 8;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
-        const AreaLight& l = scene.lights[i];
+        const Light& l = scene.lights[i];
         if (i == kListed && scene.lights.size() > kListed + 1) {
             std::printf("  ... and %zu more lights sampled the same way\n", scene.lights.size() - kListed);
             break;

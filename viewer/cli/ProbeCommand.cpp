@@ -145,7 +145,7 @@ void refuseOptions(const std::vector<std::string>& args, const std::string& meth
 
 std::string csvHeader(const Scene& scene) {
     std::string h = "x,y,z,nx,ny,nz";
-    for (const AreaLight& l : scene.lights) {
+    for (const Light& l : scene.lights) {
         const std::string c = columnName(l.name);
         h += ",E_" + c + "_r,E_" + c + "_g,E_" + c + "_b";
     }

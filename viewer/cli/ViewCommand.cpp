@@ -53,7 +53,10 @@ int runView(const std::vector<std::string>& args) {
                                     "photometry's 179 (RADIANCE's equal-energy white)");
     o.value("supersample", "S", "S×S sub-pixels per pixel on screen (1..4; screenshots use the same)",
             std::string("1"));
-    o.value("exposure", "EV", "exposure in stops, on top of the metered exposure", std::string("0"));
+    o.value("exposure", "EV", "exposure in stops, on top of the metered exposure (metered once, from the first "
+                              "snapshot shown)",
+            std::string("0"));
+    o.flag("no-auto-exposure", "never meter: the exposure is --exposure alone (as render --no-auto-exposure)");
     o.value("tonemap", "OP", "aces, reinhard or clamp", std::string("aces"));
     o.value("max-fps", "F", "draw at most F frames per second (0: no limit)", std::string("60"));
     o.flag("direct-only", "direct light only: no indirect bounces");
@@ -82,6 +85,7 @@ int runView(const std::vector<std::string>& args) {
     s.photometry = readPhotometryOption(o);
     if (o.has("efficacy")) s.photometry.efficacy = o.number("efficacy", 1e-3, 683);
     s.display.exposureEV = o.number("exposure", -50, 50);
+    s.display.autoExposure = !o.isSet("no-auto-exposure");
     s.display.op = parseToneOperator(o.str("tonemap"));
     s.maxFps = o.number("max-fps", 0, 1000);
     if (o.has("script-step")) {
@@ -96,7 +100,7 @@ int runView(const std::vector<std::string>& args) {
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (script) {
         std::vector<std::string> names;
-        for (const AreaLight& l : scene.lights) names.push_back(l.name);
+        for (const Light& l : scene.lights) names.push_back(l.name);
         resolveViewScript(*script, names);
         s.script = std::move(*script);
     }

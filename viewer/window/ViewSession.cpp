@@ -121,7 +121,7 @@ struct ViewSession::Impl : ScriptHost {
         : scene(s), settings(vs), state(vs.display),
           walk(vs.camera, std::max(s.bounds.diagonal(), 1e-30) / 8.0) {
         const double mpu = metresPerUnit(settings.unit);
-        for (const AreaLight& l : scene.lights) {
+        for (const Light& l : scene.lights) {
             lightControls.emplace_back();
             const double area = l.area * mpu * mpu;
             const Rgb power = kPi * l.radiance * area;
