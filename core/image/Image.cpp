@@ -6,9 +6,11 @@
 #include <unistd.h>  // access(): is the output directory writable?
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <system_error>
 
@@ -59,9 +61,10 @@ const char* oiioFormatName(ImageFormat format) {
     throw std::logic_error(concat("unknown ImageFormat ", int(format)));
 }
 
-// Writes `pixels` (laid out as `spec`, of type `pixelType`) through a temporary.
+// Opens a writer for `spec` on a temporary, lets `write` write the pixels
+// (false on failure), then renames the temporary over `path`.
 void writeAtomically(const std::string& path, ImageFormat format, const OIIO::ImageSpec& spec,
-                     OIIO::TypeDesc pixelType, const void* pixels) {
+                     const std::function<bool(OIIO::ImageOutput&)>& write) {
     checkOutputDirectory(path);
     AtomicOutput temp(path);
     // Declared after `temp` so that the file is closed before it is removed.
@@ -69,10 +72,16 @@ void writeAtomically(const std::string& path, ImageFormat format, const OIIO::Im
     if (!out)
         throwInputError(SourceLocation{path}, "no ", oiioFormatName(format),
                         " writer: ", OIIO::geterror());
-    if (!out->open(temp.path().string(), spec) || !out->write_image(pixelType, pixels) ||
-        !out->close())
+    if (!out->open(temp.path().string(), spec) || !write(*out) || !out->close())
         throwInputError(SourceLocation{path}, "cannot write: ", out->geterror());
     temp.commit();
+}
+
+// Writes `pixels` (laid out as `spec`, of type `pixelType`) through a temporary.
+void writeAtomically(const std::string& path, ImageFormat format, const OIIO::ImageSpec& spec,
+                     OIIO::TypeDesc pixelType, const void* pixels) {
+    writeAtomically(path, format, spec,
+                    [&](OIIO::ImageOutput& out) { return out.write_image(pixelType, pixels); });
 }
 
 void addAttributes(OIIO::ImageSpec& spec, const ImageAttributes& attributes) {
@@ -155,14 +164,68 @@ void writeImageChannel(const std::string& path, const std::vector<float>& values
 }
 
 void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, int width,
-                 int height) {
+                 int height, const ImageAttributes& attributes) {
     const ImageFormat format = outputFormat(path);
     ML_ASSERT(format == ImageFormat::Png, "'", path, "' is linear: use writeImageLinear");
     ML_ASSERT(width > 0 && height > 0 && rgb.size() == 3 * std::size_t(width) * std::size_t(height),
               width, "x", height, " image with ", rgb.size(), " bytes");
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
+    addAttributes(spec, attributes);
     writeAtomically(path, format, spec, OIIO::TypeDesc::UINT8, rgb.data());
+}
+
+ImageLayer ImageLayer::rgb(const std::string& name, const ImageRgb& image) {
+    return ImageLayer{name, {"R", "G", "B"}, image.data};
+}
+
+ImageLayer ImageLayer::single(const std::string& name, const std::string& channel, std::vector<float> values) {
+    return ImageLayer{name, {channel}, std::move(values)};
+}
+
+std::string ImageLayer::channelName(size_t channel) const {
+    return name.empty() ? channels[channel] : name + "." + channels[channel];
+}
+
+void writeImageLayers(const std::string& path, int width, int height, const std::vector<ImageLayer>& layers,
+                      const ImageAttributes& attributes) {
+    ML_ASSERT(outputFormat(path) == ImageFormat::Exr, "'", path, "': layers need an EXR");
+    ML_ASSERT(width > 0 && height > 0 && !layers.empty(), width, "x", height, " image with ", layers.size(),
+              " layers");
+    const size_t pixels = size_t(width) * size_t(height);
+    std::vector<std::string> names;
+    for (const ImageLayer& layer : layers) {
+        ML_ASSERT(!layer.channels.empty() && layer.values.size() == pixels * layer.channels.size(), "layer '",
+                  layer.name, "': ", layer.values.size(), " values for ", layer.channels.size(), " channels of ",
+                  width, "x", height);
+        for (size_t c = 0; c < layer.channels.size(); ++c) names.push_back(layer.channelName(c));
+    }
+    std::vector<std::string> sorted = names;
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    ML_ASSERT(twice == sorted.end(), "channel '", *twice, "' twice");
+    OIIO::ImageSpec spec(width, height, int(names.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = -1;
+    spec.attribute("oiio:ColorSpace", "Linear");
+    addAttributes(spec, attributes);
+    // Scanline by scanline: the layers are not copied into one buffer.
+    writeAtomically(path, ImageFormat::Exr, spec, [&](OIIO::ImageOutput& out) {
+        std::vector<float> row(size_t(width) * names.size());
+        for (int y = 0; y < height; ++y) {
+            size_t channel = 0;
+            for (const ImageLayer& layer : layers) {
+                const size_t n = layer.channels.size();
+                for (int x = 0; x < width; ++x)
+                    for (size_t c = 0; c < n; ++c)
+                        row[size_t(x) * names.size() + channel + c] =
+                            layer.values[(size_t(y) * size_t(width) + size_t(x)) * n + c];
+                channel += n;
+            }
+            if (!out.write_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) return false;
+        }
+        return true;
+    });
 }
 
 ImageChannel readImageChannel(const std::string& path, const std::string& channel) {
@@ -187,19 +250,38 @@ std::optional<std::string> readImageAttribute(const std::string& path, const std
     return std::string(p->get_string());
 }
 
-ImageRgb readImageLinear(const std::string& path) {
+std::vector<std::string> readImageChannelNames(const std::string& path) {
+    return openImage(path)->spec().channelnames;
+}
+
+namespace {
+
+// Channels `names` (R, G, B of one layer) of an open linear image, or its
+// first three when `firstThree` and it lacks them.
+ImageRgb readRgbChannels(const std::string& path, OIIO::ImageInput& in, const std::array<std::string, 3>& names,
+                         bool firstThree) {
     const SourceLocation where{path};
-    auto in = openImage(path);
-    const std::string format = in->format_name();
+    const std::string format = in.format_name();
     if (format != "openexr" && format != "hdr")
         throwInputError(where, "is a ", format, " file; expected linear EXR or HDR");
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.nchannels < 3)
+    const OIIO::ImageSpec& spec = in.spec();
+    std::array<int, 3> index{};
+    for (int c = 0; c < 3; ++c) index[size_t(c)] = spec.channelindex(names[size_t(c)]);
+    const bool named = index[0] >= 0 && index[1] >= 0 && index[2] >= 0;
+    if (!named && !firstThree)
+        throwInputError(where, "has no channels ", names[0], ", ", names[1], ", ", names[2]);
+    if (!named && spec.nchannels < 3)
         throwInputError(where, "has ", spec.nchannels, " channels; expected R, G, B");
+    if (!named) index = {0, 1, 2};
 
     ImageRgb image(spec.width, spec.height);
-    if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, image.data.data()))
-        throwInputError(where, "cannot read image: ", in->geterror());
+    std::vector<float> plane(image.pixelCount());
+    for (int c = 0; c < 3; ++c) {
+        const int i = index[size_t(c)];
+        if (!in.read_image(0, 0, i, i + 1, OIIO::TypeDesc::FLOAT, plane.data()))
+            throwInputError(where, "cannot read image: ", in.geterror());
+        for (size_t p = 0; p < plane.size(); ++p) image.data[3 * p + size_t(c)] = plane[p];
+    }
     for (std::size_t i = 0; i < image.data.size(); ++i) {
         if (!std::isfinite(image.data[i])) {
             const std::size_t pixel = i / 3;
@@ -208,6 +290,17 @@ ImageRgb readImageLinear(const std::string& path) {
         }
     }
     return image;
+}
+
+}  // namespace
+
+ImageRgb readImageLayer(const std::string& path, const std::string& layer) {
+    const std::string prefix = layer.empty() ? "" : layer + ".";
+    return readRgbChannels(path, *openImage(path), {prefix + "R", prefix + "G", prefix + "B"}, false);
+}
+
+ImageRgb readImageLinear(const std::string& path) {
+    return readRgbChannels(path, *openImage(path), {"R", "G", "B"}, true);
 }
 
 }  // namespace ml

@@ -91,15 +91,43 @@ void writeImageChannel(const std::string& path, const std::vector<float>& values
                        const std::string& channel, const ImageAttributes& attributes = {});
 
 // Writes 8-bit sRGB (e.g. from toneMap) as PNG, with the same temporary-file
-// guarantee as writeImageLinear.
+// guarantee as writeImageLinear. PNG keeps string attributes (text chunks);
+// give numbers as text.
 //   rgb: 3 * width * height bytes, RGB interleaved, row 0 at the top
 void writeImage8(const std::string& path, const std::vector<std::uint8_t>& rgb, int width,
-                 int height);
+                 int height, const ImageAttributes& attributes = {});
 
-// Reads the first three channels (R, G, B) of an EXR or HDR file as linear
-// float, e.g. a reference image. Other formats, fewer than three channels
+// One layer of a multi-layer EXR (writeImageLayers), OpenEXR's naming: the
+// channels of layer "direct" are "direct.R", "direct.G", "direct.B"; a
+// layer named "" is the beauty image, channels "R", "G", "B".
+struct ImageLayer {
+    std::string name;                   // "" or letters, digits, '_' and '.' (e.g. "light.lamp_1")
+    std::vector<std::string> channels;  // e.g. {"R", "G", "B"} or {"Y"}
+    std::vector<float> values;          // channels.size() per pixel, interleaved, row 0 at the top
+
+    static ImageLayer rgb(const std::string& name, const ImageRgb& image);
+    static ImageLayer single(const std::string& name, const std::string& channel, std::vector<float> values);
+    // "direct.R", or "R" for the beauty layer.
+    std::string channelName(size_t channel) const;
+};
+
+// Writes `layers` (each width × height) as one 32-bit float EXR with every
+// layer's channels, atomically like writeImageLinear. `path` must be .exr.
+void writeImageLayers(const std::string& path, int width, int height, const std::vector<ImageLayer>& layers,
+                      const ImageAttributes& attributes = {});
+
+// Reads the channels R, G, B of an EXR or HDR file as linear float (the
+// first three where they have other names), e.g. a reference image or a
+// multi-layer EXR's beauty image. Other formats, fewer than three channels
 // and non-finite pixels are InputErrors naming the file.
 ImageRgb readImageLinear(const std::string& path);
+
+// The RGB layer `layer` of a multi-layer EXR (channels LAYER.R, LAYER.G,
+// LAYER.B; "" reads R, G, B). InputError naming the file when it lacks one.
+ImageRgb readImageLayer(const std::string& path, const std::string& layer);
+
+// Every channel name of an image file, in the order the file gives them.
+std::vector<std::string> readImageChannelNames(const std::string& path);
 
 // A one-channel image read back: the channel named `channel` of an EXR or
 // HDR file ("Y" of writeImageChannel). InputError naming the file when it

@@ -22,11 +22,13 @@
 #include "core/io/AtomicFile.h"
 #include "core/io/InterruptGuard.h"
 #include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/ImageLayers.h"
 
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -59,35 +61,77 @@ OutputQuantity parseOutputQuantity(const std::string& name) {
     throw InputError(concat("--quantity '", name, "': use radiance or lux"));
 }
 
-// The images render writes, one per view: radiance (EXR, HDR linear; PNG
-// tone-mapped) or illuminance (EXR: one channel Y in lux; HDR: lux in every
-// channel; PNG: the viewer's false colour, iso-lux lines and legend).
+// What an image is written for: a frame of the output (the image, or a
+// walkthrough's view), or a --snapshots progress image (beauty only, its
+// own exposure).
+enum class ImageRole { Frame, Snapshot };
+
+// The images render writes, one per view: radiance (EXR: the beauty image
+// and its layers, unless --layers none; HDR linear; PNG tone-mapped) or
+// illuminance (EXR: one channel Y in lux; HDR: lux in every channel; PNG:
+// the viewer's false colour, iso-lux lines and legend). A walkthrough's
+// PNGs share one exposure (and lux range), metered from the first frame
+// written.
 class ImageOutput {
 public:
-    ImageOutput(Compositor& compositor, const CompositorSettings& settings, const ToneMapSettings& tone,
-                OutputQuantity quantity)
-        : compositor_(compositor), settings_(settings), tone_(tone), quantity_(quantity) {}
+    // `metadata`: the attributes of an image of a snapshot.
+    ImageOutput(Compositor& compositor, const Scene& scene, const CompositorSettings& settings,
+                const ToneMapSettings& tone, OutputQuantity quantity, std::optional<LayerSettings> layers,
+                bool walkthrough, std::function<ImageAttributes(const CacheSnapshot&)> metadata)
+        : compositor_(compositor), scene_(scene), settings_(settings), tone_(tone), quantity_(quantity),
+          layers_(layers), walkthrough_(walkthrough), metadata_(std::move(metadata)) {}
 
     ImageRgb radiance(const CacheSnapshot& s, const Camera& camera) {
         return compositor_.render(camera, s.direct, s.indirect, settings_);
     }
     // Composites `s` from `camera` and writes it to `path`; returns the
     // radiance image written (empty for lux).
-    ImageRgb write(const std::string& path, const CacheSnapshot& s, const Camera& camera) {
+    ImageRgb write(const std::string& path, const CacheSnapshot& s, const Camera& camera,
+                   ImageRole role = ImageRole::Frame) {
+        const bool frame = role == ImageRole::Frame;
         if (quantity_ == OutputQuantity::Lux) {
-            writeLux(path, compositor_.renderIlluminance(camera, s.direct, s.indirect, settings_));
+            writeLux(path, compositor_.renderIlluminance(camera, s.direct, s.indirect, settings_), frame);
             return {};
         }
+        const ImageFormat format = outputFormat(path);
+        if (format == ImageFormat::Exr && layers_ && frame) {
+            RenderLayers layers = renderLayers(compositor_, scene_, camera, s.direct, s.indirect, settings_, *layers_);
+            ImageAttributes attributes = metadata_(s);
+            attributes.push_back({"meshlight:layers", std::string(kLayerSums)});
+            writeImageLayers(path, settings_.width, settings_.height, layers.exrLayers(), attributes);
+            return std::move(layers.beauty);
+        }
         ImageRgb image = radiance(s, camera);
-        if (outputFormat(path) == ImageFormat::Png)
-            writeImage8(path, toneMap(image, tone_), image.width, image.height);
-        else
-            writeImageLinear(path, image);
+        if (format != ImageFormat::Png) {
+            writeImageLinear(path, image, frame ? metadata_(s) : ImageAttributes{});
+            return image;
+        }
+        // The scale on radiance before the tone operator: the walkthrough's,
+        // once metered, or this image's own.
+        double scale = tone_.autoExposure ? autoExposureScale(image) : 1.0;
+        if (walkthrough_ && frame && tone_.autoExposure) {
+            if (!pathExposure_) pathExposure_ = scale;
+            scale = *pathExposure_;
+        }
+        ToneMapSettings tone = tone_;
+        tone.autoExposure = false;
+        tone.exposureEV = tone_.exposureEV + std::log2(scale);
+        const std::string exposure = concat(scale * std::exp2(tone_.exposureEV));
+        writeImage8(path, toneMap(image, tone), image.width, image.height,
+                    {{"meshlight:exposure", exposure},
+                     {"meshlight:exposure_from", std::string(!tone_.autoExposure ? "--exposure alone"
+                                                             : walkthrough_ && frame ? "the first frame"
+                                                                                     : "this image")}});
         return image;
     }
 
+    // How the layers add up, in the EXR's meshlight:layers.
+    static constexpr const char* kLayerSums =
+        "beauty (R,G,B) = emission + direct + indirect; direct = sum of light.* + direct_shared + direct_rest "
+        "(those present); radiance W/(sr m2) except reflectance (Kd) and illuminance.Y (lux)";
+
 private:
-    void writeLux(const std::string& path, const LuxImage& lux) const {
+    void writeLux(const std::string& path, const LuxImage& lux, bool frame) {
         if (outputFormat(path) != ImageFormat::Png) {
             writeImageChannel(path, lux.lux, lux.width, lux.height, "Y",
                               {{"meshlight:quantity", std::string("illuminance")},
@@ -95,20 +139,32 @@ private:
                                {"meshlight:photometry", settings_.photometry.describe()}});
             return;
         }
-        // The viewer's automatic range: percentiles of the lit pixels.
+        // The viewer's automatic range: percentiles of the lit pixels; a
+        // walkthrough keeps its first frame's.
         std::vector<double> values;
         for (size_t i = 0; i < lux.lux.size(); ++i)
             if (lux.coverage[i] > 0) values.push_back(lux.lux[i]);
-        const auto [lo, hi] = autoLuxRange(std::move(values));
+        std::pair<double, double> range = autoLuxRange(std::move(values));
+        if (walkthrough_ && frame) {
+            if (!pathLuxRange_) pathLuxRange_ = range;
+            range = *pathLuxRange_;
+        }
+        const auto [lo, hi] = range;
         ImageRgb display = falseColourImage(lux, lo, hi, true);
         drawLuxLegend(display, lo, hi, concat(formatLux(lo), " .. ", formatLux(hi), " lx"));
         writeImage8(path, displayBytes(display), display.width, display.height);
     }
 
     Compositor& compositor_;
+    const Scene& scene_;
     CompositorSettings settings_;
     ToneMapSettings tone_;
     OutputQuantity quantity_;
+    std::optional<LayerSettings> layers_;  // none: the beauty image alone
+    bool walkthrough_;
+    std::function<ImageAttributes(const CacheSnapshot&)> metadata_;
+    std::optional<double> pathExposure_;                     // a walkthrough's, from its first frame
+    std::optional<std::pair<double, double>> pathLuxRange_;  // likewise, in lux
 };
 
 // ProgressiveSession::refineUntil in slices of at most 0.1 s, so that an
@@ -173,10 +229,15 @@ void printStatus(const CacheSnapshot& s, double seconds, const std::string& what
 
 int runRender(const std::vector<std::string>& args) {
     Options o("render");
-    o.positional("scene", kSceneArgumentHelp);
-    o.value("out", "FILE", "output image: .exr/.hdr (linear radiance) or .png (tone-mapped); with --camera-path a "
-                           "pattern whose #### becomes the frame number",
+    declareSceneOptions(o);
+    o.value("out", "FILE", "output image: .exr (linear radiance and its layers) or .hdr (linear radiance) or "
+                           ".png (tone-mapped); with --camera-path a pattern whose #### becomes the frame number",
             std::string("meshlight.png"));
+    o.value("layers", "all|none", "an EXR of radiance: all = the beauty image (R,G,B) and the layers emission, "
+                                  "direct, indirect, light.NAME per light, reflectance, illuminance (default); "
+                                  "none = the beauty image alone");
+    o.value("max-light-layers", "N", "lights with a layer of their own (in the scene's order); the others go "
+                                     "together into direct_rest (default 64)");
     o.value("quantity", "radiance|lux", "what the image holds: radiance, or illuminance in lux at each pixel's "
                                         "surface (EXR: channel Y; PNG: false colour with iso-lux lines and a legend)",
             std::string("radiance"));
@@ -202,8 +263,11 @@ int runRender(const std::vector<std::string>& args) {
     declareCacheOptions(o);
     declareIndirectOptions(o);
     o.value("supersample", "S", "S×S sub-pixels per pixel (box filter)", std::string("4"));
-    o.value("exposure", "EV", "exposure in stops, on top of auto exposure", std::string("0"));
-    o.flag("no-auto-exposure", "do not scale the log-average luminance to middle grey");
+    o.value("exposure", "EV", "exposure in stops, on top of auto exposure (a walkthrough's is metered once, "
+                              "from its first frame)",
+            std::string("0"));
+    o.flag("no-auto-exposure", "do not scale the log-average luminance to middle grey: the exposure is --exposure "
+                               "alone");
     o.value("tonemap", "OP", "aces, reinhard or clamp", std::string("aces"));
     if (!o.parseOrPrintHelp(args)) return 0;
 
@@ -220,6 +284,18 @@ int runRender(const std::vector<std::string>& args) {
     comp.photometry = readPhotometryOption(o);
     comp.validate();
     const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));
+    const bool exrRadiance = outputFormat(out) == ImageFormat::Exr && quantity == OutputQuantity::Radiance;
+    std::optional<LayerSettings> layers;
+    if (o.has("layers") && o.str("layers") != "all" && o.str("layers") != "none")
+        throw InputError(concat("--layers '", o.str("layers"), "': use all or none"));
+    if (o.has("layers") && o.str("layers") == "all" && !exrRadiance)
+        throw InputError("--layers all needs an EXR of radiance (--out .exr, --quantity radiance)");
+    if (exrRadiance && (!o.has("layers") || o.str("layers") == "all")) {
+        layers = LayerSettings{};
+        if (o.has("max-light-layers")) layers->maxLightLayers = size_t(o.integer("max-light-layers", 0, 100000));
+    } else if (o.has("max-light-layers")) {
+        throw InputError("--max-light-layers is for an EXR with layers");
+    }
     const DirectChoice choice = readDirectOptions(o);
     if (choice.passes != 1)
         throw InputError("render samples each vertex as often as its noise asks: --passes is for probe; "
@@ -260,7 +336,7 @@ int runRender(const std::vector<std::string>& args) {
     sessionSettings.cachePath = cachePath;
 
     const auto t0 = Clock::now();
-    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     const double aspect = double(comp.width) / comp.height;
     const std::vector<Camera> cameras =
@@ -272,6 +348,14 @@ int runRender(const std::vector<std::string>& args) {
     std::printf("  stop refining each image at %s\n", stop.describe().c_str());
     if (quantity == OutputQuantity::Lux)
         std::printf("  the image: illuminance in lux, photometry %s\n", comp.photometry.describe().c_str());
+    if (layers) {
+        const size_t own = std::min(scene.lights.size(), layers->maxLightLayers);
+        std::printf("  the EXR: the beauty image and the layers emission, direct, indirect, %zu light.NAME%s, "
+                    "reflectance, illuminance (--layers none: the beauty image alone)\n",
+                    own, own < scene.lights.size() ? concat(", direct_rest (", scene.lights.size() - own,
+                                                            " lights past --max-light-layers)").c_str()
+                                                   : "");
+    }
 
     if (indirect.active()) sessionSettings.indirect = indirect.solver;
     ProgressiveSession session(scene, sessionSettings, samplerFactory(scene, choice, indirect), stop);
@@ -289,7 +373,32 @@ int runRender(const std::vector<std::string>& args) {
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::printf("OpenGL: %s\n", context->describe().c_str());
     Compositor compositor(*context, scene);
-    ImageOutput output(compositor, comp, tone, quantity);
+    // The header of a frame: where it comes from and how far it got.
+    std::string command = "meshlight render";
+    for (const std::string& a : args) command += " " + a;
+    const std::string sceneArgument = o.positionalValue("scene");
+    const std::string cacheDescription =
+        concat("edges at most 1/", 1 / cacheSettings.maxEdgeFraction, " of the scene, split tolerance ",
+               cacheSettings.splitTolerance, ", noise tolerance ", cacheSettings.noiseTolerance);
+    const std::string indirectDescription = indirect.active() ? indirect.describe()
+                                            : indirect.enabled ? std::string("no bounce")
+                                                               : std::string("none (--direct-only)");
+    auto metadata = [&](const CacheSnapshot& s) -> ImageAttributes {
+        return {{"meshlight:scene", sceneArgument},
+                {"meshlight:command", command},
+                {"meshlight:direct", choice.describe()},
+                {"meshlight:cache", cacheDescription},
+                {"meshlight:indirect", indirectDescription},
+                {"meshlight:samples", double(s.samples)},
+                {"meshlight:vertices", double(s.vertices)},
+                {"meshlight:seconds", session.seconds()},
+                {"meshlight:estimated_error", s.estimatedError},
+                {"meshlight:direct_error", s.directError},
+                {"meshlight:indirect_error", s.indirectError},
+                {"meshlight:converged", int(s.converged)},
+                {"meshlight:photometry", comp.photometry.describe()}};
+    };
+    ImageOutput output(compositor, scene, comp, tone, quantity, layers, walkthrough, metadata);
     ConvergenceLog log(scene.lights.size(), cache.hasSharedMesh(), o.has("reference"));
 
     // From here on, the first Ctrl-C ends refinement and writes what is cached.
@@ -306,7 +415,8 @@ int runRender(const std::vector<std::string>& args) {
             std::snprintf(name, sizeof name, "snapshot_%04zu%s.%s", snapshotIndex,
                           walkthrough ? concat("_frame", frame).c_str() : "",
                           outputFormat(out) == ImageFormat::Png ? "png" : "exr");
-            image = output.write((std::filesystem::path(snapshotsDir) / name).string(), s, cameras[frame]);
+            image = output.write((std::filesystem::path(snapshotsDir) / name).string(), s, cameras[frame],
+                                 ImageRole::Snapshot);
         }
         if (o.has("reference") && image.data.empty()) image = output.radiance(s, cameras[frame]);
         ++snapshotIndex;

@@ -396,6 +396,8 @@ struct Compositor::Impl {
                   meshes.directCount(), " meshes for ", scene.lights.size(), " lights");
         ML_ASSERT(weights.light.size() == scene.lights.size(), weights.light.size(), " weights for ",
                   scene.lights.size(), " lights");
+        ML_ASSERT(weights.emission.empty() || weights.emission.size() == scene.lights.size(),
+                  weights.emission.size(), " emission weights for ", scene.lights.size(), " lights");
         ensureTargets(s.width, s.height, s.supersample);
         mvp = clipFromLocal(camera, double(s.width) / s.height);
         setFrustum();
@@ -404,7 +406,9 @@ struct Compositor::Impl {
         if (!scene.lights.empty()) {
             std::vector<glm::vec4> emission;
             for (size_t l = 0; l < scene.lights.size(); ++l)
-                emission.emplace_back(toVec3(scene.lights[l].radiance * weights.light[l]), 1.0f);
+                emission.emplace_back(
+                    toVec3(scene.lights[l].radiance * (weights.emission.empty() ? weights.light[l] : weights.emission[l])),
+                    1.0f);
             gl.NamedBufferSubData(lightEmissionBuffer.id(), 0, GLsizeiptr(emission.size() * sizeof(glm::vec4)),
                                   emission.data());
         }
@@ -686,10 +690,16 @@ ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMe
                             const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings) {
     ML_ASSERT(direct.size() == impl_->scene.lights.size() || direct.size() == impl_->scene.lights.size() + 1,
               direct.size(), " meshes for ", impl_->scene.lights.size(), " lights");
-    GpuCacheMeshes meshes(impl_->gl, impl_->origin);
-    meshes.upload(direct, indirect);
+    const GpuCacheMeshes meshes = upload(direct, indirect);
     impl_->compose(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
     return impl_->readImage();
+}
+
+GpuCacheMeshes Compositor::upload(const std::vector<IrradianceMeshCopy>& direct,
+                                  const std::vector<IrradianceMeshCopy>& indirect) const {
+    GpuCacheMeshes meshes(impl_->gl, impl_->origin);
+    meshes.upload(direct, indirect);
+    return meshes;
 }
 
 LuxImage Compositor::renderIlluminance(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,

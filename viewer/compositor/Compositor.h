@@ -63,6 +63,10 @@ struct LightWeights {
     // The mesh many lights share (IrradianceCache::hasSharedMesh): like
     // indirect light, it takes their power-weighted mean weight.
     Rgb shared{1.0};
+    // The factor of the radiance each light's emitting faces show, when it
+    // is not `light`'s (render's layers: light without emission, emission
+    // alone). Empty: `light`.
+    std::vector<Rgb> emission;
     static LightWeights unit(size_t lights);
 };
 
@@ -94,6 +98,11 @@ public:
                     const CompositorSettings& settings);
     ImageRgb render(const Camera& camera, const std::vector<IrradianceMeshCopy>& direct,
                     const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings);
+
+    // `direct` and `indirect` (as render() takes them) copied to the GPU,
+    // for compose().
+    GpuCacheMeshes upload(const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect) const;
 
     // --- Interactive frames -------------------------------------------------
     // Composites `settings.quantity` into the compositor's own targets

@@ -48,6 +48,10 @@ struct DisplayState {
     bool luxAuto = true;        // range from the image (autoLuxRange) when asked
     double luxMin = 1, luxMax = 1000;  // false-colour range, lux
     double exposureEV = 0;      // stops on top of the metered exposure
+    // Meter the exposure (FrameMeter): once, from the first snapshot shown,
+    // and when asked again. Off (--no-auto-exposure): 2^exposureEV alone,
+    // the same in every frame and screenshot of a recording.
+    bool autoExposure = true;
     ToneOperator op = ToneOperator::Aces;
     bool showUi = true;         // the control panel (the lux legend stays)
 };

@@ -21,7 +21,9 @@ void FrameMeter::meter(Compositor& compositor, const GpuCacheMeshes& meshes, con
         if (q != shownQuantity) compositor.compose(camera, meshes, weights, shownSettings);
         return image;
     };
-    if (exposurePending_) {
+    if (exposurePending_ && !state.autoExposure) {
+        exposurePending_ = false;  // the exposure is fixed: 2^exposureEV alone
+    } else if (exposurePending_) {
         DisplayState final = state;
         if (shownQuantity != CompositeQuantity::Radiance) final.mode = DisplayMode::Final;
         scale_ = autoExposureScale(pixelsOf(CompositeQuantity::Radiance, compositeWeights(final, lights, powers)));

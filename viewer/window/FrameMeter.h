@@ -1,6 +1,8 @@
 // Auto exposure and the automatic lux range of the viewer, metered from a
 // frame's own image when asked (the first light seen, a script's `exposure
-// auto`, entering lux mode, a light change in lux mode): the image is
+// auto`, entering lux mode, a light change in lux mode), never on its own:
+// a recording keeps one exposure unless its script asks again. With
+// DisplayState::autoExposure off, exposure requests are ignored. The image is
 // composited once more in the quantity the meter needs when the mode shows
 // another, then the shown one is composited again.
 #pragma once

@@ -1,0 +1,105 @@
+#include "ImageLayers.h"
+
+#include "core/Error.h"
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+
+namespace ml {
+
+std::vector<std::string> lightLayerNames(const Scene& scene) {
+    std::vector<std::string> names;
+    std::set<std::string> taken;
+    for (size_t l = 0; l < scene.lights.size(); ++l) {
+        std::string name = scene.lights[l].name;
+        for (char& c : name)
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+        if (name.empty()) name = concat("light", l);
+        std::string unique = name;
+        for (int k = 2; taken.count(unique); ++k) unique = concat(name, "_", k);
+        taken.insert(unique);
+        names.push_back("light." + unique);
+    }
+    return names;
+}
+
+namespace {
+
+// Weights that keep no mesh and no emitting face: parts are added to it.
+LightWeights none(size_t lights) {
+    LightWeights w;
+    w.light.assign(lights, Rgb(0.0));
+    w.emission.assign(lights, Rgb(0.0));
+    w.indirect = Rgb(0.0);
+    w.shared = Rgb(0.0);
+    return w;
+}
+
+}  // namespace
+
+RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
+                          const LayerSettings& layerSettings) {
+    const size_t lights = scene.lights.size();
+    ML_ASSERT(direct.size() == lights || direct.size() == lights + 1, direct.size(), " meshes for ", lights,
+              " lights");
+    const GpuCacheMeshes meshes = compositor.upload(direct, indirect);
+    CompositorSettings radiance = settings;
+    radiance.quantity = CompositeQuantity::Radiance;
+    auto composite = [&](const LightWeights& w, const CompositorSettings& s) {
+        compositor.compose(camera, meshes, w, s);
+        return compositor.readImage();
+    };
+
+    RenderLayers out;
+    out.beauty = composite(LightWeights::unit(lights), radiance);
+    LightWeights w = none(lights);
+    w.emission.assign(lights, Rgb(1.0));
+    out.emission = composite(w, radiance);
+    w = none(lights);
+    w.light.assign(lights, Rgb(1.0));
+    w.shared = Rgb(1.0);
+    out.direct = composite(w, radiance);
+    w = none(lights);
+    w.indirect = Rgb(1.0);
+    out.indirect = composite(w, radiance);
+
+    const std::vector<std::string> names = lightLayerNames(scene);
+    const size_t own = std::min(lights, layerSettings.maxLightLayers);
+    for (size_t l = 0; l < own; ++l) {
+        w = none(lights);
+        w.light[l] = Rgb(1.0);
+        out.lights.push_back({names[l], composite(w, radiance)});
+    }
+    if (own < lights) {
+        w = none(lights);
+        for (size_t l = own; l < lights; ++l) w.light[l] = Rgb(1.0);
+        out.directRest = composite(w, radiance);
+    }
+    if (direct.size() > lights) {
+        w = none(lights);
+        w.shared = Rgb(1.0);
+        out.directShared = composite(w, radiance);
+    }
+
+    CompositorSettings reflectance = settings;
+    reflectance.quantity = CompositeQuantity::Reflectance;
+    out.reflectance = composite(LightWeights::unit(lights), reflectance);
+    out.illuminance = compositor.renderIlluminance(camera, direct, indirect, settings);
+    return out;
+}
+
+std::vector<ImageLayer> RenderLayers::exrLayers() const {
+    std::vector<ImageLayer> layers = {ImageLayer::rgb("", beauty), ImageLayer::rgb("emission", emission),
+                                      ImageLayer::rgb("direct", direct), ImageLayer::rgb("indirect", indirect)};
+    for (const Light& l : lights) layers.push_back(ImageLayer::rgb(l.layer, l.image));
+    if (directShared) layers.push_back(ImageLayer::rgb("direct_shared", *directShared));
+    if (directRest) layers.push_back(ImageLayer::rgb("direct_rest", *directRest));
+    layers.push_back(ImageLayer::rgb("reflectance", reflectance));
+    layers.push_back(ImageLayer::single("illuminance", "Y", illuminance.lux));
+    return layers;
+}
+
+}  // namespace ml

@@ -1,0 +1,66 @@
+// The layers of `render`'s multi-layer EXR: one snapshot composited once in
+// full and once per part, each part by masking the compositor's weights
+// (LightWeights: the meshes of the part weigh 1, the rest 0), the way the
+// viewer shows a light alone. No shader of its own.
+//
+// Per sub-pixel the compositor adds Kd/π × E per mesh and Le per emitting
+// face, so the parts add up to the beauty image up to float rounding
+// (the sum's order on the GPU and the box filter's on the CPU):
+//   beauty   = emission + direct + indirect
+//   direct   = Σ light.<name> + direct_shared + direct_rest
+//   indirect = Kd/π × Σ_b E_b (every bounce)
+// direct_shared: where lights share one mesh (many lights), their direct
+// light cannot be told apart; direct_rest: the lights past the cap on
+// per-light layers, together.
+#pragma once
+
+#include "Compositor.h"
+#include "core/image/Illuminance.h"
+#include "core/image/Image.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ml {
+
+struct LayerSettings {
+    // Lights with a layer of their own, in the scene's order (the rest go
+    // into direct_rest); each costs a composite and 3 floats per pixel.
+    // Typical 64.
+    size_t maxLightLayers = 64;
+};
+
+struct RenderLayers {
+    ImageRgb beauty;       // what Compositor::render gives, bit for bit
+    ImageRgb emission;     // the emitting faces' radiance
+    ImageRgb direct;       // Kd/π × Σ direct irradiance
+    ImageRgb indirect;     // Kd/π × Σ indirect irradiance
+    struct Light {
+        std::string layer;  // "light.<sanitised name>" (lightLayerNames)
+        ImageRgb image;     // Kd/π × E_l, without its emission
+    };
+    std::vector<Light> lights;
+    std::optional<ImageRgb> directShared;  // the cache has a shared mesh
+    std::optional<ImageRgb> directRest;    // more lights than LayerSettings::maxLightLayers
+    ImageRgb reflectance;  // Kd, box-filtered (black off every surface)
+    LuxImage illuminance;  // as Compositor::renderIlluminance (render --quantity lux)
+
+    // Every layer for writeImageLayers: the beauty image as R, G, B, the
+    // others as LAYER.R/G/B, illuminance as illuminance.Y.
+    std::vector<ImageLayer> exrLayers() const;
+};
+
+// Composites every layer of one snapshot (`direct`, `indirect` as
+// Compositor::render takes them) from `camera`.
+RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
+                          const LayerSettings& layers);
+
+// "light.<name>" per light: the name with every character other than a
+// letter, a digit or '_' made '_' (EXR tools split layers at '.'), "light<i>"
+// when that leaves it empty, and "_2", "_3", ... on a name already taken.
+std::vector<std::string> lightLayerNames(const Scene& scene);
+
+}  // namespace ml
