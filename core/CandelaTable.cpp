@@ -159,6 +159,19 @@ void expandCSymmetry(CandelaTable& table, const std::vector<double>& storedC,
         const auto first = storedCandela.begin() + source * long(ng);
         table.candela.insert(table.candela.end(), first, first + long(ng));
     }
+    // Stored 90..270 without 180 mirrors to no C0: add it, interpolated
+    // between its neighbours across 360, which leaves the interpolant as it was.
+    if (table.c.front() > 0) {
+        const double below = table.c.back() - 360, above = table.c.front();
+        const double t = (0 - below) / (above - below);
+        std::vector<double> plane(ng);
+        for (size_t i = 0; i < ng; ++i) {
+            const double a = table.candela[(table.c.size() - 1) * ng + i], b = table.candela[i];
+            plane[i] = a + t * (b - a);
+        }
+        table.c.insert(table.c.begin(), 0.0);
+        table.candela.insert(table.candela.begin(), plane.begin(), plane.end());
+    }
 }
 
 }  // namespace ml

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,9 @@ struct SymmetryCase {
     std::vector<Mirror> mirrors;  // the directions each stored one stands for
     double ratedLumens;
 };
+
+// ctest and failures name the case by its file.
+void PrintTo(const SymmetryCase& k, std::ostream* os) { *os << k.file; }
 
 const Mirror aboutC0 = [](double c) { return 360 - c; };
 const Mirror aboutC90 = [](double c) { return 180 - c; };
@@ -169,6 +173,22 @@ std::vector<double> steps(double from, double to, double step) {
     std::vector<double> v;
     for (int i = 0; from + i * step <= to + 1e-9; ++i) v.push_back(from + i * step);
     return v;
+}
+
+// Fuzzer finding: 90..270 without a 180 plane mirrors to no C0 plane; one is
+// added, interpolated across 360, and the symmetry holds everywhere.
+TEST(Photometric, Bilateral90WithoutC180GetsAnInterpolatedC0) {
+    const auto value = [](double g, double c) { return 10 + g + c; };
+    const CandelaTable t = parseIes(join(iesLines({90, 180}, {90, 135, 140, 225, 270}, value)), "b.ies");
+    expectWellFormed(t);
+    EXPECT_EQ(t.c.front(), 0.0);
+    for (double c : {0.0, 10.0, 40.0, 45.0, 90.0, 100.0, 140.0, 180.0, 200.0, 300.0, 359.0})
+        for (double g : {90.0, 120.0, 180.0}) {
+            const double mirrored = 180 - c < 0 ? 540 - c : 180 - c;
+            EXPECT_NEAR(t.intensity(g, c), t.intensity(g, mirrored), 1e-9) << "c " << c << " gamma " << g;
+        }
+    // C0 mirrors C180, halfway between the stored 140 and 225 (at 40 and -45).
+    EXPECT_NEAR(t.intensity(90, 0), value(90, 140) + (value(90, 225) - value(90, 140)) * 40 / 85, 1e-9);
 }
 
 // ---- Flux -------------------------------------------------------------------
@@ -365,18 +385,29 @@ void expectError(const std::function<void()>& load, const std::string& name, int
     }
 }
 
-struct IesError {
+struct LineError {
     int line;           // 1-based line to replace (0: none)
     std::string text;   // its new text
     int errorLine;      // where the message points
     std::string problem;
 };
 
+// Each case: `good` with one line replaced, parsed as `name`, must fail there.
+void expectLineErrors(const std::vector<std::string>& good, const std::vector<LineError>& cases,
+                      const std::string& name, const std::function<void(const std::string&)>& parse) {
+    for (const LineError& k : cases) {
+        std::vector<std::string> lines = good;
+        lines[size_t(k.line - 1)] = k.text;
+        SCOPED_TRACE(k.text);
+        expectError([&] { parse(join(lines)); }, name, k.errorLine, k.problem);
+    }
+}
+
 TEST(PhotometricErrors, Ies) {
     const std::vector<std::string> good = iesLines({0, 45, 90}, {0}, [](double g, double) { return 100 - g; });
     ASSERT_NO_THROW(parseIes(join(good), "bad.ies"));
     ASSERT_EQ(good.size(), 8u);
-    const std::vector<IesError> cases = {
+    const std::vector<LineError> cases = {
         {3, "[NOTILT]", 8, "without a TILT= line"},
         {3, "TILT=", 3, "TILT= names nothing"},
         {3, "TILT=missing.tlt", 3, "TILT file 'missing.tlt' cannot be read"},
@@ -402,12 +433,7 @@ TEST(PhotometricErrors, Ies) {
         {8, "100 55 10 junk", 8, "unexpected 'junk' after the last of the 3 candela values"},
         {8, "100 55 10 11", 8, "unexpected '11' after the last of the 3 candela values"},
     };
-    for (const IesError& k : cases) {
-        std::vector<std::string> lines = good;
-        lines[size_t(k.line - 1)] = k.text;
-        SCOPED_TRACE(k.text);
-        expectError([&] { parseIes(join(lines), "bad.ies"); }, "bad.ies", k.errorLine, k.problem);
-    }
+    expectLineErrors(good, cases, "bad.ies", [](const std::string& text) { parseIes(text, "bad.ies"); });
     // The 1e15 case above: 1e15 × the candela multiplier (1) is allowed, 2e15 is not.
     std::vector<std::string> bright = good;
     bright[7] = "100 1e15 10";
@@ -471,7 +497,7 @@ TEST(PhotometricErrors, Eulumdat) {
     const CandelaTable ok = parseEulumdat(join(good), "bad.ldt");
     EXPECT_DOUBLE_EQ(ok.intensity(0, 0), 200.0);  // 1000 lm: cd/klm = cd
     EXPECT_DOUBLE_EQ(ok.intensity(0, 270), ok.intensity(0, 90));
-    const std::vector<IesError> cases = {
+    const std::vector<LineError> cases = {
         {2, "7", 2, "Ityp (type indicator) is 7"},
         {3, "5", 3, "Isym (symmetry indicator) is 5: expected a whole number from 0 to 4"},
         {4, "-3", 4, "Mc (number of C planes) is -3"},
@@ -498,12 +524,7 @@ TEST(PhotometricErrors, Eulumdat) {
         {58, "", 58, "the file ends before intensity 9 of 9: found 8, expected Isym 2 with Mc 4 stores 3 C planes"},
         {58, "120 7", 58, "unexpected '7' after the last of the 9 intensities"},
     };
-    for (const IesError& k : cases) {
-        std::vector<std::string> lines = good;
-        lines[size_t(k.line - 1)] = k.text;
-        SCOPED_TRACE(k.text);
-        expectError([&] { parseEulumdat(join(lines), "bad.ldt"); }, "bad.ldt", k.errorLine, k.problem);
-    }
+    expectLineErrors(good, cases, "bad.ldt", [](const std::string& text) { parseEulumdat(text, "bad.ldt"); });
     // Cut short in the header.
     const std::vector<std::string> cut(good.begin(), good.begin() + 19);
     expectError([&] { parseEulumdat(join(cut), "cut.ldt"); }, "cut.ldt", 19,

@@ -10,6 +10,9 @@ set_property(CACHE MESHLIGHT_FUZZ PROPERTY STRINGS AUTO ON OFF)
 # Wall-clock seconds the ctest `fuzz_obj_loader` fuzzes for (the run also
 # reads the corpus first, a second or two).
 set(MESHLIGHT_FUZZ_SECONDS 50 CACHE STRING "Seconds each fuzz test runs its fuzzer")
+# The photometric loaders are small and fast (about 15000 inputs a second):
+# a shorter run of `fuzz_photometric` reaches them.
+set(MESHLIGHT_FUZZ_PHOTOMETRIC_SECONDS 20 CACHE STRING "Seconds the ctest fuzz_photometric runs its fuzzer")
 
 if(MESHLIGHT_FUZZ STREQUAL "OFF")
   return()
@@ -48,7 +51,7 @@ if(NOT _fuzz_ok)
   if(MESHLIGHT_FUZZ STREQUAL "ON")
     message(FATAL_ERROR "MESHLIGHT_FUZZ=ON but ${_fuzz_why}")
   endif()
-  message(WARNING "\n*** The loader fuzzer (ctest fuzz_obj_loader) is NOT built and NOT run: ${_fuzz_why}\n"
+  message(WARNING "\n*** The loader fuzzers (ctest fuzz_obj_loader, fuzz_photometric) are NOT built and NOT run: ${_fuzz_why}\n"
                   "*** Install them (.ci/install-deps does) or configure with -DMESHLIGHT_FUZZ=OFF.\n")
   return()
 endif()
@@ -75,3 +78,13 @@ add_test(NAME fuzz_obj_loader
                  -DSECONDS=${MESHLIGHT_FUZZ_SECONDS}
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/fuzz/RunFuzzer.cmake)
 set_tests_properties(fuzz_obj_loader PROPERTIES LABELS fuzz TIMEOUT 300)
+
+add_test(NAME fuzz_photometric
+         COMMAND ${CMAKE_COMMAND}
+                 -DFUZZER=${CMAKE_CURRENT_BINARY_DIR}/fuzz/fuzz_photometric
+                 -DCORPUS=${CMAKE_CURRENT_SOURCE_DIR}/fuzz/corpus_photometric
+                 -DDICT=${CMAKE_CURRENT_SOURCE_DIR}/fuzz/photometric.dict
+                 -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fuzz-run/photometric
+                 -DSECONDS=${MESHLIGHT_FUZZ_PHOTOMETRIC_SECONDS}
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/fuzz/RunFuzzer.cmake)
+set_tests_properties(fuzz_photometric PROPERTIES LABELS fuzz TIMEOUT 300)
