@@ -439,6 +439,30 @@ TEST_F(Gltf, PunctualLightsArePlacedAimedAndConvertedFromCandela) {
     EXPECT_EQ(scene.metresPerUnit, 1.0);
 }
 
+// A photometric luminaire on a node's extras, placed like a glTF light.
+TEST_F(Gltf, LuminaireOnANodesExtras) {
+    std::ofstream(path("iso.ies")) << "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 180\n0\n100 100\n";
+    GltfFile f = quadScene();
+    const json downX = {-std::sin(kPi / 4), 0, 0, std::cos(kPi / 4)};
+    const int lum = f.add("nodes", {{"name", "Downlight.004"}, {"translation", {1, 3, 1}}, {"rotation", downX},
+                                    {"extras", {{"photometry", "iso.ies"}, {"multiplier", 2}}}});
+    f.setRoots({0, lum});
+    const Scene scene = loadGltf(f.writeGltf(path("lum.gltf")));
+    ASSERT_EQ(scene.lights.size(), 1u);
+    const Light& l = scene.lights[0];
+    EXPECT_EQ(l.name, "Downlight.004");
+    EXPECT_EQ(l.group, "Downlight");
+    EXPECT_EQ(l.emission.profile.shape, IntensityProfile::Shape::Table);
+    expectClose(l.emission.position, Vec3(1, 3, 1), 1e-12);
+    expectClose(l.emission.axis, Vec3(0, -1, 0), 1e-12);
+    EXPECT_NEAR(l.emission.intensityToward(Vec3(0, -1, 0)).g * 179, 200, 1e-9);  // 100 cd × 2
+    // A missing file names itself.
+    GltfFile g = quadScene();
+    const int bad = g.add("nodes", {{"extras", {{"photometry", "none.ies"}}}});
+    g.setRoots({0, bad});
+    EXPECT_NE(loadError(g.writeGltf(path("bad.gltf"))).find("none.ies"), std::string::npos);
+}
+
 TEST_F(Gltf, BadPunctualLightsNameTheField) {
     auto withLight = [&](json light, const std::string& name) {
         GltfFile f = quadScene();

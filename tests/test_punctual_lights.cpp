@@ -2,12 +2,14 @@
 // the glTF spot falloff against their formulas, the shadow ray every sampler
 // and the path tracer share, and a closed cube lit by an isotropic point,
 // whose mean wall illuminance is known exactly: Φ / (S (1 − ρ)).
+#include "TempDirTest.h"
 #include "TestSamplers.h"
 #include "TestScenes.h"
 #include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
 #include "core/CandelaTable.h"
 #include "core/image/Photometry.h"
+#include "core/loaders/LuminaireLayout.h"
 #include "core/raytrace/BounceCount.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
@@ -21,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <sstream>
 
 using namespace ml;
 using namespace ml::test;
@@ -47,6 +50,11 @@ Scene floorWith(std::vector<Light> lights, double metresPerUnit = 1, double size
     scene.lights = std::move(lights);
     scene.finalize();
     return scene;
+}
+
+void expectNear(const Vec3& a, const Vec3& b, double tol = 1e-12) {
+    EXPECT_LE(glm::length(a - b), tol) << "(" << a.x << ", " << a.y << ", " << a.z << ") vs (" << b.x << ", " << b.y
+                                       << ", " << b.z << ")";
 }
 
 double lux(const Rgb& e, const char* photometry = "radiance") { return photometryNamed(photometry).luminous(e); }
@@ -331,4 +339,182 @@ TEST(PunctualCube, MeanWallIlluminanceIsFluxOverAreaTimesOneOverOneMinusRho) {
     EXPECT_NEAR(sum / (side * side), expected, 0.02 * expected);
     std::printf("cube: expected %.5f, cache %.5f (direct %.5f, %d bounces), path tracer %.5f\n", expected,
                 total.g / area, directSum.g / area, plan.bounces, sum / (side * side));
+}
+
+// --- Photometric luminaires (IES, a layout file) ----------------------------------------
+
+namespace {
+
+// I(γ, C) = i0 cos γ (1 + 0.3 sin² γ cos 2C) below the horizon, 0 above
+// (radians): one value at the nadir, brighter across C0–C180.
+double intensity(double i0, double g, double c) {
+    return std::max(0.0, i0 * std::cos(g) * (1 + 0.3 * std::sin(g) * std::sin(g) * std::cos(2 * c)));
+}
+
+// An IES LM-63-2002 file of intensity() (the file stops at 90°),
+// quadrant-symmetric, every 2.5° in γ and 15° in C, rated at its own flux
+// π i0 (the cos 2C term integrates to zero).
+std::string cosineIes(double i0) {
+    std::ostringstream f;
+    f.precision(12);
+    f << "IESNA:LM-63-2002\n[TEST] cosine downlight\n[LUMINAIRE] Cosine\nTILT=NONE\n";
+    const int nv = 37, nh = 7;
+    f << "1 " << kPi * i0 << " 1 " << nv << " " << nh << " 1 2 0.2 0.2 0\n1 1 20\n";
+    for (int v = 0; v < nv; ++v) f << 2.5 * v << (v + 1 < nv ? " " : "\n");
+    for (int h = 0; h < nh; ++h) f << 15.0 * h << (h + 1 < nh ? " " : "\n");
+    for (int h = 0; h < nh; ++h) {
+        for (int v = 0; v < nv; ++v) {
+            const double g = 2.5 * v * kPi / 180, c = 15.0 * h * kPi / 180;
+            f << intensity(i0, g, c) << (v + 1 < nv ? " " : "\n");
+        }
+    }
+    return f.str();
+}
+
+class Luminaires : public TempDirTest {};
+
+// A floor 10 m below the luminaire (so the scene has a size), nothing else.
+Scene luminaireScene(const std::string& layout) {
+    Scene scene;
+    scene.name = "luminaires";
+    scene.materials = {Material::diffuse("grey", Rgb(0.5))};
+    scene.meshes = {quadMesh("floor", 0, Vec3(-10, -10, -10), 20.0 * kZ, 20.0 * kX)};
+    scene.finalize();
+    addLuminaireLayout(scene, layout);
+    return scene;
+}
+
+}  // namespace
+
+// The issue's checks: on a sphere of 5 m around the luminaire, E r² (lux ×
+// m²) equals the file's I(γ, C) at every tabulated direction (0.5%; exact
+// up to rounding here), through the cache's direct sampler; the flux over
+// the sphere equals the file's lumens within 1% (midpoint quadrature of
+// 90 × 180 cells of the bilinear table: its error is O(1°²)).
+TEST_F(Luminaires, CandelaTableReproducesItselfOnASphereAndItsFlux) {
+    const double i0 = 1000;
+    write("cosine.ies", cosineIes(i0));
+    // Aimed down, C0 along +x (no rotation).
+    const Scene scene = luminaireScene(write("layout.csv", "# test\nfile,x,y,z\ncosine.ies,0,0,0\n"));
+    ASSERT_EQ(scene.lights.size(), 1u);
+    const Light& l = scene.lights[0];
+    EXPECT_EQ(l.name, "cosine#0");
+    EXPECT_EQ(l.group, "cosine");
+    DirectChoice choice;
+    choice.backend = GlBackend::OsMesa;
+    ConfiguredDirectSampler sampler(scene, choice);
+    const Photometry photometry;
+    const double r = 5;
+    // The direction of (γ, C): nadir −y, C0 +x, C90 = axis × C0 (right-handed about the axis).
+    const Vec3 axis(0, -1, 0), c0(1, 0, 0), c90 = glm::cross(axis, c0);
+    auto direction = [&](double gammaDeg, double cDeg) {
+        const double g = gammaDeg * kPi / 180, c = cDeg * kPi / 180;
+        return std::cos(g) * axis + std::sin(g) * (std::cos(c) * c0 + std::sin(c) * c90);
+    };
+    for (int v = 0; v <= 36; ++v)
+        for (int h = 0; h < 24; ++h) {  // C every 15° around the circle: the quadrant mirrored
+            const double g = 2.5 * v, c = 15.0 * h;
+            const Vec3 w = direction(g, c);
+            const double e = photometry.luminous(sampler.sample(0, r * w, -w, 1).irradiance);
+            const double expected = intensity(i0, g * kPi / 180, c * kPi / 180);
+            EXPECT_NEAR(e * r * r, expected, 0.005 * i0) << "gamma " << g << ", C " << c;
+        }
+    // Above the horizon the file says nothing: zero, on the sphere and on the ceiling side.
+    EXPECT_EQ(sampler.sample(0, r * direction(120, 30), -direction(120, 30), 1).irradiance.g, 0);
+    double flux = 0;
+    const int ng = 90, nc = 180;
+    for (int i = 0; i < ng; ++i)
+        for (int j = 0; j < nc; ++j) {
+            const double g = (i + 0.5) * 180.0 / ng, c = (j + 0.5) * 360.0 / nc;
+            const Vec3 w = direction(g, c);
+            const double dA = r * r * std::sin(g * kPi / 180) * (kPi / ng) * (2 * kPi / nc);
+            flux += photometry.luminous(sampler.sample(0, r * w, -w, 1).irradiance) * dA;
+        }
+    EXPECT_NEAR(flux, kPi * i0, 0.01 * kPi * i0);
+    EXPECT_NEAR(photometry.luminous(l.power()), flux, 0.01 * flux) << "the light's power is the table's flux";
+}
+
+// Aim and rotation: aimed along +x, the default C0 half-plane is the scene's
+// +z (+x lies along the aim); turned 90° about the aim it becomes aim × z.
+TEST_F(Luminaires, AimAndRotationTurnTheDistribution) {
+    write("cosine.ies", cosineIes(100));
+    const Scene scene = luminaireScene(write("layout.csv",
+                                             "name,file,x,y,z,aim_x,aim_y,aim_z,rotation,multiplier,group\n"
+                                             "a,cosine.ies,0,0,0,1,0,0,0,2,g1\n"
+                                             "b,cosine.ies,0,0,0,1,0,0,90,1,g1\n"));
+    ASSERT_EQ(scene.lights.size(), 2u);
+    const PunctualEmission& a = scene.lights[0].emission;
+    const PunctualEmission& b = scene.lights[1].emission;
+    EXPECT_EQ(scene.lights[0].group, "g1");
+    expectNear(a.axis, Vec3(1, 0, 0));
+    expectNear(a.reference, Vec3(0, 0, 1));
+    expectNear(b.reference, glm::cross(Vec3(1, 0, 0), Vec3(0, 0, 1)));  // turned 90° about the aim
+    // 45° off the aim in the C0 plane: i0 cos 45° (1 + 0.3 sin² 45°), times the
+    // multiplier; in the C90 plane (1 − 0.3 sin² 45°).
+    const Vec3 w = glm::normalize(Vec3(1, 0, 1));
+    EXPECT_NEAR(a.intensityToward(w).g * kRadianceEfficacy, 2 * 100 * std::cos(kPi / 4) * 1.15, 1e-9);
+    EXPECT_NEAR(b.intensityToward(w).g * kRadianceEfficacy, 100 * std::cos(kPi / 4) * 0.85, 1e-9);
+}
+
+// Hard cases from the issue: luminaires from 1e-3 to 1e6 lm in one scene,
+// one lying on the floor and one 1e-6 m above it: every value finite, each
+// light's irradiance its own alone, and the path tracer agrees.
+TEST_F(Luminaires, FluxesFromAMilliLumenToAMegaLumenAndLightsOnTheFloor) {
+    write("cosine.ies", cosineIes(1000 / kPi));  // 1000 lm
+    const Scene scene = luminaireScene(write("layout.csv",
+                                             "file,x,y,z,multiplier\n"
+                                             "cosine.ies,0,0,0,1e-6\n"
+                                             "cosine.ies,1,0,0,1e3\n"
+                                             "cosine.ies,2,-10,0,1\n"
+                                             "cosine.ies,3,-9.999999,0,1\n"));
+    ASSERT_EQ(scene.lights.size(), 4u);
+    const Photometry photometry;
+    EXPECT_NEAR(photometry.luminous(scene.lights[0].power()), 1e-3, 2e-5);
+    EXPECT_NEAR(photometry.luminous(scene.lights[1].power()), 1e6, 2e4);
+    DirectChoice choice;
+    choice.backend = GlBackend::OsMesa;
+    ConfiguredDirectSampler sampler(scene, choice);
+    const EmbreeScene rays(scene);
+    PathTracerSettings ps;
+    ps.maxDepth = 1;
+    ps.threads = 1;
+    const PathTracer tracer(rays, ps);
+    for (const Vec3& x : {Vec3(0, -10, 0), Vec3(1, -10, 0.5), Vec3(2, -10, 0), Vec3(2.5, -10, 0), Vec3(3, -10, 0)}) {
+        const IrradianceEstimate pt = tracer.irradiance(x, kY, 4, 0);
+        for (size_t l = 0; l < scene.lights.size(); ++l) {
+            const Rgb e = sampler.sample(l, x, kY, 1).irradiance;
+            ASSERT_TRUE(std::isfinite(e.g)) << "light " << l;
+            EXPECT_EQ(e, punctualIrradiance(rays, l, x, kY).irradiance);
+            EXPECT_NEAR(pt.directPerLight[l].g, e.g, 1e-9 * std::max(1.0, e.g)) << "light " << l;
+        }
+    }
+    // On the floor the lying light gives nothing (edge-on); 1e-6 m above, 1000/π cd / 1e-12 m².
+    EXPECT_EQ(sampler.sample(2, Vec3(2.5, -10, 0), kY, 1).irradiance.g, 0);
+    EXPECT_NEAR(photometry.luminous(sampler.sample(3, Vec3(3, -10, 0), kY, 1).irradiance) / (1000 / kPi / 1e-12), 1, 1e-4);
+}
+
+TEST_F(Luminaires, LayoutErrorsNameTheFileLineAndColumn) {
+    write("cosine.ies", cosineIes(100));
+    Scene base = luminaireScene(write("empty.csv", "file,x,y,z\n"));
+    auto error = [&](const std::string& text) {
+        Scene scene = base;
+        try {
+            addLuminaireLayout(scene, write("bad.csv", text));
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        ADD_FAILURE() << "no error for:\n" << text;
+        return std::string();
+    };
+    EXPECT_NE(error("file,x,y\ncosine.ies,0,0\n").find("bad.csv:1: the header has no column 'z'"), std::string::npos);
+    EXPECT_NE(error("file,x,y,z,colour\n").find("bad.csv:1: unknown column 'colour'"), std::string::npos);
+    EXPECT_NE(error("# c\nfile,x,y,z\ncosine.ies,0,nan,0\n").find("bad.csv:3: column 'y': 'nan' is not a finite number"),
+              std::string::npos);
+    EXPECT_NE(error("file,x,y,z\ncosine.ies,0,0\n").find("bad.csv:2: 3 values, the header names 4 columns"), std::string::npos);
+    EXPECT_NE(error("file,x,y,z\nmissing.ies,0,0,0\n").find("missing.ies"), std::string::npos);
+    EXPECT_NE(error("file,x,y,z,aim_x,aim_y,aim_z\ncosine.ies,0,0,0,0,0,0\n").find("bad.csv:2: the aim is the zero vector"),
+              std::string::npos);
+    EXPECT_NE(error("file,x,y,z,multiplier\ncosine.ies,0,0,0,-1\n").find("is negative"), std::string::npos);
+    write("broken.ies", "IESNA:LM-63-2002\nTILT=NONE\n1 100 1 x\n");
+    EXPECT_NE(error("file,x,y,z\nbroken.ies,0,0,0\n").find("broken.ies:3"), std::string::npos);
 }

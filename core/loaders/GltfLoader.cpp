@@ -14,6 +14,8 @@
 
 #include "GltfLoader.h"
 
+#include "LuminaireLayout.h"
+#include "PhotometricFile.h"
 #include "TextureMean.h"
 
 #include "core/Error.h"
@@ -236,6 +238,7 @@ private:
     Mat4 localTransform(int node) const;
     void readCamera(int node, const Mat4& world);
     void readLight(int node, const Mat4& world);
+    void readLuminaire(int node, const Mat4& world);
 
     // Accessors and primitives
     struct ByteRange {
@@ -289,6 +292,7 @@ private:
     Vec3 cameraForward_{0.0};       // unit
     std::vector<Light> punctual_;  // KHR_lights_punctual, in traversal order
     std::set<int> rangeWarned_;
+    std::map<std::string, std::shared_ptr<const CandelaTable>> luminaireTables_;  // by file: read once
 
     size_t pointsAndLines_ = 0;
     std::string firstPointsAndLines_;
@@ -529,6 +533,7 @@ void GltfReader::readCamera(int node, const Mat4& world) {
 // with K = 179 lm/W (core/PunctualLight.h), times the linear RGB colour.
 void GltfReader::readLight(int node, const Mat4& world) {
     const tg::Node& n = model_.nodes[static_cast<size_t>(node)];
+    readLuminaire(node, world);
     const auto ext = n.extensions.find("KHR_lights_punctual");
     if (ext == n.extensions.end() || !ext->second.IsObject() || !ext->second.Has("light")) return;
     const std::string field = item("nodes", node) + ".extensions.KHR_lights_punctual.light";
@@ -577,6 +582,40 @@ void GltfReader::readLight(int node, const Mat4& world) {
         warn(at, " '", light.name, "': range ", light.range,
              " m ignored: light falls off by the inverse-square law at every distance");
     punctual_.push_back(std::move(l));
+}
+
+// A photometric luminaire on a node: extras {"photometry": "file.ies" or
+// ".ldt" (relative to the glTF file), "multiplier": 1, "group": "..."},
+// placed at the node's origin, aimed along its −Z with C0 along its +X (as
+// KHR_lights_punctual aims lights). The node's name names the light.
+void GltfReader::readLuminaire(int node, const Mat4& world) {
+    const tg::Node& n = model_.nodes[static_cast<size_t>(node)];
+    if (!n.extras.IsObject() || !n.extras.Has("photometry")) return;
+    const std::string at = item("nodes", node) + ".extras";
+    const tg::Value& file = n.extras.Get("photometry");
+    if (!file.IsString() || file.Get<std::string>().empty()) fail(at, ".photometry is not a file name");
+    LuminairePlacement p;
+    if (n.extras.Has("multiplier")) {
+        const tg::Value& m = n.extras.Get("multiplier");
+        if (!m.IsNumber() || !(m.GetNumberAsDouble() >= 0) || !std::isfinite(m.GetNumberAsDouble()))
+            fail(at, ".multiplier is not a finite number >= 0");
+        p.multiplier = m.GetNumberAsDouble();
+    }
+    std::string group;
+    if (n.extras.Has("group")) {
+        if (!n.extras.Get("group").IsString()) fail(at, ".group is not a string");
+        group = n.extras.Get("group").Get<std::string>();
+    }
+    const Mat3 m(world);
+    p.position = Vec3(world[3]);
+    p.aim = m * Vec3(0, 0, -1);
+    p.reference = m * Vec3(1, 0, 0);
+    if (!(glm::length(p.aim) > 0) || !isFinite(p.aim)) fail(item("nodes", node), ": the luminaire's transform is singular");
+    const std::string path = (baseDir_ / file.Get<std::string>()).lexically_normal().string();
+    auto& table = luminaireTables_[path];
+    if (!table) table = std::make_shared<const CandelaTable>(loadPhotometricFile(path));
+    const std::string name = n.name.empty() ? concat("luminaire", node) : n.name;
+    punctual_.push_back(luminaireLight(table, p, name, group.empty() ? lightGroupOf(name) : group));
 }
 
 // Accessors and primitives ---------------------------------------------------

@@ -12,6 +12,7 @@ namespace ml {
 
 int runRender(const std::vector<std::string>& args);
 int runProbe(const std::vector<std::string>& args);
+int runGrid(const std::vector<std::string>& args);
 int runBench(const std::vector<std::string>& args);
 int runPlan(const std::vector<std::string>& args);
 int runReference(const std::vector<std::string>& args);

@@ -1,5 +1,7 @@
 #include "Plan.h"
 
+#include "core/image/Photometry.h"
+
 #include "cache/LightCoverage.h"
 
 #include "Commands.h"
@@ -53,26 +55,54 @@ CacheSettings readCacheSettings(const Options& o) {
     return c;
 }
 
+// What a light is and how its direct light is sampled, for the plan.
+std::string describeLight(const Light& l, const Scene& scene, const DirectChoice& choice) {
+    const Photometry photometry;  // lumens in RADIANCE's convention (PunctualLight.h)
+    const double s = scene.metresPerUnit;
+    const std::string flux = concat(photometry.luminous(l.power()) * s * s, " lm");
+    const std::string group = l.group.empty() || l.group == l.name ? std::string() : concat(", group '", l.group, "'");
+    if (l.kind == LightKind::Directional)
+        return concat("directional, travelling along (", l.emission.axis.x, ", ", l.emission.axis.y, ", ",
+                      l.emission.axis.z, "), ", photometry.luminous(l.emission.intensity), " lx on a surface facing it",
+                      group, "; direct light by one shadow ray per vertex (parallel light: hard shadows, no "
+                      "soft-shadow sampling)");
+    if (l.kind == LightKind::Point) {
+        const PunctualEmission& e = l.emission;
+        return concat("point at (", e.position.x, ", ", e.position.y, ", ", e.position.z, "), ",
+                      e.profile.describe(), e.profile.shape == IntensityProfile::Shape::Isotropic
+                                                ? std::string()
+                                                : concat(" aimed along (", e.axis.x, ", ", e.axis.y, ", ", e.axis.z, ")"),
+                      ", peak ", photometry.luminous(e.intensity), " cd, ", flux, group,
+                      "; direct light by one shadow ray per vertex (a point: hard shadows, no soft-shadow "
+                      "sampling), refined along shadow edges down to the view's pixels");
+    }
+    const bool point = actsAsPoint(l, scene, choice);
+    return concat(l.triangles.size(), " triangles, area ", l.area, ", ", l.planar ? "planar" : "not planar", ", ",
+                  flux, group, "; ",
+                  point ? "smaller than a sampling pixel from 1% of the scene away: hard shadows, one visibility "
+                          "test per pixel would do (still sampled as an area light)"
+                        : "an area light: soft shadows, sampled with jittered tests",
+                  "; direct light by ", choice.describe());
+}
+
 void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
                const IndirectChoice& indirect) {
     std::printf("plan:\n");
-    // Many lights: the first few, then a count (their sampling is the same).
+    // Many lights: the first few, then a count of each kind.
     constexpr size_t kListed = 8;
+    size_t area = 0, punctual = 0;
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
-        if (i == kListed && scene.lights.size() > kListed + 1) {
-            std::printf("  ... and %zu more lights sampled the same way\n", scene.lights.size() - kListed);
-            break;
+        if (i >= kListed && scene.lights.size() > kListed + 1) {
+            (l.punctual() ? punctual : area)++;
+            continue;
         }
-        const bool point = actsAsPoint(l, scene, choice);
-        std::printf("  light '%s': %zu triangles, area %.6g, %s; %s; direct light by %s\n", l.name.c_str(),
-                    l.triangles.size(), l.area, l.planar ? "planar" : "not planar",
-                    point ? "smaller than a sampling pixel from 1% of the scene away: hard shadows, one visibility "
-                            "test per pixel would do (still sampled as an area light)"
-                          : "an area light: soft shadows, sampled with jittered tests",
-                    choice.describe().c_str());
+        std::printf("  light '%s': %s\n", l.name.c_str(), describeLight(l, scene, choice).c_str());
     }
-    if (scene.lights.empty()) std::printf("  no emissive material (Ke > 0): the image is black\n");
+    if (area + punctual > 0)
+        std::printf("  ... and %zu more lights (%zu area, %zu punctual), each sampled as its kind is above\n",
+                    area + punctual, area, punctual);
+    if (scene.lights.empty()) std::printf("  no light (no emissive material, no punctual light): the image is black\n");
     const double maxEdge = cache.maxEdgeFraction * scene.bounds.diagonal();
     size_t grids = 0;
     for (const Mesh& m : scene.meshes) {
@@ -124,7 +154,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
 
 int runPlan(const std::vector<std::string>& args) {
     Options o("plan");
-    o.positional("scene", kSceneArgumentHelp);
+    declareSceneOptions(o);
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);
@@ -133,7 +163,7 @@ int runPlan(const std::vector<std::string>& args) {
     const DirectChoice choice = readDirectOptions(o);
     const CacheSettings cache = readCacheSettings(o);
     IndirectChoice indirect = readIndirectOptions(o);
-    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     std::printf("scene '%s': %zu meshes, %zu triangles, %zu lights\n", scene.name.c_str(), scene.meshes.size(),
                 scene.triangleCount(), scene.lights.size());

@@ -25,7 +25,7 @@ std::string referenceNoisePath(const std::string& out) {
 
 int runReference(const std::vector<std::string>& args) {
     Options o("reference");
-    o.positional("scene", kSceneArgumentHelp);
+    declareSceneOptions(o);
     o.value("out", "FILE", "output image, .exr or .hdr (linear radiance); its standard error goes beside it "
                            "as FILE.noise.exr (.hdr)");
     o.value("spp", "N", "samples per pixel, at least 2 (even and odd samples estimate the noise)");
@@ -57,7 +57,7 @@ int runReference(const std::vector<std::string>& args) {
     settings.threads = o.integer("threads", 0, 1024);
     settings.validate();
 
-    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     const Camera camera = cameraFromOptions(o, scene, double(width) / height);
     const int threads = settings.threads ? settings.threads : std::max(1, int(std::thread::hardware_concurrency()));

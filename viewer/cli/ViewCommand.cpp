@@ -30,7 +30,7 @@ LengthUnit defaultUnit(const std::string& sceneArg) {
 
 int runView(const std::vector<std::string>& args) {
     Options o("view");
-    o.positional("scene", kSceneArgumentHelp);
+    declareSceneOptions(o);
     o.value("width", "W", "window width, pixels", std::string("1280"));
     o.value("height", "H", "window height, pixels", std::string("720"));
     declareCameraOptions(o);
@@ -96,7 +96,7 @@ int runView(const std::vector<std::string>& args) {
     std::optional<ViewScript> script;
     if (o.has("script")) script = loadViewScript(o.str("script"));
 
-    const Scene scene = loadSceneArgument(sceneArg);
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (script) {
         std::vector<std::string> names;

@@ -14,6 +14,7 @@ const char* kUsage =
     "  render SCENE   render an image (SCENE: cornell, office[:KEY=VALUE,...], bench, an OBJ or glTF file)\n"
     "  plan SCENE     what a render of SCENE would simulate, and why\n"
     "  probe SCENE    direct and indirect irradiance and lux at sensor points (a CSV, or rtrace's x y z dx dy dz)\n"
+    "  grid SCENE     illuminance on a work plane or objects: lux per point, EN 12464-1 statistics, HTML report\n"
     "  reference SCENE --spp N --out REF.exr\n"
     "                 path-traced reference image (and REF.noise.exr, its standard error)\n"
     "  view SCENE     walk through SCENE in a window while its lighting converges\n"
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
     try {
         if (command == "render") return ml::runRender(args);
         if (command == "probe") return ml::runProbe(args);
+        if (command == "grid") return ml::runGrid(args);
         if (command == "plan") return ml::runPlan(args);
         if (command == "bench") return ml::runBench(args);
         if (command == "reference") return ml::runReference(args);
