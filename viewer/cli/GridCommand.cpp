@@ -287,7 +287,7 @@ int runGrid(const std::vector<std::string>& args) {
                 up == UpAxis::Y ? v0 : v1, " to ", up == UpAxis::Y ? v1 : v0, " ", unitName, " top to bottom (",
                 g.columns, " x ", g.rows, " cells of ", fixed(g.cellU, 3), " x ", fixed(g.cellV, 3), " ", unitName,
                 ", margin ", plane.margin, " ", unitName, "). Lux interpolated between the cells' centres on a log "
-                "scale; black lines at the 1-2-5 iso-lux levels; grey: outside the plane",
+                "scale; black lines at the 1-2-5 iso-lux levels; dark grey: outside the plane",
                 wp.skipped ? " or inside solid objects." : ".");
         }
         report.notes.push_back(

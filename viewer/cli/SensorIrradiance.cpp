@@ -107,14 +107,14 @@ SensorReadings measurePath(const Scene& scene, const SensorSettings& s, const st
     return r;
 }
 
-// --method raytrace: the ray-traced peer of the jittered sampler (same
-// frusta, jitter and estimators, Embree shadow rays instead of rasterising).
-SensorReadings measureRaytrace(const Scene& scene, const SensorSettings& s, const std::vector<SensorPoint>& points,
-                               const char* label, const InterruptGuard* interrupt) {
-    const EmbreeScene rays(scene);
-    const RayTracedLightSampler sampler(rays, s.raytrace);
-    const int passes = s.direct.passes;
-    SensorReadings r;
+// Direct light at each point, `passes` estimates per light with the raster
+// sampler's seeds (so the raster sampler and its ray-traced peer draw the
+// same jitter), plus `indirectAt` where given; appended to r.values, point
+// after point, until an interrupt (if any) after the point under way.
+template <typename Sampler>
+void measureDirect(Sampler& sampler, const Scene& scene, const std::vector<SensorPoint>& points, int passes,
+                   uint32_t seed, const std::vector<Rgb>* indirectAt, const char* label,
+                   const InterruptGuard* interrupt, SensorReadings& r) {
     r.samples = passes * int(scene.lights.size());
     Progress progress(label, points.size());
     for (size_t i = 0; i < points.size(); ++i) {
@@ -123,20 +123,30 @@ SensorReadings measureRaytrace(const Scene& scene, const SensorSettings& s, cons
         SensorValue v;
         v.directPerLight.assign(scene.lights.size(), Rgb(0.0));
         for (size_t l = 0; l < scene.lights.size(); ++l) {
-            // The raster sampler's seeds, so both draw the same jitter.
             for (int k = 0; k < passes; ++k)
-                v.directPerLight[l] += sampler.sample(l, p.position, p.normal,
-                                                      seedFor(s.direct.seed, uint32_t(i), uint32_t(l), uint32_t(k)))
-                                           .irradiance;
+                v.directPerLight[l] +=
+                    sampler.sample(l, p.position, p.normal, seedFor(seed, uint32_t(i), uint32_t(l), uint32_t(k)))
+                        .irradiance;
             v.directPerLight[l] /= double(passes);
         }
         v.seconds = secondsSince(t0);
         for (const Rgb& e : v.directPerLight) v.direct += e;
+        if (indirectAt) v.indirect = (*indirectAt)[i];
         r.values.push_back(std::move(v));
         if (interruptedNow(interrupt) && i + 1 < points.size()) break;
         progress.update(i + 1);
     }
     endProgress(progress, r.values.size() == points.size());
+}
+
+// --method raytrace: the ray-traced peer of the jittered sampler (same
+// frusta, jitter and estimators, Embree shadow rays instead of rasterising).
+SensorReadings measureRaytrace(const Scene& scene, const SensorSettings& s, const std::vector<SensorPoint>& points,
+                               const char* label, const InterruptGuard* interrupt) {
+    const EmbreeScene rays(scene);
+    const RayTracedLightSampler sampler(rays, s.raytrace);
+    SensorReadings r;
+    measureDirect(sampler, scene, points, s.direct.passes, s.direct.seed, nullptr, label, interrupt, r);
     return r;
 }
 
@@ -232,30 +242,9 @@ SensorReadings measureCache(const Scene& scene, SensorSettings& s, const std::ve
     // A signal during refinement has had its effect: the points are all evaluated.
     const InterruptGuard* pointsInterrupt = r.interrupted ? nullptr : interrupt;
 
-    const DirectChoice& choice = s.direct;
-    ConfiguredDirectSampler sampler(scene, choice);
-    r.samples = choice.passes * int(scene.lights.size());
-    Progress progress(label, points.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-        const SensorPoint& p = points[i];
-        const auto t0 = Clock::now();
-        SensorValue v;
-        v.directPerLight.assign(scene.lights.size(), Rgb(0.0));
-        for (size_t l = 0; l < scene.lights.size(); ++l) {
-            for (int k = 0; k < choice.passes; ++k)
-                v.directPerLight[l] +=
-                    sampler.sample(l, p.position, p.normal, seedFor(choice.seed, uint32_t(i), uint32_t(l), uint32_t(k)))
-                        .irradiance;
-            v.directPerLight[l] /= double(choice.passes);
-        }
-        v.seconds = secondsSince(t0);
-        for (const Rgb& e : v.directPerLight) v.direct += e;
-        if (s.indirect.enabled) v.indirect = indirectAt[i];
-        r.values.push_back(std::move(v));
-        if (interruptedNow(pointsInterrupt) && i + 1 < points.size()) break;
-        progress.update(i + 1);
-    }
-    endProgress(progress, r.values.size() == points.size());
+    ConfiguredDirectSampler sampler(scene, s.direct);
+    measureDirect(sampler, scene, points, s.direct.passes, s.direct.seed, r.indirect ? &indirectAt : nullptr, label,
+                  pointsInterrupt, r);
     return r;
 }
 
