@@ -28,10 +28,12 @@
 #include "core/image/Photometry.h"
 #include "core/image/ToneMap.h"
 #include "viewer/window/DisplayState.h"
+#include "viewer/window/ViewLights.h"
 #include "viewer/window/ViewScript.h"
 #include "viewer/window/WalkCamera.h"
 
 #include "GlTestContext.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -415,6 +417,173 @@ TEST(DisplayState, ModesChooseWeightsAndQuantities) {
     EXPECT_EQ(compositeQuantity(DisplayMode::Illuminance), CompositeQuantity::Illuminance);
     EXPECT_EQ(compositeQuantity(DisplayMode::Reflectance), CompositeQuantity::Reflectance);
     EXPECT_EQ(compositeQuantity(DisplayMode::Light), CompositeQuantity::Radiance);
+}
+
+// --- Light groups and punctual lights -------------------------------------------
+
+namespace {
+
+// A white isotropic point light of `candela` at p, in `group`.
+Light pointLight(const std::string& name, const std::string& group, const Vec3& p, double candela) {
+    Light l;
+    l.name = name;
+    l.group = group;
+    l.kind = LightKind::Point;
+    l.emission.position = p;
+    l.emission.intensity = Rgb(candela / kRadianceEfficacy);
+    return l;
+}
+
+// A 10 × 10 floor of the given unit, the lights given (finalized).
+Scene floorWith(std::vector<Light> lights, double metresPerUnit = 1) {
+    Scene scene;
+    scene.name = "floor";
+    scene.materials = {Material::diffuse("grey", Rgb(0.5))};
+    scene.meshes = {test::quadMesh("floor", 0, Vec3(-5, 0, -5), 10.0 * test::kZ, 10.0 * test::kX)};
+    scene.metresPerUnit = metresPerUnit;
+    scene.lights = std::move(lights);
+    scene.finalize();
+    return scene;
+}
+
+}  // namespace
+
+TEST(ViewLights, PointLightOfICandelaGivesFourPiILumens) {
+    // Φ = ∫ I dω = 4π I for an isotropic point, whatever the lengths are in:
+    // the scene in metres or millimetres, and --units saying either.
+    const double candela = 1000;
+    for (double metresPerUnit : {1.0, 0.001}) {
+        const Scene scene = floorWith({pointLight("bulb", "", Vec3(0, 2 / metresPerUnit, 0), candela)}, metresPerUnit);
+        ASSERT_EQ(scene.lights.size(), 1u);
+        for (double unit : {1.0, 0.001}) {
+            const ViewLight v = viewLight(scene.lights[0], scene, unit, Photometry());
+            EXPECT_NEAR(v.lumens, 4 * kPi * candela, 1e-9 * candela) << metresPerUnit << " m per unit, --units " << unit;
+            EXPECT_EQ(v.kind, "point");
+            EXPECT_NE(v.details.find("peak 1000 cd"), std::string::npos) << v.details;
+        }
+    }
+    // An area light's flux is π Ke A, A in the viewer's unit.
+    Scene lit = test::sceneOf("lit", {Material::diffuse("lamp", Rgb(0.0), Rgb(2.0)), Material::diffuse("grey", Rgb(0.5))},
+                              {test::unitLight(), test::floorMesh()});
+    const ViewLight area = viewLight(lit.lights[0], lit, 0.1, Photometry());
+    EXPECT_EQ(area.kind, "area");
+    EXPECT_NEAR(area.lumens, kRadianceEfficacy * kPi * 2.0 * 0.01, 1e-12);
+}
+
+TEST(ViewLights, GroupsFollowTheLightsGroupOrTheirName) {
+    const Scene scene = floorWith({pointLight("Spot.001", "Spot", Vec3(1, 2, 0), 100),
+                                   pointLight("Bulb", "", Vec3(0, 2, 0), 100),
+                                   pointLight("Spot.002", "Spot", Vec3(-1, 2, 0), 100)});
+    const std::vector<LightGroup> groups = lightGroups(scene.lights);
+    ASSERT_EQ(groups.size(), 2u);
+    EXPECT_EQ(groups[0].name, "Spot");
+    EXPECT_EQ(groups[0].lights, (std::vector<size_t>{0, 2}));
+    EXPECT_EQ(groups[1].name, "Bulb");
+    EXPECT_EQ(groups[1].lights, (std::vector<size_t>{1}));
+    EXPECT_EQ(describeGroups(groups), "'Spot' (2 lights), 'Bulb'");
+}
+
+TEST(ViewLights, DimmingAGroupIsDimmingEachOfItsLights) {
+    const Scene scene = floorWith({pointLight("Spot.001", "Spot", Vec3(1, 2, 0), 100),
+                                   pointLight("Spot.002", "Spot", Vec3(-1, 2, 0), 300),
+                                   pointLight("Bulb", "", Vec3(0, 2, 0), 50)});
+    const std::vector<LightGroup> groups = lightGroups(scene.lights);
+    std::vector<Rgb> powers;
+    for (const Light& l : scene.lights) powers.push_back(viewLight(l, scene, 1, Photometry()).powerW);
+    // Punctual lights weigh in the indirect light's mean by their power.
+    EXPECT_GT(powers[0].r, 0);
+    for (DisplayMode mode : {DisplayMode::Final, DisplayMode::Direct, DisplayMode::Indirect}) {
+        SCOPED_TRACE(displayModeName(mode));
+        DisplayState d;
+        d.mode = mode;
+        std::vector<LightControl> byGroup(3), each(3);
+        dimGroup(byGroup, groups[0], 0.5);
+        each[0].intensity = 0.5;
+        each[1].intensity = 0.5;
+        LightWeights g = compositeWeights(d, byGroup, powers), e = compositeWeights(d, each, powers);
+        EXPECT_EQ(g.light, e.light);
+        EXPECT_EQ(g.indirect, e.indirect);
+        EXPECT_EQ(g.shared, e.shared);
+        // Off likewise; the bulb is untouched.
+        switchGroup(byGroup, groups[0], false);
+        EXPECT_FALSE(groupOn(byGroup, groups[0]));
+        each[0].on = each[1].on = false;
+        g = compositeWeights(d, byGroup, powers);
+        e = compositeWeights(d, each, powers);
+        EXPECT_EQ(g.light, e.light);
+        EXPECT_EQ(g.indirect, e.indirect);
+        if (mode != DisplayMode::Indirect) {
+            EXPECT_EQ(g.light[2], Rgb(1.0));
+        }
+        // Off and on again keeps the dimmer.
+        switchGroup(byGroup, groups[0], true);
+        EXPECT_EQ(byGroup[1].weight(), Rgb(0.5));
+    }
+    // All off: no indirect light is left (the punctual lights' powers count).
+    std::vector<LightControl> off(3);
+    for (const LightGroup& group : groups) switchGroup(off, group, false);
+    EXPECT_EQ(indirectWeight(off, powers), Rgb(0.0));
+}
+
+TEST(ViewScript, GroupsParseResolveAndSwitchTheirLights) {
+    ViewScript s = parseViewScript("group Spot off\n"
+                                   "group Spot dim 0.5   # comment\n"
+                                   "group \"Ceiling Light\" on\n"
+                                   "light Panel#2 off\n",
+                                   "g.txt");
+    ASSERT_EQ(s.actions.size(), 4u);
+    EXPECT_EQ(s.actions[0].kind, ScriptAction::Kind::Group);
+    EXPECT_EQ(s.actions[0].change, ScriptAction::LightChange::Off);
+    EXPECT_EQ(s.actions[1].change, ScriptAction::LightChange::Intensity);
+    EXPECT_EQ(s.actions[1].number, 0.5);
+    EXPECT_EQ(s.actions[2].lightName, "Ceiling Light");
+    EXPECT_EQ(s.actions[3].lightName, "Panel#2");  // '#' inside a word is no comment
+    const std::vector<LightGroup> groups = {{"Spot", {0, 2}}, {"Ceiling Light", {1}}, {"Panel#2", {3}}};
+    resolveViewScript(s, {"Spot.001", "Ceiling Light", "Spot.002", "Panel#2"}, groups);
+    EXPECT_EQ(s.actions[0].group.lights, (std::vector<size_t>{0, 2}));
+    EXPECT_EQ(s.actions[3].light, 3u);
+
+    FakeHost host;
+    host.controls.resize(4);
+    ScriptPlayer player(s);
+    player.advance(0, host);
+    EXPECT_TRUE(player.finished());
+    EXPECT_FALSE(host.controls[0].on);  // off, then dimmed: dimming leaves the switch off
+    EXPECT_EQ(host.controls[0].weight(), Rgb(0.0));
+    EXPECT_FALSE(host.controls[2].on);
+    EXPECT_EQ(host.controls[2].intensity, 0.5);
+    EXPECT_EQ(host.controls[1].intensity, 1.0);
+    EXPECT_FALSE(host.controls[3].on);
+    EXPECT_EQ(host.lightChanges, 4);
+
+    // Errors name the line; an unknown group lists the scene's.
+    const std::vector<std::pair<std::string, std::string>> bad = {
+        {"wait 0\ngroup Spot\n", "g.txt:2: 'group' takes the group's name and on, off or dim F"},
+        {"group Spot dim\n", "g.txt:1: 'group Spot dim' takes one number"},
+        {"group Spot dim -1\n", "g.txt:1: group dim -1 is not within 0..1e6"},
+        {"group Spot dim half\n", "g.txt:1: group dim 'half' is not a finite number"},
+        {"group Spot toggle\n", "g.txt:1: unknown group change 'toggle' (use on, off or dim F)"},
+        {"group Spot on now\n", "g.txt:1: 'group Spot on' takes no further argument"},
+        {"group \"Ceiling Light on\n", "g.txt:1: a quoted name has no closing"},
+    };
+    for (const auto& [text, message] : bad) {
+        try {
+            parseViewScript(text, "g.txt");
+            ADD_FAILURE() << "no error for: " << text;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what() << "\nexpected: " << message;
+        }
+    }
+    ViewScript unknown = parseViewScript("wait 0\ngroup Panel off\n", "g.txt");
+    try {
+        resolveViewScript(unknown, {"Spot.001", "Bulb", "Spot.002"}, {{"Spot", {0, 2}}, {"Bulb", {1}}});
+        ADD_FAILURE() << "no error for an unknown group";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("g.txt:2: no light group 'Panel' in the scene (groups: 'Spot' (2 "
+                                             "lights), 'Bulb')"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 // --- Illuminance -------------------------------------------------------------

@@ -99,6 +99,17 @@ TEST_F(ViewCli, MalformedScriptsNameFileAndLine) {
         << r.output;
 }
 
+TEST_F(ViewCli, UnknownLightGroupListsTheScenesGroups) {
+    const std::string scene = std::string(MESHLIGHT_TEST_DATA) + "/../../data/spot_room.gltf";
+    const std::string s = write("group.txt", "wait-done\ngroup Panel off\n");
+    const CommandResult r = runMeshlight("view " + scene + " --script " + s);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find(s + ":2: no light group 'Panel' in the scene (groups: 'Spot' (2 lights), 'Bulb')"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("OpenGL"), std::string::npos) << "no window may open: " << r.output;
+}
+
 TEST_F(ViewCli, BadOptionsAndMissingFiles) {
     CommandResult r = runMeshlight("view cornell --frobnicate 3");
     EXPECT_EQ(r.status, 2);
@@ -219,6 +230,46 @@ TEST_F(ViewWindow, LightsSwitchDimAndShowAloneLinearly) {
     EXPECT_TRUE(floorSeen);
     EXPECT_GT(lit, size_t(kd.width * kd.height / 10));
     EXPECT_TRUE(fs::exists(path("lux.png")));
+}
+
+TEST_F(ViewWindow, AGroupSwitchesAndDimsAsItsLights) {
+    // Two spots in group 'Spot' and a bulb, all punctual: no emitting faces,
+    // each light's image only its cache mesh.
+    const std::string scene = std::string(MESHLIGHT_TEST_DATA) + "/../../data/spot_room.gltf";
+    const std::string s = write("groups.txt", concat("wait-done\n"
+                                                     "screenshot ", path("all.exr"), "\n"
+                                                     "group Spot off\n"
+                                                     "screenshot ", path("spotsOff.exr"), "\n"
+                                                     "group Spot on\n"
+                                                     "mode light Bulb\n"
+                                                     "screenshot ", path("bulb.exr"), "\n"
+                                                     "mode final\n"
+                                                     "group Spot dim 0.5\n"
+                                                     "screenshot ", path("groupHalf.exr"), "\n"
+                                                     "group Spot dim 1\n"
+                                                     "light Spot.001 intensity 0.5\n"
+                                                     "light Spot.002 intensity 0.5\n"
+                                                     "screenshot ", path("eachHalf.exr"), "\n"
+                                                     "quit\n"));
+    CommandResult v = runMeshlight("view " + scene + " --script " + s +
+                                   " --width 80 --height 60 --samples 3000 --direct-only --supersample 2"
+                                   " --light-share 0");  // a mesh per light everywhere: relighting is exact
+    ASSERT_EQ(v.status, 0) << v.output;
+    // The viewer lists each luminaire's flux (plan's: 462.8 lm a spot, 1659 lm the bulb).
+    EXPECT_NE(v.output.find("'Spot.001' spot 462.8 lm"), std::string::npos) << v.output;
+    EXPECT_NE(v.output.find("group 'Spot': 2 lights, 925.6 lm"), std::string::npos) << v.output;
+    const ImageRgb all = readImageLinear(path("all.exr")), spotsOff = readImageLinear(path("spotsOff.exr")),
+                   bulb = readImageLinear(path("bulb.exr")), groupHalf = readImageLinear(path("groupHalf.exr")),
+                   eachHalf = readImageLinear(path("eachHalf.exr"));
+    // The group off is the bulb alone, and the group dimmed is each light
+    // dimmed: the same weights, the same image.
+    EXPECT_EQ(spotsOff.data, bulb.data) << "[exact]";
+    EXPECT_EQ(groupHalf.data, eachHalf.data) << "[exact]";
+    EXPECT_NE(all.data, spotsOff.data) << "the spots light something in view";
+    // Half the spots: (all + bulb alone) / 2.
+    ImageRgb expected = all;
+    for (size_t i = 0; i < expected.data.size(); ++i) expected.data[i] = 0.5f * (all.data[i] + bulb.data[i]);
+    expectLinear(groupHalf, expected, "bulb + spots / 2");
 }
 
 TEST_F(ViewWindow, CtrlCStopsTheWorkerCleanly) {

@@ -46,8 +46,8 @@ int runView(const std::vector<std::string>& args) {
             std::string("0"));
     o.value("cache", "FILE", "resume from this cache file if it exists; 'save cache' and the end of the session "
                              "save to it");
-    o.value("units", "mm|cm|m", "the scene's length unit, for walking speed, positions and light power (lux does "
-                                "not depend on it); default mm for cornell, m otherwise");
+    o.value("units", "mm|cm|m", "the scene's length unit, for walking speed, positions and area lights' power (lux "
+                                "and punctual lights' power do not depend on it); default mm for cornell, m otherwise");
     declarePhotometryOption(o);
     o.value("efficacy", "LM_PER_W", "luminous efficacy turning irradiance (W/m2) into lux, in place of the "
                                     "photometry's 179 (RADIANCE's equal-energy white)");
@@ -101,7 +101,7 @@ int runView(const std::vector<std::string>& args) {
     if (script) {
         std::vector<std::string> names;
         for (const Light& l : scene.lights) names.push_back(l.name);
-        resolveViewScript(*script, names);
+        resolveViewScript(*script, names, lightGroups(scene.lights));
         s.script = std::move(*script);
     }
     s.camera = cameraFromOptions(o, scene, double(s.width) / s.height);

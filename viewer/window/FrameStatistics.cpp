@@ -15,13 +15,15 @@ void FrameStatistics::add(const FrameRecord& f, double end) {
     frames_.push_back(f);
 }
 
-void FrameStatistics::printStatus(double seconds, size_t vertices, uint64_t samples, double estimatedError, bool now) {
+void FrameStatistics::printStatus(double seconds, size_t vertices, uint64_t samples, double estimatedError,
+                                  const std::string& lights, bool now) {
     if (!now && seconds - lastStatus_ < 1.0) return;
     static const bool terminal = ::isatty(STDERR_FILENO) != 0;
     lastStatus_ = seconds;
-    std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s%s",
+    std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s; %s%s",
                  terminal ? "\r" : "", seconds, vertices, static_cast<unsigned long long>(samples),
-                 100 * estimatedError, frameMsAverage_ > 0 ? 1e3 / frameMsAverage_ : 0.0, terminal ? "   " : "\n");
+                 100 * estimatedError, frameMsAverage_ > 0 ? 1e3 / frameMsAverage_ : 0.0, lights.c_str(),
+                 terminal ? "   " : "\n");
     std::fflush(stderr);
 }
 

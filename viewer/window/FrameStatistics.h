@@ -7,6 +7,7 @@
 #include "ViewSession.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace ml {
@@ -28,7 +29,9 @@ public:
     // "view 12.3 s: N vertices, M samples, estimated error E%, F frames/s",
     // on stderr, at most once a second unless `now`; redrawn in place on a
     // terminal.
-    void printStatus(double seconds, size_t vertices, uint64_t samples, double estimatedError, bool now = false);
+    // `lights`: what the lights give as set now ("925.6 lm, 2 of 3 lights on").
+    void printStatus(double seconds, size_t vertices, uint64_t samples, double estimatedError,
+                     const std::string& lights, bool now = false);
     // Frames drawn, median and 95th percentile, first (lit) frame, on stdout.
     void printSummary() const;
 

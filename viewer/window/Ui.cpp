@@ -83,6 +83,69 @@ void luxLegend(UiModel& m) {
     ImGui::End();
 }
 
+// One light's switch, flux, intensity and colour. True when changed.
+bool lightControls(UiModel& m, size_t l) {
+    ImGui::PushID(int(l));
+    const ViewLight& info = m.lightInfo[l];
+    LightControl& c = (*m.lights)[l];
+    bool changed = ImGui::Checkbox("##on", &c.on);
+    ImGui::SameLine();
+    ImGui::Text("%zu '%s' (%s): %.4g lm", l, info.name.c_str(), info.kind.c_str(),
+                m.photometry.luminous(info.powerW * c.weight()));
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("As in the scene: %s,\npower (%.3g, %.3g, %.3g) W, %.4g lm at %.0f lm/W", info.details.c_str(),
+                          info.powerW.r, info.powerW.g, info.powerW.b, info.lumens, m.photometry.efficacy);
+    float intensity = float(c.intensity);
+    if (ImGui::SliderFloat("intensity", &intensity, 0.0f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic)) {
+        c.intensity = intensity;
+        changed = true;
+    }
+    float colour[3] = {float(c.colour.r), float(c.colour.g), float(c.colour.b)};
+    if (ImGui::ColorEdit3("colour", colour, ImGuiColorEditFlags_Float)) {
+        c.colour = Rgb(colour[0], colour[1], colour[2]);
+        changed = true;
+    }
+    ImGui::PopID();
+    return changed;
+}
+
+// A group of lights: one switch and one dimmer for all (ViewLights.h), its
+// flux, and its lights' own controls when opened. True when changed.
+bool groupControls(UiModel& m, const LightGroup& g) {
+    std::vector<LightControl>& lights = *m.lights;
+    ImGui::PushID(("group " + g.name).c_str());
+    bool changed = false;
+    bool on = groupOn(lights, g);
+    if (ImGui::Checkbox("##on", &on)) {
+        switchGroup(lights, g, on);
+        changed = true;
+    }
+    ImGui::SameLine();
+    double lumens = 0, sceneLumens = 0;
+    bool alike = true;
+    for (size_t l : g.lights) {
+        lumens += m.photometry.luminous(m.lightInfo[l].powerW * lights[l].weight());
+        sceneLumens += m.lightInfo[l].lumens;
+        alike = alike && lights[l].intensity == lights[g.lights[0]].intensity;
+    }
+    const bool open = ImGui::TreeNode("##lights", "group '%s': %zu lights, %.4g lm", g.name.c_str(), g.lights.size(),
+                                      lumens);
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%.4g lm as in the scene; the switch and the dimmer set each of its lights", sceneLumens);
+    float dimmer = float(lights[g.lights[0]].intensity);
+    if (ImGui::SliderFloat("dimmer", &dimmer, 0.0f, 10.0f, alike ? "%.3f" : "%.3f (lights differ)",
+                           ImGuiSliderFlags_Logarithmic)) {
+        dimGroup(lights, g, std::max(0.0f, dimmer));
+        changed = true;
+    }
+    if (open) {
+        for (size_t l : g.lights) changed |= lightControls(m, l);
+        ImGui::TreePop();
+    }
+    ImGui::PopID();
+    return changed;
+}
+
 }  // namespace
 
 Ui::Ui(GLFWwindow* window, const std::string& screenshotPath, const std::string& cachePath) {
@@ -175,7 +238,9 @@ UiRequests Ui::build(UiModel& m) {
         if (ImGui::Combo("mode", &mode, modes, IM_ARRAYSIZE(modes))) d.mode = DisplayMode(mode);
         if (d.mode == DisplayMode::Light && !m.lightInfo.empty()) {
             int light = int(std::min(d.light, m.lightInfo.size() - 1));
-            if (ImGui::SliderInt("light", &light, 0, int(m.lightInfo.size()) - 1, m.lightInfo[size_t(light)].name.c_str()))
+            const ViewLight& shown = m.lightInfo[size_t(light)];
+            if (ImGui::SliderInt("light", &light, 0, int(m.lightInfo.size()) - 1,
+                                 concat(shown.name, " (", shown.kind, ")").c_str()))
                 d.light = size_t(light);
         }
         if (d.mode == DisplayMode::Indirect && s.indirectMeshes == 0)
@@ -212,30 +277,11 @@ UiRequests Ui::build(UiModel& m) {
 
     // --- Lights ---------------------------------------------------------------
     if (ImGui::CollapsingHeader("Lights", ImGuiTreeNodeFlags_DefaultOpen)) {
-        std::vector<LightControl>& lights = *m.lights;
-        for (size_t l = 0; l < lights.size(); ++l) {
-            ImGui::PushID(int(l));
-            const UiLightInfo& info = m.lightInfo[l];
-            LightControl& c = lights[l];
-            r.lightsChanged |= ImGui::Checkbox("##on", &c.on);
-            ImGui::SameLine();
-            ImGui::Text("%zu '%s': %.4g lm", l, info.name.c_str(), m.photometry.luminous(info.powerW * c.weight()));
-            if (ImGui::IsItemHovered())
-                ImGui::SetTooltip("As in the scene: Ke (%.3g, %.3g, %.3g) W/sr/m2, area %.4g m2,\n"
-                                  "power (%.3g, %.3g, %.3g) W, %.4g lm at %.0f lm/W",
-                                  info.radiance.r, info.radiance.g, info.radiance.b, info.areaM2, info.powerW.r,
-                                  info.powerW.g, info.powerW.b, info.lumens, m.photometry.efficacy);
-            float intensity = float(c.intensity);
-            if (ImGui::SliderFloat("intensity", &intensity, 0.0f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic)) {
-                c.intensity = intensity;
-                r.lightsChanged = true;
-            }
-            float colour[3] = {float(c.colour.r), float(c.colour.g), float(c.colour.b)};
-            if (ImGui::ColorEdit3("colour", colour, ImGuiColorEditFlags_Float)) {
-                c.colour = Rgb(colour[0], colour[1], colour[2]);
-                r.lightsChanged = true;
-            }
-            ImGui::PopID();
+        for (const LightGroup& g : m.groups) {
+            if (g.lights.size() == 1)
+                r.lightsChanged |= lightControls(m, g.lights[0]);
+            else
+                r.lightsChanged |= groupControls(m, g);
         }
         ImGui::TextWrapped("Indirect light x(%.2f, %.2f, %.2f): the lights' power-weighted mean, exact when all "
                            "lights change alike (it is cached per bounce, not per light).",

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "DisplayState.h"
+#include "ViewLights.h"
 #include "core/image/Illuminance.h"
 #include "core/image/Photometry.h"
 
@@ -20,15 +21,6 @@
 struct GLFWwindow;
 
 namespace ml {
-
-// What the panel shows about one light.
-struct UiLightInfo {
-    std::string name;
-    Rgb radiance{0.0};  // Ke, W·sr⁻¹·m⁻²
-    double areaM2 = 0;  // area in m², from the scene's unit
-    Rgb powerW{0.0};    // Φ = π Ke A, W per channel
-    double lumens = 0;  // Photometry::luminous(Φ)
-};
 
 struct UiStats {
     double elapsed = 0;        // seconds since the viewer started
@@ -47,7 +39,8 @@ struct UiStats {
 struct UiModel {
     DisplayState* display = nullptr;
     std::vector<LightControl>* lights = nullptr;
-    std::vector<UiLightInfo> lightInfo;
+    std::vector<ViewLight> lightInfo;  // per scene light
+    std::vector<LightGroup> groups;     // the panel lists the lights by group
     Rgb indirectWeight{1.0};
     // Where lights share a cache mesh (LightCoverage): one line saying where
     // changing a light is exact and where approximate; empty: every light

@@ -3,6 +3,7 @@
 #include "core/image/Image.h"
 #include "core/io/AtomicFile.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -17,7 +18,7 @@ namespace {
 using Kind = ScriptAction::Kind;
 
 const char* const kActions =
-    "camera, wait, wait-samples, wait-error, wait-done, mode, wireframe, contours, ui, light, exposure, tonemap, "
+    "camera, wait, wait-samples, wait-error, wait-done, mode, wireframe, contours, ui, light, group, exposure, tonemap, "
     "lux-range, pause, resume, screenshot, save-cache, quit";
 
 double parseNumber(const std::string& token, const std::string& what, const SourceLocation& where) {
@@ -94,6 +95,33 @@ ScriptAction parseCamera(const std::vector<std::string>& t, const SourceLocation
     return a;
 }
 
+// What `light N ...` or `group NAME ...` changes, from t[2] on: on, off,
+// `scale` X (its intensity: "intensity" or "dim") or, with `colour`, color R,G,B.
+void parseLightChange(const std::vector<std::string>& t, const std::string& scale, bool colour, ScriptAction& a,
+                      const SourceLocation& where) {
+    const std::string& what = t[2];
+    const std::string line = concat("'", t[0], " ", t[1], " ", what, "'");
+    if (what == "on" || what == "off") {
+        if (t.size() != 3) throwInputError(where, line, " takes no further argument");
+        a.change = what == "on" ? ScriptAction::LightChange::On : ScriptAction::LightChange::Off;
+    } else if (what == scale) {
+        if (t.size() != 4) throwInputError(where, line, " takes one number");
+        a.change = ScriptAction::LightChange::Intensity;
+        a.number = parseNumber(t[3], t[0] + " " + scale, where);
+        if (a.number < 0 || a.number > 1e6) throwInputError(where, t[0], " ", scale, " ", t[3], " is not within 0..1e6");
+    } else if (colour && (what == "color" || what == "colour")) {
+        if (t.size() != 4) throwInputError(where, line, " takes R,G,B");
+        a.change = ScriptAction::LightChange::Colour;
+        a.colour = parseVec3(t[3], t[0] + " color", where);
+        if (a.colour.r < 0 || a.colour.g < 0 || a.colour.b < 0)
+            throwInputError(where, t[0], " color ", t[3], " has a negative component");
+    } else {
+        throwInputError(where, "unknown ", t[0], " change '", what, "' (use ",
+                        colour ? concat("on, off, ", scale, " X or color R,G,B") : concat("on, off or ", scale, " F"),
+                        ")");
+    }
+}
+
 ScriptAction parseLine(const std::vector<std::string>& t, const SourceLocation& where) {
     ScriptAction a;
     a.where = where;
@@ -149,24 +177,12 @@ ScriptAction parseLine(const std::vector<std::string>& t, const SourceLocation& 
             throwInputError(where, "'light' takes the light (index or name) and on, off, intensity X or color R,G,B");
         a.kind = Kind::Light;
         a.lightName = t[1];
-        const std::string& what = t[2];
-        if (what == "on" || what == "off") {
-            if (t.size() != 3) throwInputError(where, "'light ", t[1], " ", what, "' takes no further argument");
-            a.change = what == "on" ? ScriptAction::LightChange::On : ScriptAction::LightChange::Off;
-        } else if (what == "intensity") {
-            if (t.size() != 4) throwInputError(where, "'light ", t[1], " intensity' takes one number");
-            a.change = ScriptAction::LightChange::Intensity;
-            a.number = parseNumber(t[3], "light intensity", where);
-            if (a.number < 0 || a.number > 1e6) throwInputError(where, "light intensity ", t[3], " is not within 0..1e6");
-        } else if (what == "color" || what == "colour") {
-            if (t.size() != 4) throwInputError(where, "'light ", t[1], " color' takes R,G,B");
-            a.change = ScriptAction::LightChange::Colour;
-            a.colour = parseVec3(t[3], "light color", where);
-            if (a.colour.r < 0 || a.colour.g < 0 || a.colour.b < 0)
-                throwInputError(where, "light color ", t[3], " has a negative component");
-        } else {
-            throwInputError(where, "unknown light change '", what, "' (use on, off, intensity X or color R,G,B)");
-        }
+        parseLightChange(t, "intensity", true, a, where);
+    } else if (name == "group") {
+        if (t.size() < 3) throwInputError(where, "'group' takes the group's name and on, off or dim F");
+        a.kind = Kind::Group;
+        a.lightName = t[1];
+        parseLightChange(t, "dim", false, a, where);
     } else if (name == "exposure") {
         expectArguments(t, 1, 1, "stops EV or auto", where);
         if (t[1] == "auto") {
@@ -218,6 +234,35 @@ ScriptAction parseLine(const std::vector<std::string>& t, const SourceLocation& 
     return a;
 }
 
+// A line's words: separated by white space, a "quoted name" one word with
+// its spaces, a '#' at the start of a word the start of a comment ("Panel#2"
+// is a name, as Scene::finalize names lights).
+std::vector<std::string> splitWords(const std::string& line, const SourceLocation& where) {
+    std::vector<std::string> words;
+    size_t i = 0;
+    const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+    while (i < line.size()) {
+        if (space(line[i])) {
+            ++i;
+            continue;
+        }
+        if (line[i] == '#') break;
+        if (line[i] == '"') {
+            const size_t close = line.find('"', i + 1);
+            if (close == std::string::npos) throwInputError(where, "a quoted name has no closing '\"'");
+            words.push_back(line.substr(i + 1, close - i - 1));
+            i = close + 1;
+            if (i < line.size() && !space(line[i]))
+                throwInputError(where, "'", line.substr(close + 1), "' follows a quoted name without a space");
+            continue;
+        }
+        const size_t start = i;
+        while (i < line.size() && !space(line[i])) ++i;
+        words.push_back(line.substr(start, i - start));
+    }
+    return words;
+}
+
 }  // namespace
 
 ViewScript parseViewScript(const std::string& text, const std::string& file) {
@@ -230,12 +275,7 @@ ViewScript parseViewScript(const std::string& text, const std::string& file) {
     while (std::getline(in, line)) {
         ++number;
         const SourceLocation where{file, number};
-        const size_t hash = line.find('#');
-        if (hash != std::string::npos) line.erase(hash);
-        std::istringstream words(line);
-        std::vector<std::string> tokens;
-        std::string w;
-        while (words >> w) tokens.push_back(w);
+        const std::vector<std::string> tokens = splitWords(line, where);
         if (tokens.empty()) continue;
         ScriptAction a = parseLine(tokens, where);
         if (a.kind == Kind::Camera && !a.relative) {
@@ -260,8 +300,18 @@ ViewScript loadViewScript(const std::string& path) {
     return parseViewScript(text.str(), path);
 }
 
-void resolveViewScript(ViewScript& script, const std::vector<std::string>& lightNames) {
+void resolveViewScript(ViewScript& script, const std::vector<std::string>& lightNames,
+                       const std::vector<LightGroup>& groups) {
     for (ScriptAction& a : script.actions) {
+        if (a.kind == Kind::Group) {
+            const auto g = std::find_if(groups.begin(), groups.end(),
+                                        [&](const LightGroup& x) { return x.name == a.lightName; });
+            if (g == groups.end())
+                throwInputError(a.where, "no light group '", a.lightName, "' in the scene (",
+                                groups.empty() ? std::string("it has no lights") : "groups: " + describeGroups(groups),
+                                ")");
+            a.group = *g;
+        }
         const bool namesLight = a.kind == Kind::Light || (a.kind == Kind::Mode && a.mode == DisplayMode::Light);
         if (namesLight) {
             bool found = false;
@@ -374,6 +424,13 @@ bool ScriptPlayer::run(const ScriptAction& a, double now, ScriptHost& host, bool
             host.lightsChanged();
             return true;
         }
+        case Kind::Group:
+            if (a.change == ScriptAction::LightChange::Intensity)
+                dimGroup(host.lights(), a.group, a.number);
+            else
+                switchGroup(host.lights(), a.group, a.change == ScriptAction::LightChange::On);
+            host.lightsChanged();
+            return true;
         case Kind::Exposure: d.exposureEV = a.number; return true;
         case Kind::ExposureAuto: host.meterExposure(); return true;
         case Kind::Tonemap: d.op = a.op; return true;

@@ -19,11 +19,16 @@
 //                      (wireframe: final with the cache meshes' edges on)
 //   wireframe on|off   contours on|off   ui on|off
 //   light N on|off|intensity X|color R,G,B      (N: index from 0 or the light's name)
+//   group NAME on|off|dim F   every light of the group (ViewLights.h) on, off,
+//                      or at intensity F; NAME as the panel lists it
 //   exposure EV|auto   tonemap aces|reinhard|clamp   lux-range MIN MAX|auto
 //   pause | resume     refinement
 //   screenshot FILE    .png: the window as shown; .exr/.hdr: the linear
 //                      image of the mode (radiance, reflectance or lux)
 //   save-cache FILE    quit
+//
+// A name with spaces is written in double quotes ("Ceiling Light"); '#'
+// starts a comment at the start of a word only, so "Panel#2" is a name.
 //
 // Script time is wall-clock seconds since the script started, or
 // frames × --script-step when that is given (deterministic frame timing).
@@ -32,6 +37,7 @@
 #pragma once
 
 #include "DisplayState.h"
+#include "ViewLights.h"
 #include "core/Camera.h"
 #include "core/Error.h"
 
@@ -43,7 +49,7 @@ namespace ml {
 
 struct ScriptAction {
     enum class Kind {
-        Camera, Wait, WaitSamples, WaitError, WaitDone, Mode, Wireframe, Contours, Ui, Light, Exposure,
+        Camera, Wait, WaitSamples, WaitError, WaitDone, Mode, Wireframe, Contours, Ui, Light, Group, Exposure,
         ExposureAuto, Tonemap, LuxRange, LuxRangeAuto, Pause, Resume, Screenshot, SaveCache, Quit,
     };
     enum class LightChange { On, Off, Intensity, Colour };
@@ -62,9 +68,12 @@ struct ScriptAction {
     // Mode
     DisplayMode mode = DisplayMode::Final;
     bool flag = false;     // Wireframe, Contours, Ui: on; Mode: wireframe on
-    // Light (and Mode light N): the light as written, resolved by resolveLights()
+    // Light (and Mode light N): the light as written, resolved by
+    // resolveViewScript(). Group: the group as written, and its lights once
+    // resolved; `change` On, Off or Intensity (dim F).
     std::string lightName;
     size_t light = 0;
+    LightGroup group;
     LightChange change = LightChange::On;
     Rgb colour{1.0};
     ToneOperator op = ToneOperator::Aces;
@@ -85,9 +94,12 @@ ViewScript parseViewScript(const std::string& text, const std::string& file);
 ViewScript loadViewScript(const std::string& path);
 
 // Checks the script against the scene before anything opens: light names
-// and indices exist (sets ScriptAction::light), keyframe cameras are valid,
-// screenshot and cache folders exist. InputError naming the line otherwise.
-void resolveViewScript(ViewScript& script, const std::vector<std::string>& lightNames);
+// and indices exist (sets ScriptAction::light), groups exist (sets
+// ScriptAction::group; the error lists the scene's), keyframe cameras are
+// valid, screenshot and cache folders exist. InputError naming the line
+// otherwise.
+void resolveViewScript(ViewScript& script, const std::vector<std::string>& lightNames,
+                       const std::vector<LightGroup>& groups = {});
 
 // What the player needs from the viewer. Queries answer for the image shown
 // now; commands take effect in the frame being made.

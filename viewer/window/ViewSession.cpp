@@ -5,6 +5,7 @@
 #include "GlfwWindow.h"
 #include "Screenshot.h"
 #include "Ui.h"
+#include "ViewLights.h"
 #include "ViewRefinement.h"
 #include "WalkCamera.h"
 #include "WindowInput.h"
@@ -78,8 +79,9 @@ struct ViewSession::Impl : ScriptHost {
     Clock::time_point t0 = Clock::now();
 
     std::vector<LightControl> lightControls;
-    std::vector<Rgb> lightPowers;  // W per channel, at the scene's Ke
-    std::vector<UiLightInfo> lightInfo;
+    std::vector<Rgb> lightPowers;  // W per channel, as the scene emits (every kind: ViewLights.h)
+    std::vector<ViewLight> lightInfo;
+    std::vector<LightGroup> groups;
     DisplayState state;
 
     std::unique_ptr<GlfwWindow> window;
@@ -120,14 +122,13 @@ struct ViewSession::Impl : ScriptHost {
     Impl(const Scene& s, const ViewSettings& vs)
         : scene(s), settings(vs), state(vs.display),
           walk(vs.camera, std::max(s.bounds.diagonal(), 1e-30) / 8.0) {
-        const double mpu = metresPerUnit(settings.unit);
         for (const Light& l : scene.lights) {
             lightControls.emplace_back();
-            const double area = l.area * mpu * mpu;
-            const Rgb power = kPi * l.radiance * area;
-            lightPowers.push_back(power);
-            lightInfo.push_back({l.name, l.radiance, area, power, settings.photometry.luminous(power)});
+            lightInfo.push_back(viewLight(l, scene, metresPerUnit(settings.unit), settings.photometry));
+            lightPowers.push_back(lightInfo.back().powerW);
         }
+        groups = lightGroups(scene.lights);
+        if (settings.printProgress) printLights();
         // Before the window: a cache that cannot be resumed is refused first.
         std::unique_ptr<ProgressiveSession> session = ViewRefinement::makeSession(scene, settings);
         if (settings.script) player.emplace(*settings.script);
@@ -253,6 +254,7 @@ struct ViewSession::Impl : ScriptHost {
         m.display = &state;
         m.lights = &lightControls;
         m.lightInfo = lightInfo;
+        m.groups = groups;
         m.indirectWeight = indirectWeight(lightControls, lightPowers);
         UiStats& s = m.stats;
         const ViewRefinement::Shown& shown = refinement->shown();
@@ -332,7 +334,44 @@ struct ViewSession::Impl : ScriptHost {
     void printStatus(bool now = false) {
         const ViewRefinement::Shown& shown = refinement->shown();
         if (settings.printProgress && shown.any)
-            stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError, now);
+            stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError, lightsStatus(), now);
+    }
+
+    // Each luminaire's flux as the scene emits it, once, on stdout: the
+    // first few lights, then each group's total.
+    void printLights() const {
+        constexpr size_t kListed = 8;
+        std::printf("lights (%s):", settings.photometry.describe().c_str());
+        for (size_t l = 0; l < lightInfo.size() && l < kListed; ++l)
+            std::printf("%s '%s' %s %.4g lm", l ? "," : "", lightInfo[l].name.c_str(), lightInfo[l].kind.c_str(),
+                        lightInfo[l].lumens);
+        if (lightInfo.size() > kListed) std::printf(", and %zu more", lightInfo.size() - kListed);
+        if (lightInfo.empty()) std::printf(" none");
+        std::printf("\n");
+        bool any = false;
+        for (const LightGroup& g : groups) {
+            if (g.lights.size() < 2) continue;
+            double lumens = 0;
+            for (size_t l : g.lights) lumens += lightInfo[l].lumens;
+            std::printf("%s group '%s': %zu lights, %.4g lm", any ? "," : "light groups:", g.name.c_str(),
+                        g.lights.size(), lumens);
+            any = true;
+        }
+        if (any) std::printf("\n");
+    }
+
+    // The flux the lights give as they are set now, for the status line:
+    // "925.6 lm, 2 of 3 lights on" and, if any is changed, which.
+    std::string lightsStatus() const {
+        double lumens = 0;
+        size_t on = 0;
+        for (size_t l = 0; l < lightControls.size(); ++l) {
+            lumens += settings.photometry.luminous(lightInfo[l].powerW * lightControls[l].weight());
+            on += lightControls[l].on ? 1 : 0;
+        }
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%.4g lm, %zu of %zu lights on", lumens, on, lightControls.size());
+        return buf;
     }
 
     // The image in the window's back buffer: composited, metered when asked,
