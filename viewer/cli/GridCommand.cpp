@@ -43,10 +43,15 @@ std::vector<std::string> repeatedValues(const std::vector<std::string>& args, co
     return values;
 }
 
-// The built-in Cornell box is in millimetres; the office, the bench, OBJ
-// and glTF files in metres (as `view --units`).
-LengthUnit defaultUnit(const std::string& sceneArg) {
-    return sceneArg == "cornell" ? LengthUnit::Millimetre : LengthUnit::Metre;
+// The scene's length unit: --units, else the scene's own (Scene::metresPerUnit:
+// millimetres for the built-in Cornell box, metres for the office, the bench,
+// OBJ and glTF files), as its name ("mm") and metres per unit.
+std::pair<std::string, double> sceneUnit(const std::optional<LengthUnit>& given, const Scene& scene) {
+    if (given) return {lengthUnitName(*given), metresPerUnit(*given)};
+    for (LengthUnit u : {LengthUnit::Millimetre, LengthUnit::Centimetre, LengthUnit::Metre})
+        if (std::abs(scene.metresPerUnit - metresPerUnit(u)) <= 1e-9 * metresPerUnit(u))
+            return {lengthUnitName(u), metresPerUnit(u)};
+    return {concat("units of ", scene.metresPerUnit, " m"), scene.metresPerUnit};
 }
 
 // The surfaces of a grid file: one per name in its `surface` column, in
@@ -127,7 +132,7 @@ int runGrid(const std::vector<std::string>& args) {
                                    "back of a face first): left out of the grid and the statistics, or kept",
             std::string("skip"));
     o.value("units", "mm|cm|m", "the scene's length unit, for the default spacing, the report and the lights' flux "
-                                "(lux does not depend on it); default mm for cornell, m otherwise");
+                                "(lux does not depend on it); default the scene's own: mm for cornell, m otherwise");
     o.value("out", "FILE.csv", "lux at every point: surface,x,y,z,nx,ny,nz,lux,lux_direct,lux_indirect");
     o.value("summary", "FILE.csv", "per surface: points, average, minimum, maximum, U0 = Emin/Eavg, Emin/Emax");
     o.value("report", "FILE.html", "a one-page HTML report: plan view, statistics, luminaires, settings");
@@ -155,9 +160,8 @@ int runGrid(const std::vector<std::string>& args) {
     if (inside != "skip" && inside != "keep") throw InputError(concat("--inside '", inside, "': expected skip or keep"));
     const UpAxis up = parseUpAxis(o.str("up"));
     const std::string sceneArg = o.positionalValue("scene");
-    const LengthUnit unit = o.has("units") ? parseLengthUnit(o.str("units")) : defaultUnit(sceneArg);
-    const double metres = metresPerUnit(unit);
-    const char* unitName = lengthUnitName(unit);
+    std::optional<LengthUnit> givenUnit;
+    if (o.has("units")) givenUnit = parseLengthUnit(o.str("units"));
     WorkPlaneSettings plane;
     plane.up = up;
     plane.margin = o.number("margin", 0, 1e12);
@@ -171,6 +175,8 @@ int runGrid(const std::vector<std::string>& args) {
     const Scene scene = loadSceneArgument(o.positionalValue("scene"));
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (scene.bounds.empty()) throw InputError(concat("scene '", scene.name, "' has no triangles"));
+    const auto [unitLabel, metres] = sceneUnit(givenUnit, scene);
+    const char* unitName = unitLabel.c_str();
 
     // The surfaces: the work plane first, then the objects, then the file's.
     std::vector<CalculationSurface> made;
