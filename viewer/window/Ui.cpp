@@ -1,6 +1,7 @@
 #include "Ui.h"
 
 #include "core/Error.h"
+#include "WireframeColours.h"
 #include "core/image/FalseColour.h"
 
 #include <backends/imgui_impl_glfw.h>
@@ -81,6 +82,31 @@ void luxLegend(UiModel& m) {
     ImGui::TextDisabled("%.0f lm/W, %s%s", m.photometry.efficacy, m.photometry.name.c_str(),
                         d.contours ? ", 1-2-5 lines" : "");
     ImGui::End();
+}
+
+// Point lights have no emitting faces, so nothing of them is in the image:
+// with the wireframe on, each is marked where it is, in its cache mesh's
+// colour (the legend's), with its name.
+void pointLightMarkers(const UiModel& m) {
+    const ImGuiIO& io = ImGui::GetIO();
+    Vec3 forward, right, up;
+    m.camera.basis(forward, right, up);
+    const double t = std::tan(0.5 * m.camera.fovYDegrees * kPi / 180), aspect = io.DisplaySize.x / io.DisplaySize.y;
+    ImDrawList* draw = ImGui::GetBackgroundDrawList();
+    for (size_t l = 0; l < m.lightInfo.size(); ++l) {
+        const ViewLight& v = m.lightInfo[l];
+        const Vec3 d = v.position - m.camera.position;
+        const double z = glm::dot(d, forward);
+        if (!v.point || z <= 0) continue;
+        const ImVec2 p(float(0.5 * io.DisplaySize.x * (1 + glm::dot(d, right) / (z * t * aspect))),
+                       float(0.5 * io.DisplaySize.y * (1 - glm::dot(d, up) / (z * t))));
+        const ImU32 c = colourU32(meshColour(l));
+        draw->AddCircle(p, 7, c, 0, 2);
+        draw->AddLine(ImVec2(p.x - 11, p.y), ImVec2(p.x + 11, p.y), c, 1.5f);
+        draw->AddLine(ImVec2(p.x, p.y - 11), ImVec2(p.x, p.y + 11), c, 1.5f);
+        draw->AddText(ImVec2(p.x + 11, p.y + 5), IM_COL32(0, 0, 0, 255), v.name.c_str());  // legible on any image
+        draw->AddText(ImVec2(p.x + 10, p.y + 4), c, v.name.c_str());
+    }
 }
 
 // One light's switch, flux, intensity and colour. True when changed.
@@ -202,6 +228,7 @@ UiRequests Ui::build(UiModel& m) {
         ImGui::End();
     }
     if (d.mode == DisplayMode::Illuminance) luxLegend(m);
+    if (d.wireframe) pointLightMarkers(m);
     if (!d.showUi) return r;
 
     ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);

@@ -45,6 +45,8 @@ ViewLight viewLight(const Light& light, const Scene& scene, double areaMetresPer
                                light.radiance.b, light.area * areaMetresPerUnit * areaMetresPerUnit);
             break;
         case LightKind::Point:
+            v.point = true;
+            v.position = e.position;
             v.details = concat(format("peak %.4g cd, ", photometry.luminous(e.intensity)), e.profile.describe(),
                                ", at ", position(e.position),
                                e.profile.shape == IntensityProfile::Shape::Isotropic

@@ -35,6 +35,10 @@ struct ViewLight {
     std::string details;  // the panel's tooltip: "Ke (...) W/sr/m2, area A m2" or "peak I cd, ... at (x, y, z)"
     Rgb powerW{0.0};      // emitted power, W per channel (a directional light's: what reaches the scene)
     double lumens = 0;    // Photometry::luminous(powerW), lm
+    // A point light (point, spot, luminaire) has no faces to draw: the
+    // wireframe marks it at its position instead.
+    bool point = false;
+    Vec3 position{0.0};
 };
 
 // `areaMetresPerUnit`: metres per scene unit for an area light's area (the
