@@ -30,4 +30,11 @@ inline constexpr const char* kSceneArgumentHelp =
 // of an OBJ or glTF file.
 Scene loadSceneArgument(const std::string& arg);
 
+class Options;
+// The scene every command takes: the positional <scene> and what may be
+// added to it (--luminaires FILE: photometric luminaires placed by a layout
+// file, core/loaders/LuminaireLayout.h). Declared and read in one place.
+void declareSceneOptions(Options& o);
+Scene loadScene(const Options& o);
+
 }  // namespace ml

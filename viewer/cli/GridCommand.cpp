@@ -116,7 +116,7 @@ std::string localTime() {
 int runGrid(const std::vector<std::string>& args) {
     const auto t0 = Clock::now();
     Options o("grid");
-    o.positional("scene", kSceneArgumentHelp);
+    declareSceneOptions(o);
     o.value("plane", "H", "a work plane H scene units above the floor (the scene bounds' minimum along --up), e.g. "
                           "0.75 (m) for desks");
     o.value("spacing", "S", "grid spacing, scene units: the work plane's cells are at most S on a side, objects get "
@@ -172,7 +172,7 @@ int runGrid(const std::vector<std::string>& args) {
     const Photometry photometry = readPhotometryOption(o);
     std::vector<CalculationSurface> surfaces;
     if (o.has("grid-file")) surfaces = fileSurfaces(o.str("grid-file"));
-    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (scene.bounds.empty()) throw InputError(concat("scene '", scene.name, "' has no triangles"));
     const auto [unitLabel, metres] = sceneUnit(givenUnit, scene);

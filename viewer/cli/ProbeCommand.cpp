@@ -107,7 +107,7 @@ void printPathError(const SensorReadings& r) {
 
 int runProbe(const std::vector<std::string>& args) {
     Options o("probe");
-    o.positional("scene", kSceneArgumentHelp);
+    declareSceneOptions(o);
     o.value("points", "IN.csv|-", "sensor points: a CSV file with columns x,y,z,nx,ny,nz, or - for RADIANCE's rtrace "
                                   "input on standard input: lines of x y z dx dy dz ('#' comments)");
     o.value("out", "OUT.csv", "irradiance per light and in total (RGB, W/m²), and illuminance: lux (all the light "
@@ -120,7 +120,7 @@ int runProbe(const std::vector<std::string>& args) {
     SensorSettings settings = readSensorSettings(o, args);
     const Photometry photometry = readPhotometryOption(o);
     const std::vector<SensorPoint> points = readPoints(o.str("points"));
-    const Scene scene = loadSceneArgument(o.positionalValue("scene"));
+    const Scene scene = loadScene(o);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
     // From here on, the first Ctrl-C ends the work under way and writes what is done.
