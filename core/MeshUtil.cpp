@@ -51,6 +51,7 @@ size_t removeDegenerateTriangles(Mesh& mesh, double relTol, std::vector<size_t>*
             concat("relative tolerance ", relTol, " is not a finite number >= 0"));
     checkPerTriangle(mesh, mesh.materials.size(), "materials");
     checkPerTriangle(mesh, mesh.sourceLines.size(), "source lines");
+    checkPerTriangle(mesh, mesh.albedo.size(), "albedos");
     checkIndices(mesh);
 
     Bounds3 bounds;
@@ -75,12 +76,14 @@ size_t removeDegenerateTriangles(Mesh& mesh, double relTol, std::vector<size_t>*
         mesh.triangles[kept] = mesh.triangles[t];
         if (!mesh.materials.empty()) mesh.materials[kept] = mesh.materials[t];
         if (!mesh.sourceLines.empty()) mesh.sourceLines[kept] = mesh.sourceLines[t];
+        if (!mesh.albedo.empty()) mesh.albedo[kept] = mesh.albedo[t];
         ++kept;
     }
     const size_t dropped = mesh.triangles.size() - kept;
     mesh.triangles.resize(kept);
     if (!mesh.materials.empty()) mesh.materials.resize(kept);
     if (!mesh.sourceLines.empty()) mesh.sourceLines.resize(kept);
+    if (!mesh.albedo.empty()) mesh.albedo.resize(kept);
     return dropped;
 }
 
@@ -133,7 +136,9 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
     // The tolerance lets triangles of one plane, whose normals differ only by
     // rounding, share vertices even at a crease angle of 0.
     const double minCos = std::cos(glm::radians(creaseAngleDegrees)) - 1e-12;
+    const bool hasTexcoords = !mesh.texcoords.empty();
     std::vector<Vec3> positions, normals;
+    std::vector<Vec2> texcoords;
     std::vector<glm::uvec3> triangles(triangleCount);
     for (size_t g = 0; g + 1 < groupStart.size(); ++g) {
         const size_t groupFirstVertex = positions.size();
@@ -153,17 +158,21 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
             const double len = glm::length(sum);
             const Vec3 normal = len > 1e-12 ? sum / len : own;
 
+            const uint32_t original = mesh.triangles[corner / 3][corner % 3];
+            const Vec2 uv = hasTexcoords ? mesh.texcoords[original] : Vec2(0.0);
             size_t v = groupFirstVertex;
-            while (v < normals.size() && normals[v] != normal) ++v;
+            while (v < normals.size() && (normals[v] != normal || (hasTexcoords && texcoords[v] != uv))) ++v;
             if (v == normals.size()) {
-                positions.push_back(mesh.positions[mesh.triangles[corner / 3][corner % 3]]);
+                positions.push_back(mesh.positions[original]);
                 normals.push_back(normal);
+                if (hasTexcoords) texcoords.push_back(uv);
             }
             triangles[corner / 3][corner % 3] = uint32_t(v);
         }
     }
     mesh.positions = std::move(positions);
     mesh.normals = std::move(normals);
+    mesh.texcoords = std::move(texcoords);
     mesh.triangles = std::move(triangles);
 }
 

@@ -16,14 +16,15 @@ namespace ml {
 //   relTol:  relative edge tolerance, >= 0; typical 1e-6 (area <= 1e-12 · d²).
 //   removed: when not null, receives the indices the dropped triangles had
 //            before the call, ascending (e.g. to report their sourceLines).
-// Keeps `materials` and `sourceLines` aligned with `triangles` (each may be
-// empty); vertices are left as they are, even when no longer referenced.
+// Keeps `materials`, `sourceLines` and `albedo` aligned with `triangles`
+// (each may be empty); vertices are left as they are, even when no longer referenced.
 // Returns the number of triangles dropped. Throws std::invalid_argument if
 // relTol is negative or not finite, or a per-triangle array is misaligned.
 size_t removeDegenerateTriangles(Mesh& mesh, double relTol,
                                  std::vector<size_t>* removed = nullptr);
 
-// Replaces the mesh's vertices by (position, shading normal) pairs.
+// Replaces the mesh's vertices by (position, shading normal) pairs, and
+// (position, normal, texture coordinate) when the mesh has texcoords.
 // Each corner's normal is the angle-weighted mean of the face normals of the
 // triangles around its position (positions welded by exact equality) whose
 // normal is within creaseAngleDegrees of the corner's own face normal; faces
@@ -32,7 +33,7 @@ size_t removeDegenerateTriangles(Mesh& mesh, double relTol,
 //   creaseAngleDegrees: in [0, 180]; typical 30. 0 gives flat faces (exactly
 //                       coplanar triangles still share vertices), 180 smooths
 //                       everything.
-// Corners with equal position and normal share one vertex; vertices are
+// Corners with equal position, normal (and texcoord) share one vertex; vertices are
 // ordered by the first use of their position; triangle order, `materials` and
 // `sourceLines` are unchanged; unreferenced positions are dropped; existing
 // normals are ignored. Cost grows with the square of the number of triangles

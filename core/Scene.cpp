@@ -160,8 +160,13 @@ void finalizePunctual(const Scene& scene, Light& l) {
 
 void Scene::finalize() {
     bounds = Bounds3{};
-    for (const Mesh& m : meshes)
+    for (const Mesh& m : meshes) {
         for (const Vec3& p : m.positions) bounds.extend(p);
+        ML_ASSERT(m.texcoords.empty() || m.texcoords.size() == m.positions.size(), "mesh '", m.name, "' has ",
+                  m.texcoords.size(), " texcoords for ", m.positions.size(), " vertices");
+        ML_ASSERT(m.albedo.empty() || m.albedo.size() == m.triangles.size(), "mesh '", m.name, "' has ",
+                  m.albedo.size(), " albedos for ", m.triangles.size(), " triangles");
+    }
 
     std::vector<Light> punctual;
     for (Light& l : lights)
@@ -219,6 +224,14 @@ Camera Scene::cameraOrDefault(double aspect) const {
 bool Scene::hasGlossy() const {
     for (const Material& m : materials)
         if (m.glossy()) return true;
+    return false;
+}
+
+bool Scene::hasTextures() const {
+    for (const Mesh& m : meshes)
+        if (!m.texcoords.empty())
+            for (uint32_t mat : m.materials)
+                if (materials[mat].kdMap || materials[mat].keMap) return true;
     return false;
 }
 

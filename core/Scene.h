@@ -5,6 +5,7 @@
 #include "Camera.h"
 #include "Math.h"
 #include "PunctualLight.h"
+#include "Texture.h"
 
 #include <array>
 #include <cstdint>
@@ -22,6 +23,13 @@ struct Material {
     Rgb ks{0.0};   // Phong specular reflectance in [0,1]; > 0 asks for a specular pass
     double ns = 1; // Phong exponent, typical 10..1000
     Rgb ke{0.0};   // emitted radiance, W·sr⁻¹·m⁻², leaving the front (CCW) face only
+    // Textures drawn per pixel (empty: none). kd and ke stay the factor ×
+    // the texture's area-weighted mean over the faces that use it: the
+    // cache, the light sampler and the bounce count work with means; the
+    // compositor and the path tracer show kdMap.value(uv) (clamped to
+    // [0, 1]) and keMap.value(uv) on the faces of meshes with texcoords.
+    TextureMap kdMap;
+    TextureMap keMap;
 
     bool emissive() const { return ke.r > 0 || ke.g > 0 || ke.b > 0; }
     // A Lambertian material (no Ks) emitting `ke` from its front face.
@@ -46,6 +54,13 @@ struct Mesh {
     std::vector<glm::uvec3> triangles;      // counter-clockwise = front face
     std::vector<uint32_t> materials;        // per triangle, index into Scene::materials
     std::vector<int> sourceLines;           // per triangle, line in the source file (0 if built in)
+    // Per vertex, glTF's convention (Texture.h), for the materials' texture
+    // maps; empty when the mesh has none (its textured faces show kd, ke).
+    std::vector<Vec2> texcoords;
+    // Per triangle, the mean of its material's Kd over its own texture
+    // footprint (clamp(factor × footprint mean)); empty when no face of the
+    // mesh is textured: Scene::albedo() then gives the material's kd.
+    std::vector<Rgb> albedo;
 
     Triangle3 triangle(size_t t) const {
         const glm::uvec3 i = triangles[t];
@@ -165,6 +180,13 @@ struct Scene {
     Camera cameraOrDefault(double aspect) const;
     // True when any material has Ks > 0 (a specular pass is needed).
     bool hasGlossy() const;
+    // A triangle's mean diffuse reflectance: Mesh::albedo's, or its material's kd.
+    Rgb albedo(size_t mesh, size_t triangle) const {
+        const Mesh& m = meshes[mesh];
+        return m.albedo.empty() ? materials[m.materials[triangle]].kd : m.albedo[triangle];
+    }
+    // True when a material draws a texture on a mesh with coordinates.
+    bool hasTextures() const;
 };
 
 }  // namespace ml

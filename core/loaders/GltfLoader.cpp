@@ -176,6 +176,7 @@ struct MaterialChoice {
     bool dropped = false;      // alphaMode MASK cuts it away entirely
     bool backToo = false;      // doubleSided emitter: its triangles reversed as well
     int sceneIndex = -1;       // set when a kept triangle first uses it
+    int texCoord = -1;         // the TEXCOORD_n set its textures read (Mesh::texcoords); -1: none
 };
 
 // Drops the vertices no triangle uses (the file's unused ones, those of
@@ -190,11 +191,13 @@ void compactVertices(Mesh& mesh) {
                 n = static_cast<uint32_t>(out.positions.size());
                 out.positions.push_back(mesh.positions[t[k]]);
                 if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[t[k]]);
+                if (!mesh.texcoords.empty()) out.texcoords.push_back(mesh.texcoords[t[k]]);
             }
             t[k] = n;
         }
     mesh.positions = std::move(out.positions);
     mesh.normals = std::move(out.normals);
+    mesh.texcoords = std::move(out.texcoords);
 }
 
 class GltfReader {
@@ -260,8 +263,9 @@ private:
     // Materials
     void chooseMaterials();
     MaterialChoice chooseMaterial(int index);
-    const Texture* texture(const tg::TextureInfo& info, const std::string& field);
-    Rgb textureMean(const Texture& tex, int texCoord, int material, const std::string& field);
+    std::shared_ptr<const Texture> texture(const tg::TextureInfo& info, const std::string& field);
+    Rgb textureMean(const Texture& tex, int texCoord, int material, const std::string& field,
+                    bool perTriangle = false);
     uint32_t sceneMaterial(int gltfMaterial);
 
     // Meshes
@@ -284,7 +288,10 @@ private:
     std::vector<Instance> instances_;
     std::map<std::pair<int, int>, Primitive> primitives_;
     std::vector<Piece> pieces_;
-    std::map<int, std::unique_ptr<Texture>> textures_;  // by glTF texture index
+    std::map<int, std::shared_ptr<const Texture>> textures_;  // by glTF texture index
+    // Per piece (index into pieces_), each triangle's base colour texture
+    // mean over its footprint (before the factor); empty: not textured.
+    std::vector<std::vector<Rgb>> footprints_;
     std::vector<MaterialChoice> materials_;             // by glTF material index
     int defaultMaterial_ = -1;
 
@@ -866,7 +873,7 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
     // Alpha: what glTF would cut away or blend, Meshlight renders opaque
     // except a whole material below its cut-off.
     const double alpha = pbr.baseColorFactor[3];
-    const Texture* base = texture(pbr.baseColorTexture, baseAt + ".baseColorTexture");
+    const std::shared_ptr<const Texture> base = texture(pbr.baseColorTexture, baseAt + ".baseColorTexture");
     const double textureAlpha = base ? alpha * base->minAlpha : alpha;
     if (m.alphaMode == "MASK") {
         if (alpha < m.alphaCutoff) {
@@ -887,7 +894,12 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
     }
 
     Rgb kd = glm::make_vec3(pbr.baseColorFactor.data());
-    if (base) kd *= textureMean(*base, pbr.baseColorTexture.texCoord, index, baseAt + ".baseColorTexture");
+    if (base) {
+        choice.material.kdMap.image = base;
+        choice.material.kdMap.factor = kd;
+        choice.texCoord = pbr.baseColorTexture.texCoord;
+        kd *= textureMean(*base, pbr.baseColorTexture.texCoord, index, baseAt + ".baseColorTexture", true);
+    }
     choice.material.kd = glm::clamp(kd, Rgb(0.0), Rgb(1.0));
     if (base) warn(named, ": texture ", base->name, " averaged to Kd ", rgbText(choice.material.kd));
 
@@ -902,7 +914,16 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
     Rgb ke = glm::make_vec3(m.emissiveFactor.data()) * strength * options_.emissionScale;
     if (ke != Rgb(0.0)) {
         const std::string emissiveAt = at + ".emissiveTexture";
-        if (const Texture* emissive = texture(m.emissiveTexture, emissiveAt)) {
+        if (const std::shared_ptr<const Texture> emissive = texture(m.emissiveTexture, emissiveAt)) {
+            if (choice.texCoord >= 0 && choice.texCoord != m.emissiveTexture.texCoord) {
+                // One set of coordinates per mesh: the emission shows its mean.
+                warn(named, ": emissiveTexture reads TEXCOORD_", m.emissiveTexture.texCoord,
+                     ", baseColorTexture TEXCOORD_", choice.texCoord, "; emission shown as its mean Ke");
+            } else {
+                choice.material.keMap.image = emissive;
+                choice.material.keMap.factor = ke;
+                choice.texCoord = m.emissiveTexture.texCoord;
+            }
             ke *= textureMean(*emissive, m.emissiveTexture.texCoord, index, emissiveAt);
             warn(named, ": texture ", emissive->name, " averaged to Ke ", rgbText(ke));
         }
@@ -923,11 +944,11 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
 }
 
 // The texture a material refers to, decoded once; null when there is none.
-const Texture* GltfReader::texture(const tg::TextureInfo& info, const std::string& field) {
+std::shared_ptr<const Texture> GltfReader::texture(const tg::TextureInfo& info, const std::string& field) {
     if (info.index == -1) return nullptr;
     const tg::Texture& t = element(model_.textures, info.index, "textures", field + ".index");
     auto [it, inserted] = textures_.try_emplace(info.index);
-    if (!inserted) return it->second.get();
+    if (!inserted) return it->second;
     const std::string at = item("textures", info.index);
     if (t.source == -1) {
         warn(at, ": no PNG or JPEG source; ignored");
@@ -935,7 +956,7 @@ const Texture* GltfReader::texture(const tg::TextureInfo& info, const std::strin
     }
     const tg::Image& image = element(model_.images, t.source, "images", at + ".source");
     const std::string imageAt = item("images", t.source);
-    auto tex = std::make_unique<Texture>();
+    auto tex = std::make_shared<Texture>();
     tex->name = !image.name.empty() ? image.name : !image.uri.empty() && !tg::IsDataURI(image.uri) ? image.uri : imageAt;
 
     std::vector<unsigned char> file;
@@ -969,13 +990,17 @@ const Texture* GltfReader::texture(const tg::TextureInfo& info, const std::strin
         tex->nearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
     }
     it->second = std::move(tex);
-    return it->second.get();
+    return it->second;
 }
 
-// The texture's area-weighted mean over the triangles that use `material`.
-Rgb GltfReader::textureMean(const Texture& tex, int texCoord, int material, const std::string& field) {
+// The texture's area-weighted mean over the triangles that use `material`;
+// with `perTriangle`, each triangle's own mean is kept in footprints_.
+Rgb GltfReader::textureMean(const Texture& tex, int texCoord, int material, const std::string& field,
+                            bool perTriangle) {
     TextureMean mean(tex);
-    for (const Piece& piece : pieces_) {
+    footprints_.resize(pieces_.size());
+    for (size_t pi = 0; pi < pieces_.size(); ++pi) {
+        const Piece& piece = pieces_[pi];
         if (piece.primitive->material != material) continue;
         const auto set = piece.primitive->texcoords.find(texCoord);
         if (set == piece.primitive->texcoords.end()) {
@@ -984,10 +1009,13 @@ Rgb GltfReader::textureMean(const Texture& tex, int texCoord, int material, cons
             continue;
         }
         const std::vector<Vec2>& uv = set->second;
-        for (const glm::uvec3& t : piece.triangles)
-            mean.add(0.5 * glm::length(glm::cross(piece.positions[t.y] - piece.positions[t.x],
-                                                  piece.positions[t.z] - piece.positions[t.x])),
-                     {uv[t.x], uv[t.y], uv[t.z]});
+        for (const glm::uvec3& t : piece.triangles) {
+            const Rgb value = footprintMean(tex, {uv[t.x], uv[t.y], uv[t.z]});
+            mean.addValue(0.5 * glm::length(glm::cross(piece.positions[t.y] - piece.positions[t.x],
+                                                       piece.positions[t.z] - piece.positions[t.x])),
+                          value);
+            if (perTriangle) footprints_[pi].push_back(value);
+        }
     }
     return mean.mean();
 }
@@ -1011,7 +1039,8 @@ uint32_t GltfReader::sceneMaterial(int gltfMaterial) {
 
 void GltfReader::buildMeshes() {
     size_t read = 0, masked = 0;
-    for (const Piece& piece : pieces_) {
+    for (size_t pi = 0; pi < pieces_.size(); ++pi) {
+        const Piece& piece = pieces_[pi];
         const Primitive& prim = *piece.primitive;
         read += piece.triangles.size();
         if (prim.material >= 0 && materials_[prim.material].dropped) {
@@ -1025,6 +1054,14 @@ void GltfReader::buildMeshes() {
         mesh.triangles = piece.triangles;
         mesh.materials.assign(mesh.triangles.size(), sceneMaterial(prim.material));
         mesh.sourceLines.assign(mesh.triangles.size(), 0);
+        if (prim.material >= 0 && materials_[prim.material].texCoord >= 0) {
+            const MaterialChoice& choice = materials_[prim.material];
+            const auto set = prim.texcoords.find(choice.texCoord);
+            if (set != prim.texcoords.end()) mesh.texcoords = set->second;
+            if (pi < footprints_.size() && !footprints_[pi].empty())
+                for (const Rgb& f : footprints_[pi])
+                    mesh.albedo.push_back(glm::clamp(choice.material.kdMap.factor * f, Rgb(0.0), Rgb(1.0)));
+        }
         const size_t dropped = removeDegenerateTriangles(mesh, kDegenerateRelTol);
         if (dropped > 0 && degenerate_ == 0) firstDegenerate_ = prim.at;
         degenerate_ += dropped;
@@ -1051,6 +1088,8 @@ void GltfReader::addBackFaces(const Mesh& front) {
     back.name = front.name + " (back)";
     back.positions = front.positions;
     for (const Vec3& n : front.normals) back.normals.push_back(-n);
+    back.texcoords = front.texcoords;
+    back.albedo = front.albedo;
     for (const glm::uvec3& t : front.triangles) back.triangles.emplace_back(t.x, t.z, t.y);
     back.materials = front.materials;
     back.sourceLines = front.sourceLines;

@@ -222,6 +222,7 @@ struct RawTriangle {
     uint32_t material;  // index into Scene::materials
     int line;
     bool cutOut = false;  // removed by its material's map_d
+    std::optional<Rgb> albedo;  // map_Kd's mean over its footprint × Kd, when textured with vt
 
     bool hasTexcoords() const { return texcoord[0] >= 0 && texcoord[1] >= 0 && texcoord[2] >= 0; }
 };
@@ -248,6 +249,16 @@ struct TextureStatement {
     Vec2 lookup(const Vec2& vt) const {
         const Vec2 p = vt * scale + offset;
         return {p.x, 1 - p.y};
+    }
+    // The same as a TextureMap of Mesh::texcoords, which hold (u, 1 − v):
+    // lookup(vt) = texcoord·(sx, sy) + (ox, 1 − sy − oy).
+    TextureMap map(std::shared_ptr<const Texture> image, const Rgb& factor) const {
+        TextureMap m;
+        m.image = std::move(image);
+        m.factor = factor;
+        m.scale = scale;
+        m.offset = Vec2(offset.x, 1 - scale.y - offset.y);
+        return m;
     }
 };
 
@@ -288,9 +299,10 @@ private:
 
     // Textures
     void applyTextures();
-    const Texture& loadTexture(const TextureStatement& statement);
+    std::shared_ptr<const Texture> loadTexture(const TextureStatement& statement);
     void cutOut(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles);
-    Rgb textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles);
+    Rgb textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles,
+                    const Rgb* albedoFactor = nullptr);
     double worldArea(const RawTriangle& t) const;
     std::array<Vec2, 3> lookups(const TextureStatement& statement, const RawTriangle& t) const;
     void warnWithoutUv(const TextureStatement& statement, size_t triangles);
@@ -315,7 +327,8 @@ private:
 
     std::map<std::string, LibraryMaterial> library_;
     std::vector<std::string> libraryFiles_;
-    std::map<std::string, std::unique_ptr<Texture>> textures_;  // by path, and "(clamp)" when clamped
+    std::map<std::string, std::shared_ptr<const Texture>> textures_;  // by path, and "(clamp)" when clamped
+    std::vector<bool> drawsTexture_;  // per scene material: a map_Kd or map_Ke drawn per pixel
     LibraryMaterial* currentLibraryMaterial_ = nullptr;  // null: no usemtl yet
     int defaultMaterial_ = -1;
 
@@ -762,6 +775,9 @@ void ObjParser::applyTextures() {
             any = true;
         }
     if (!any) return;
+    drawsTexture_.assign(scene_.materials.size(), false);
+    for (size_t mi = 0; mi < textured.size(); ++mi)
+        drawsTexture_[mi] = textured[mi] && (textured[mi]->mapKd || textured[mi]->mapKe);
     std::vector<std::vector<RawTriangle*>> trianglesOf(scene_.materials.size());
     for (Group& g : groups_)
         for (RawTriangle& t : g.triangles)
@@ -779,7 +795,8 @@ void ObjParser::applyTextures() {
                             triangles.end());
         }
         if (lm->mapKd) {
-            m.kd = glm::clamp(m.kd * textureMean(*lm->mapKd, triangles), Rgb(0.0), Rgb(1.0));
+            m.kdMap = lm->mapKd->map(loadTexture(*lm->mapKd), m.kd);
+            m.kd = glm::clamp(m.kd * textureMean(*lm->mapKd, triangles, &m.kd), Rgb(0.0), Rgb(1.0));
             scene_.warnings.push_back(concat(lm->mapKd->at.str(), ": texture ", lm->mapKd->named(),
                                              " averaged to Kd ", rgbText(m.kd)));
         }
@@ -787,6 +804,7 @@ void ObjParser::applyTextures() {
             // Exporters often write Ke 0 with an emission map: the map is the emission.
             const bool unset = m.ke == Rgb(0.0);
             if (unset) m.ke = Rgb(1.0);
+            m.keMap = lm->mapKe->map(loadTexture(*lm->mapKe), m.ke);
             m.ke *= textureMean(*lm->mapKe, triangles);
             scene_.warnings.push_back(concat(lm->mapKe->at.str(), ": texture ", lm->mapKe->named(),
                                              " averaged to Ke ", rgbText(m.ke),
@@ -800,15 +818,15 @@ void ObjParser::applyTextures() {
 }
 
 // The texture a statement names, read (through read_) and decoded once.
-const Texture& ObjParser::loadTexture(const TextureStatement& statement) {
+std::shared_ptr<const Texture> ObjParser::loadTexture(const TextureStatement& statement) {
     const std::string key = statement.clamp ? statement.path + " (clamp)" : statement.path;
     auto found = textures_.find(key);
-    if (found != textures_.end()) return *found->second;
+    if (found != textures_.end()) return found->second;
     std::string bytes;
     if (!read_(statement.path, bytes))
         throwInputError(statement.at, statement.named(), ": cannot read: no such file or not readable (",
                         statement.path, ")");
-    auto texture = std::make_unique<Texture>();
+    auto texture = std::make_shared<Texture>();
     texture->name = statement.file;
     const std::string reason =
         decodeTexture(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), *texture);
@@ -818,11 +836,11 @@ const Texture& ObjParser::loadTexture(const TextureStatement& statement) {
     // The nearest texel: a footprint of whole texels averages exactly those.
     texture->nearest = true;
     texture->wrapS = texture->wrapT = statement.clamp ? TextureWrap::ClampToEdge : TextureWrap::Repeat;
-    return *textures_.emplace(key, std::move(texture)).first->second;
+    return textures_.emplace(key, std::move(texture)).first->second;
 }
 
 void ObjParser::cutOut(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles) {
-    const Texture& texture = loadTexture(statement);
+    const Texture& texture = *loadTexture(statement);
     std::optional<double> imageCoverage;  // computed once, when a triangle has no vt
     size_t removed = 0, withoutUv = 0;
     for (RawTriangle* t : triangles) {
@@ -845,12 +863,18 @@ void ObjParser::cutOut(const TextureStatement& statement, const std::vector<RawT
     if (withoutUv > 0) warnWithoutUv(statement, withoutUv);
 }
 
-Rgb ObjParser::textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles) {
-    TextureMean mean(loadTexture(statement));
+// With `albedoFactor`, each triangle with vt keeps factor × its own mean
+// (RawTriangle::albedo).
+Rgb ObjParser::textureMean(const TextureStatement& statement, const std::vector<RawTriangle*>& triangles,
+                           const Rgb* albedoFactor) {
+    const std::shared_ptr<const Texture> texture = loadTexture(statement);
+    TextureMean mean(*texture);
     size_t withoutUv = 0;
-    for (const RawTriangle* t : triangles) {
+    for (RawTriangle* t : triangles) {
         if (t->hasTexcoords()) {
-            mean.add(worldArea(*t), lookups(statement, *t));
+            const Rgb value = footprintMean(*texture, lookups(statement, *t));
+            mean.addValue(worldArea(*t), value);
+            if (albedoFactor) t->albedo = glm::clamp(*albedoFactor * value, Rgb(0.0), Rgb(1.0));
         } else {
             mean.addWithoutUv(worldArea(*t));
             ++withoutUv;
@@ -881,21 +905,39 @@ std::array<Vec2, 3> ObjParser::lookups(const TextureStatement& statement, const 
 
 Mesh ObjParser::buildMesh(const Group& group) {
     // The group's triangles over its own vertices, one per OBJ position.
+    // Faces that draw a texture keep their vt: their vertices are split by
+    // texture coordinate as well (Mesh::texcoords, v turned down).
+    auto drawsTexture = [&](const RawTriangle& t) {
+        return t.hasTexcoords() && t.material < drawsTexture_.size() && drawsTexture_[t.material];
+    };
+    const bool textured = std::any_of(group.triangles.begin(), group.triangles.end(), drawsTexture);
+    const bool anyAlbedo = std::any_of(group.triangles.begin(), group.triangles.end(),
+                                       [](const RawTriangle& t) { return t.albedo.has_value(); });
     Mesh raw;
     raw.name = group.name;
     std::vector<std::array<int32_t, 3>> cornerNormals;
-    std::unordered_map<uint32_t, uint32_t> localOf;
+    std::unordered_map<uint64_t, uint32_t> localOf;  // (position, vt + 1 or 0) → vertex
     for (const RawTriangle& t : group.triangles) {
         glm::uvec3 tri;
+        const bool keepUv = textured && drawsTexture(t);
         for (int k = 0; k < 3; ++k) {
+            const int32_t vt = keepUv ? t.texcoord[k] : -1;
             const auto [it, inserted] =
-                localOf.try_emplace(t.position[k], static_cast<uint32_t>(raw.positions.size()));
-            if (inserted) raw.positions.push_back(positions_[t.position[k]]);
+                localOf.try_emplace(uint64_t(t.position[k]) << 32 | uint32_t(vt + 1),
+                                    static_cast<uint32_t>(raw.positions.size()));
+            if (inserted) {
+                raw.positions.push_back(positions_[t.position[k]]);
+                if (textured) {
+                    const Vec2 uv = vt >= 0 ? texcoords_[vt] : Vec2(0.0, 1.0);
+                    raw.texcoords.emplace_back(uv.x, 1 - uv.y);
+                }
+            }
             tri[k] = it->second;
         }
         raw.triangles.push_back(tri);
         raw.materials.push_back(t.material);
         raw.sourceLines.push_back(t.line);
+        if (anyAlbedo) raw.albedo.push_back(t.albedo ? *t.albedo : scene_.materials[t.material].kd);
         cornerNormals.push_back(t.normal);
     }
 
@@ -938,6 +980,7 @@ Mesh ObjParser::buildMesh(const Group& group) {
             if (inserted) {
                 out.positions.push_back(raw.positions[raw.triangles[t][k]]);
                 out.normals.push_back(normals_[cn[k]]);
+                if (textured) out.texcoords.push_back(raw.texcoords[raw.triangles[t][k]]);
             }
             tri[k] = it->second;
         }
@@ -946,13 +989,16 @@ Mesh ObjParser::buildMesh(const Group& group) {
     if (computed.triangles.empty()) {
         out.materials = std::move(raw.materials);
         out.sourceLines = std::move(raw.sourceLines);
+        out.albedo = std::move(raw.albedo);
         return out;
     }
+    computed.texcoords = raw.texcoords;
     computeShadingNormals(computed, options_.creaseAngleDegrees);
 
     const uint32_t offset = static_cast<uint32_t>(out.positions.size());
     out.positions.insert(out.positions.end(), computed.positions.begin(), computed.positions.end());
     out.normals.insert(out.normals.end(), computed.normals.begin(), computed.normals.end());
+    out.texcoords.insert(out.texcoords.end(), computed.texcoords.begin(), computed.texcoords.end());
     std::vector<glm::uvec3> given = std::move(out.triangles);
     out.triangles.clear();
     size_t nextGiven = 0, nextComputed = 0;
@@ -961,6 +1007,7 @@ Mesh ObjParser::buildMesh(const Group& group) {
                                            : computed.triangles[nextComputed++] + offset);
     out.materials = std::move(raw.materials);
     out.sourceLines = std::move(raw.sourceLines);
+    out.albedo = std::move(raw.albedo);
     return out;
 }
 

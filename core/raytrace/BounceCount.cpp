@@ -57,7 +57,7 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             const double a = scene.meshes[m].area(t);
             if (!(a > 0)) continue;
             total += a;
-            areaWeighted += a * scene.materials[scene.meshes[m].materials[t]].kd;
+            areaWeighted += a * scene.albedo(m, t);
             tris.push_back({m, t});
             cdf.push_back(total);
         }
@@ -110,7 +110,8 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
                 }
                 e += luminance(light.radiance) * sum / settings.lightSamples;
             }
-            const Rgb kd = scene.materials[mesh.materials[tris[k].tri]].kd;
+            // The triangle's own mean over its texture footprint (Mesh::albedo).
+            const Rgb kd = scene.albedo(tris[k].mesh, tris[k].tri);
             weighted += e * kd;
             weight += e;
         }

@@ -214,6 +214,11 @@ SurfacePoint EmbreeScene::surface(const RayHit& hit) const {
         if (nl > 0 && std::isfinite(nl)) s.shadingNormal = n / nl;
     }
     s.material = mesh.materials[hit.triangle];
+    if (!mesh.texcoords.empty()) {
+        const Vec2 t0 = mesh.texcoords[idx.x];
+        s.texcoord = t0 + hit.b1 * (mesh.texcoords[idx.y] - t0) + hit.b2 * (mesh.texcoords[idx.z] - t0);
+        s.hasTexcoord = true;
+    }
     return s;
 }
 

@@ -44,6 +44,8 @@ struct SurfacePoint {
     Vec3 geometricNormal{0.0};  // unit, front (CCW) side
     Vec3 shadingNormal{0.0};    // unit, interpolated from Mesh::normals (geometric when a mesh has none)
     uint32_t material = 0;      // index into Scene::materials
+    Vec2 texcoord{0.0};         // interpolated from Mesh::texcoords
+    bool hasTexcoord = false;   // false when the mesh has none
 };
 
 class EmbreeScene {

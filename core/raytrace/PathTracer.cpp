@@ -58,6 +58,7 @@ struct PathTracer::Vertex {
     Vec3 ns{0.0};  // shading normal, unit, on the same side as ng
     Vec3 wo{0.0};  // towards where the path came from, unit
     const Material* material = nullptr;
+    Rgb kd{0.0};   // the material's Kd here: its texture's at the hit, else Material::kd
 };
 
 namespace {
@@ -148,6 +149,8 @@ PathTracer::Vertex PathTracer::vertexAt(const SurfacePoint& s, const Vec3& incom
         v.ns = -v.ns;
     }
     v.material = &scene.materials[s.material];
+    v.kd = v.material->kdMap && s.hasTexcoord ? glm::clamp(v.material->kdMap.value(s.texcoord), Rgb(0.0), Rgb(1.0))
+                                              : v.material->kd;
     return v;
 }
 
@@ -161,7 +164,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
         // A delta light: only this strategy can reach it (no MIS).
         const PunctualSample p = punctualIrradiance(rays_, l, v.position, v.ns, v.ng);
         if (!p.visible) return Rgb(0.0);
-        const PhongBsdf bsdf(*v.material, v.ns);
+        const PhongBsdf bsdf(*v.material, v.ns, v.kd);
         return bsdf.eval(v.wo, p.toLight) * p.irradiance / lightProbability_[l];
     }
     Vec3 y, nl;
@@ -172,7 +175,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
     const Vec3 wi = d / std::sqrt(d2);
     const double cosLight = -glm::dot(nl, wi);
     if (cosLight <= 0 || glm::dot(wi, v.ng) <= 0) return Rgb(0.0);  // light's back, or behind the surface
-    const PhongBsdf bsdf(*v.material, v.ns);
+    const PhongBsdf bsdf(*v.material, v.ns, v.kd);
     const Rgb f = bsdf.eval(v.wo, wi);
     if (maxComponent(f) <= 0) return Rgb(0.0);
     const Light& light = scene_.lights[l];
@@ -190,7 +193,7 @@ Rgb PathTracer::scattered(const Vertex& first, Stream& rng, int depth) const {
     Rgb result(0.0), beta(1.0);
     Vertex v = first;
     for (int k = 1;; ++k) {
-        const PhongBsdf bsdf(*v.material, v.ns);
+        const PhongBsdf bsdf(*v.material, v.ns, v.kd);
         if (bsdf.black()) break;
         result += beta * sampleLight(v, rng);
 
@@ -238,7 +241,10 @@ Rgb PathTracer::radiance(const Vec3& origin, const Vec3& direction, Stream& rng)
     const SurfacePoint s = rays_.surface(hit);
     Rgb result(0.0);
     const Material& m = scene_.materials[s.material];
-    if (m.emissive() && glm::dot(s.geometricNormal, direction) < 0) result += m.ke;
+    // Emission seen directly shows its texture, as the compositor does;
+    // emitters met later show their mean Ke, which the light sampler uses.
+    if (m.emissive() && glm::dot(s.geometricNormal, direction) < 0)
+        result += m.keMap && s.hasTexcoord ? m.keMap.value(s.texcoord) : m.ke;
     return result + scattered(vertexAt(s, direction, scene_), rng, settings_.maxDepth);
 }
 

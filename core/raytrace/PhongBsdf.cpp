@@ -12,8 +12,8 @@ Vec3 mirror(const Vec3& wo, const Vec3& n) { return 2.0 * glm::dot(wo, n) * n - 
 
 }  // namespace
 
-PhongBsdf::PhongBsdf(const Material& material, const Vec3& n)
-    : n_(n), kd_(material.kd), ks_(material.ks), exponent_(std::max(material.ns, 0.0)) {
+PhongBsdf::PhongBsdf(const Material& material, const Vec3& n, const Rgb& kd)
+    : n_(n), kd_(kd), ks_(material.ks), exponent_(std::max(material.ns, 0.0)) {
     orthonormalBasis(n_, t_, b_);
     const double wd = std::max(mean(kd_), 0.0), ws = std::max(mean(ks_), 0.0);
     const double sum = wd + ws;

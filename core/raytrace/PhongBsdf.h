@@ -23,7 +23,9 @@ class PhongBsdf {
 public:
     // `n`: unit shading normal on the side of the incoming light's hemisphere
     // (the integrator flips it towards wo).
-    PhongBsdf(const Material& material, const Vec3& n);
+    PhongBsdf(const Material& material, const Vec3& n) : PhongBsdf(material, n, material.kd) {}
+    // With the diffuse reflectance at the point (a texture's, Material::kdMap).
+    PhongBsdf(const Material& material, const Vec3& n, const Rgb& kd);
 
     // True when the surface reflects nothing (Kd = Ks = 0): paths end there.
     bool black() const { return diffuseWeight_ + glossyWeight_ <= 0; }

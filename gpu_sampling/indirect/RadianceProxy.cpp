@@ -98,7 +98,8 @@ RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(
     // interpolated linearly between its corners, and slices are filled at
     // twice the voxels' resolution.
     constexpr int kMaxSplit = 256;
-    for (const Mesh& m : scene.meshes) {
+    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+        const Mesh& m = scene.meshes[mi];
         const bool closed = isClosedMesh(m);
         for (size_t t = 0; t < m.triangles.size(); ++t) {
             const Triangle3 p = m.triangle(t);
@@ -107,7 +108,9 @@ RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(
             const Vec3 n = glm::normalize(an);
             const double longest = std::max({glm::length(p[1] - p[0]), glm::length(p[2] - p[1]), glm::length(p[0] - p[2])});
             const int k = std::clamp(int(std::ceil(longest / (2 * grid_.voxel))), 1, kMaxSplit);
-            const Rgb kd = scene.materials[m.materials[t]].kd;
+            // The triangle's mean over its texture footprint (Mesh::albedo),
+            // or its material's Kd: each piece reflects with it.
+            const Rgb kd = scene.albedo(mi, t);
             // The sides to make: the front always, the back for open objects.
             for (int side = 0; side < (closed ? 1 : 2); ++side) {
                 const uint32_t base = uint32_t(positions_.size());
