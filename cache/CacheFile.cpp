@@ -5,7 +5,8 @@
 //   magic "MESHLIGHT-CACHE\n" (16 bytes), u32 format version,
 //   u64 scene fingerprint, u64 settings fingerprint, u64 payload bytes,
 //   payload, u64 FNV-1a of the payload.
-// Payload: u64 rounds, u64 samples, u64 detached faces, u32 meshes; per
+// Payload: u64 rounds, u64 samples, u64 detached faces, u32 refinement
+// level (IrradianceCache::tighten), u32 meshes; per
 // mesh: u32 vertices, u32 faces, per vertex 6 f64 (point, normal) and its
 // sample sums (6 f64, 2 u32), per face 3 u32 vertex indices, then u32 grid
 // samples and their sample sums (the grids themselves are made from the
@@ -33,7 +34,7 @@ using detail::toOm;
 using detail::toVec3;
 
 constexpr char kMagic[16] = {'M', 'E', 'S', 'H', 'L', 'I', 'G', 'H', 'T', '-', 'C', 'A', 'C', 'H', 'E', '\n'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;  // 2: the refinement level
 
 uint64_t fnv1a(const std::string& bytes) {
     uint64_t h = 0xcbf29ce484222325ull;
@@ -109,6 +110,7 @@ void IrradianceCache::save(const std::string& path) const {
     payload.put(uint64_t(s.rounds));
     payload.put(uint64_t(s.samples));
     payload.put(uint64_t(s.detachedFaces));
+    payload.put(uint32_t(s.level));
     payload.put(uint32_t(s.meshes.size()));
     for (const detail::LightMesh& lm : s.meshes) {
         payload.put(uint32_t(lm.mesh.n_vertices()));
@@ -184,6 +186,9 @@ void IrradianceCache::load(const std::string& path) {
     next.rounds = p.get<uint64_t>("the counters");
     next.samples = p.get<uint64_t>("the counters");
     next.detachedFaces = p.get<uint64_t>("the counters");
+    next.level = int(p.get<uint32_t>("the counters"));
+    if (next.level < 0 || next.level > IrradianceCache::kMaxRefinementLevel)
+        throw InputError(concat(path, ": cache file is corrupt (refinement level ", next.level, ")"));
     const uint32_t meshes = p.get<uint32_t>("the counters");
     if (meshes != s.meshes.size())
         throw InputError(concat(path, ": cache file has ", meshes, " light meshes, the scene has ", s.meshes.size(),

@@ -13,6 +13,9 @@ void WorkerSettings::validate() const {
     if (!(publishSeconds >= 0 && publishSeconds <= 3600))
         throw InputError(concat("snapshot interval ", publishSeconds, " s is not in [0, 3600]"));
     if (roundBudget > (size_t(1) << 24)) throw InputError(concat("round budget ", roundBudget, " is above 2^24"));
+    if (refinementLevels < 0 || refinementLevels > IrradianceCache::kMaxRefinementLevel)
+        throw InputError(concat("refinement levels ", refinementLevels, " is not in 0..",
+                                IrradianceCache::kMaxRefinementLevel));
 }
 
 CacheWorker::CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
@@ -210,6 +213,12 @@ void CacheWorker::run() {
                 }
             }
             converged = directConverged && indirectConverged;
+            // Converged at this level: tighten every cache one level and go on.
+            if (converged && cache_.level() < settings_.refinementLevels) {
+                const bool direct = cache_.tighten();
+                const bool indirect = indirect_ && estimator && indirect_->tighten(*estimator);
+                if (direct || indirect) converged = directConverged = false;
+            }
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
                 publish(seconds(), converged, view, serial, pool);
                 lastPublish = seconds();

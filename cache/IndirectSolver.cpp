@@ -175,6 +175,23 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     }
 }
 
+bool IndirectSolver::tighten(IndirectEstimator& estimator) {
+    if (!allFinished() || caches_.empty()) return false;
+    bool tightened = false;
+    for (auto& c : caches_) tightened |= c->tighten();
+    if (!tightened) return false;
+    finished_ = 0;
+    directRefreshed_ = false;
+    for (size_t s = 0; s < sourceBuilt_.size(); ++s)
+        if (sourceBuilt_[s]) {
+            estimator.releaseSource(s);
+            sourceBuilt_[s] = false;
+        }
+    return true;
+}
+
+int IndirectSolver::level() const { return caches_.empty() ? 0 : caches_.front()->level(); }
+
 void fillHiddenVertices(IrradianceMeshCopy& mesh) {
     const size_t n = mesh.positions.size();
     if (n == 0) return;

@@ -98,6 +98,16 @@ public:
     // old value.
     void restart(IndirectEstimator& estimator);
 
+    // Once every bounce has converged: one more refinement level for every
+    // bounce's cache (IrradianceCache::tighten), and pass 2 again from
+    // bounce 1, each bounce's source rebuilt from its predecessor as now
+    // refined (bounce 1's from the direct meshes as they are then), so the
+    // sources follow refinement. False, changing nothing, while bounces are
+    // still being refined or at the last level.
+    bool tighten(IndirectEstimator& estimator);
+    // The refinement level of bounce 1's cache (0 before any tighten()).
+    int level() const;
+
     // One mesh per started bounce, bounce 1 first, hidden vertices filled
     // (fillHiddenVertices): what is shown and what the next bounce reflects.
     std::vector<IrradianceMeshCopy> copyMeshes() const;

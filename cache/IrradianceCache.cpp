@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <queue>
@@ -285,6 +286,33 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
 IrradianceCache::~IrradianceCache() = default;
 
 const CacheSettings& IrradianceCache::settings() const { return impl_->state.settings; }
+
+bool IrradianceCache::tighten() {
+    if (impl_->state.level >= kMaxRefinementLevel) return false;
+    ++impl_->state.level;
+    return true;
+}
+
+int IrradianceCache::level() const { return impl_->state.level; }
+
+namespace detail {
+
+CacheSettings effectiveSettings(const CacheState& s) {
+    CacheSettings c = s.settings;
+    if (s.level == 0) return c;
+    const double f = std::ldexp(1.0, -s.level);
+    c.splitTolerance *= f;
+    c.noiseTolerance *= f;
+    // The smallest edge in the scene shrinks (indirect light's corners
+    // refine on), the one on screen does not: a step finer than the view's
+    // pixels cannot be seen, and counting edges below it would make the
+    // estimate the error of detail no image shows.
+    c.minEdgeFraction *= f;
+    c.maxSamplesPerVertex = uint32_t(std::min<double>(4096, std::ldexp(double(c.maxSamplesPerVertex), s.level)));
+    return c;
+}
+
+}  // namespace detail
 size_t IrradianceCache::meshCount() const { return impl_->state.meshes.size(); }
 size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size() - (impl_->state.sharedMesh ? 1 : 0); }
 bool IrradianceCache::hasSharedMesh() const { return impl_->state.sharedMesh; }

@@ -128,7 +128,18 @@ public:
     IrradianceCache(const IrradianceCache&) = delete;
     IrradianceCache& operator=(const IrradianceCache&) = delete;
 
+    // The settings the cache was made with (what a cache file must match).
     const CacheSettings& settings() const;
+    // Progressive refinement beyond them: one more level halves the split
+    // and noise tolerances and the smallest edge as a fraction of the scene
+    // (not in pixels) and doubles the samples a vertex may take, so a cache that
+    // has converged at one level refines on toward the exact irradiance
+    // (ProgressiveSession tightens when every mesh has converged and the
+    // stop rule wants more). Returns false, changing nothing, at
+    // kMaxRefinementLevel. The level is saved with the cache.
+    bool tighten();
+    int level() const;
+    static constexpr int kMaxRefinementLevel = 6;
     // Meshes in all: lightCount(), then the shared mesh if there is one.
     size_t meshCount() const;
     // Meshes of their own: one per light (or per CacheLayout::meshes).

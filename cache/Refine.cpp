@@ -199,7 +199,7 @@ std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
 }
 
 Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, bool collect) {
-    const CacheSettings& cs = s.settings;
+    const CacheSettings cs = effectiveSettings(s);
     std::vector<std::vector<double>> areas;
     for (const LightMesh& lm : s.meshes) areas.push_back(vertexAreas(lm.mesh));
     Scoring out;

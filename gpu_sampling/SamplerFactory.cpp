@@ -5,6 +5,7 @@
 #include "core/raytrace/PunctualShadow.h"
 #include "core/reference/ExactIrradiance.h"
 #include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
 #include "gpu_sampling/indirect/VoxelMarchGather.h"
@@ -12,6 +13,18 @@
 #include <algorithm>
 
 namespace ml {
+
+namespace {
+
+// --gather-size N: N² pixels for the image gathers, N²/4 rays for the ray
+// gather (40 → 400: about the error of a 40×40 fish-eye on the walls).
+RayGatherSettings rayGatherSettings(const IndirectChoice& choice) {
+    RayGatherSettings r;
+    r.rays = std::max(4, choice.gather.imageSize * choice.gather.imageSize / 4);
+    return r;
+}
+
+}  // namespace
 
 // --- Choices -----------------------------------------------------------------
 
@@ -26,10 +39,19 @@ std::string DirectChoice::describe() const {
 }
 
 std::vector<std::string> indirectMethodNames() {
-    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube"};
+    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace"};
+}
+
+std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
+    reason = concat("auto: the ray gather is consistent (its mean is the exact one-bounce irradiance of what the "
+                    "cache holds, so resampling converges to it), where the voxel gathers keep a bias of a voxel; "
+                    "rays cost the log of the scene's ", scene.triangleCount(), " triangles");
+    return "raytrace";
 }
 
 void IndirectChoice::decide(const Scene& scene) {
+    if (method == "auto") method = chooseIndirectMethod(scene, methodReason);
+    else if (methodReason.empty()) methodReason = "as asked (--indirect-method)";
     bounceCount = countBounces(scene, bounces);
     solver.bounces = enabled ? bounceCount.bounces : 0;
     solver.albedo = bounceCount.meanAlbedo;
@@ -38,6 +60,7 @@ void IndirectChoice::decide(const Scene& scene) {
 }
 
 std::string IndirectChoice::describe() const {
+    if (method == "auto") return "auto (chosen from the scene when it is known)";
     if (method == "slices" || method == "slice-quads" || method == "raymarch")
         return concat(method, ": ", gather.imageSize, "x", gather.imageSize, " fish-eye gathers over ", gather.resolution,
                       " voxels along the longest side (slices ", gather.sliceSupersample,
@@ -45,6 +68,10 @@ std::string IndirectChoice::describe() const {
                       gather.nearVoxels == 0 ? std::string("its own voxel")
                                              : concat("its voxel and ", gather.nearVoxels, " more each way"),
                       ")");
+    if (method == "raytrace")
+        return concat("raytrace: ", rayGatherSettings(*this).rays,
+                      " stratified cosine-weighted rays (Embree) per gather, reading the cache meshes' radiance where "
+                      "they land (consistent: no proxy)");
     return concat(method, ": the radiance proxy's triangles (", gather.resolution,
                   " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }
@@ -173,7 +200,9 @@ void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requ
 // --- The indirect gather -----------------------------------------------------------
 
 std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, const Scene& scene,
-                                                         const IndirectChoice& choice) {
+                                                         const IndirectChoice& given) {
+    IndirectChoice choice = given;
+    if (choice.method == "auto") choice.method = chooseIndirectMethod(scene, choice.methodReason);
     if (choice.method == "slices") return std::make_unique<SliceGather>(context, scene, choice.gather);
     // The comparisons of `bench indirect`: the same proxy, gathered otherwise.
     if (choice.method == "slice-quads") {
@@ -182,6 +211,7 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
         return std::make_unique<SliceGather>(context, scene, g);
     }
     if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
+    if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
     for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
         if (choice.method == triangleProjectionName(p)) {
             TriangleGatherSettings t;
@@ -235,7 +265,15 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
     return [&scene, direct, indirect]() {
         WorkerSamplers samplers;
         samplers.direct = std::make_unique<ConfiguredDirectSampler>(scene, direct);
-        if (indirect.active()) samplers.indirect = std::make_unique<OwnContextGather>(scene, indirect, direct.backend);
+        if (indirect.active()) {
+            // The ray gather draws nothing: no GL context of its own.
+            IndirectChoice resolved = indirect;
+            if (resolved.method == "auto") resolved.method = chooseIndirectMethod(scene, resolved.methodReason);
+            if (resolved.method == "raytrace")
+                samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
+            else
+                samplers.indirect = std::make_unique<OwnContextGather>(scene, resolved, direct.backend);
+        }
         return samplers;
     };
 }

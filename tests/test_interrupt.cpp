@@ -144,7 +144,10 @@ TEST_F(Interrupt, SecondSignalExitsAtOnceAndLeavesNoTemporary) {
     const auto second = Clock::now();
     render.signal(SIGINT);
     ASSERT_EQ(render.wait(30), 130) << render.output();
-    EXPECT_LT(std::chrono::duration<double>(Clock::now() - second).count(), 1.0) << render.output();
+    // At once: not after the worker's round or the writing of files. 2 s,
+    // not less: on a loaded 2-core machine the child's exit and this
+    // test's polling alone measured 1.05 s.
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - second).count(), 2.0) << render.output();
     EXPECT_TRUE(temporaries().empty()) << testing::PrintToString(temporaries());
     EXPECT_EQ(render.output().find("interrupted: wrote"), std::string::npos) << render.output();
     // What is there is whole: an image written before the second signal is valid.

@@ -65,7 +65,11 @@ struct GridObject {
 constexpr uint32_t kGridSeedBase = 0x40000000u;
 
 struct CacheState {
-    CacheSettings settings;
+    CacheSettings settings;       // as made (the cache file's fingerprint); refinement uses effective()
+    // Progressive refinement: each level halves the tolerances and the
+    // smallest edge (in the scene) and doubles the samples a vertex may take
+    // (IrradianceCache::tighten). Saved in the cache file.
+    int level = 0;
     double diagonal = 1;          // of the scene's bounds
     std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
@@ -79,6 +83,11 @@ struct CacheState {
     size_t detachedFaces = 0;     // non-manifold input faces given vertices of their own
     size_t backFaces = 0;         // reversed copies of faces lit from behind
 };
+
+// The settings at the cache's level: CacheState::level halvings of the
+// split and noise tolerances and of the smallest edge as a fraction of the
+// scene, and as many doublings of the samples per vertex (at most 4096).
+CacheSettings effectiveSettings(const CacheState& s);
 
 // A hash of everything in the scene that the cache depends on: geometry,
 // normals, materials and lights. A cache file records it.

@@ -13,6 +13,7 @@
 #include "core/raytrace/PathTracer.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
+#include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
 #include "gpu_sampling/gl/GlContext.h"
@@ -55,6 +56,7 @@ struct Config {
     // "slices 40 @64", "slices 40 @64 near1": no commas, also a CSV cell and a gnuplot label.
     std::string label() const { return concat(method, " ", shortLabel()); }
     std::string shortLabel() const {
+        if (method == "raytrace") return concat(imageSize * imageSize / 4, " rays");
         return concat(imageSize, " @", resolution, nearVoxels > 0 ? concat(" near", nearVoxels) : std::string());
     }
 };
@@ -91,8 +93,9 @@ Workload workloadFor(const BenchOptions& options) {
         sizes("fisheye-triangles", {24, 40}, 32);
         sizes("perspective", {64, 128}, 32);
         sizes("hemicube", {32, 64}, 32);
+        sizes("raytrace", {24, 40}, 0);
         p.mainResolution = {{"slices", 32},      {"slice-quads", 32}, {"raymarch", 32}, {"fisheye-triangles", 32},
-                            {"perspective", 32}, {"hemicube", 32}};
+                            {"perspective", 32}, {"hemicube", 32},    {"raytrace", 0}};
         return p;
     }
     p.areaPoints = 96;
@@ -119,8 +122,9 @@ Workload workloadFor(const BenchOptions& options) {
     sizes("hemicube", {32, 64, 128}, 32);
     sizes("hemicube", {64}, 16);
     sizes("hemicube", {64}, 64);
+    sizes("raytrace", {16, 24, 40, 64}, 0);
     p.mainResolution = {{"slices", 64},      {"slice-quads", 64}, {"raymarch", 64}, {"fisheye-triangles", 32},
-                        {"perspective", 32}, {"hemicube", 32}};
+                        {"perspective", 32}, {"hemicube", 32},    {"raytrace", 0}};
     return p;
 }
 
@@ -149,6 +153,16 @@ Gatherer gathererOf(std::unique_ptr<Gather> gather, Drawn drawn) {
 
 Gatherer makeGatherer(GlContext& context, const Scene& scene, const Config& c) {
     auto nearCount = [](const auto& gather) { return gather.lastNearCount(); };
+    if (c.method == "raytrace") {  // CPU rays: no GL phases, nothing drawn
+        RayGatherSettings s;
+        s.rays = c.imageSize * c.imageSize / 4;
+        Gatherer g;
+        g.estimator = std::make_unique<RayGather>(scene, s);
+        g.timePhases = [](bool) {};
+        g.phases = [] { return GatherPhaseTimes{}; };
+        g.drawn = [] { return size_t(0); };
+        return g;
+    }
     if (c.method == "slices" || c.method == "slice-quads") {
         GatherSettings s;
         s.imageSize = c.imageSize;
@@ -297,42 +311,15 @@ struct PointReference {
     double source = 0;  // luminance of the exact-geometry gather of the source
 };
 
-// What a perfect gather of the source gives: cosine-weighted rays on exact
-// geometry (Embree), each taking Kd/π × the cache's irradiance where it lands
-// on the side it sees (zero where the cache has no mesh: the back of a
-// wall, as the proxy does), side × side stratified (concentric map).
+// What a perfect gather of the source gives: the ray gather's own work
+// (gatherCachedRadiance: cosine-weighted rays on exact geometry, each taking
+// Kd/π × the cache's irradiance where it lands), side × side stratified.
 double sourceGather(const Scene& scene, const EmbreeScene& rays, const std::vector<MeshIrradianceLookup>& lookups,
                     const Vec3& x, const Vec3& n, int side, uint32_t seed) {
-    Vec3 t, b;
-    orthonormalBasis(n, t, b);
-    const Vec3 origin = rays.spawnPoint(x, n, n);
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    Rgb sum(0.0);
-    for (int i = 0; i < side; ++i)
-        for (int j = 0; j < side; ++j) {
-            // Shirley & Chiu's concentric map of the stratum's jittered point.
-            const double a = 2 * (i + unit(rng)) / side - 1, c = 2 * (j + unit(rng)) / side - 1;
-            double r, phi;
-            if (a == 0 && c == 0) {
-                r = 0, phi = 0;
-            } else if (std::abs(a) > std::abs(c)) {
-                r = a, phi = (kPi / 4) * (c / a);
-            } else {
-                r = c, phi = kPi / 2 - (kPi / 4) * (a / c);
-            }
-            const double dx = r * std::cos(phi), dy = r * std::sin(phi);
-            const Vec3 d = dx * t + dy * b + std::sqrt(std::max(0.0, 1 - dx * dx - dy * dy)) * n;
-            RayHit hit;
-            if (!rays.intersect(origin, d, 0.0, kInf, hit)) continue;
-            const SurfacePoint s = rays.surface(hit);
-            const Vec3 seen = glm::dot(s.geometricNormal, d) < 0 ? s.geometricNormal : -s.geometricNormal;
-            Rgb e(0.0);
-            for (const MeshIrradianceLookup& l : lookups) e += l.at(s.position, seen);
-            sum += scene.materials[s.material].kd * e / kPi;
-        }
-    // Cosine-weighted: E = π × mean radiance.
-    return luminance(kPi * sum / double(side * side));
+    const std::vector<char> closed = closedMeshesOf(scene);
+    std::vector<const MeshIrradianceLookup*> pointers;
+    for (const MeshIrradianceLookup& l : lookups) pointers.push_back(&l);
+    return luminance(gatherCachedRadiance(scene, rays, closed, pointers, x, n, side, seed));
 }
 
 // --- Measuring -----------------------------------------------------------------------------
@@ -624,9 +611,9 @@ const std::vector<GnuplotOutput> kPlots = {
 };
 
 const std::vector<std::string> kMethods = {"slices",      "slice-quads", "raymarch", "fisheye-triangles",
-                                           "perspective", "hemicube"};
+                                           "perspective", "hemicube",    "raytrace"};
 // One colour per method, in kMethods order (readable on white).
-const char* const kColours[] = {"#7b2cbf", "#2a9d8f", "#56b4e9", "#e69f00", "#d62728", "#0072b2"};
+const char* const kColours[] = {"#7b2cbf", "#2a9d8f", "#56b4e9", "#e69f00", "#d62728", "#0072b2", "#222222"};
 
 std::string gnuplotScript(const std::vector<Row>& rows, const Workload& work, double floorError, double pathNoise,
                           size_t pointCount) {

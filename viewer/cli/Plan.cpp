@@ -127,13 +127,15 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         std::printf("  indirect light: none: %s\n", b.reason.c_str());
     } else {
         std::printf("  indirect light: %s\n", b.reason.c_str());
-        std::printf("  indirect gather: %s\n", indirect.describe().c_str());
-        const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
-        std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
-                    "(empty faces are freed)\n",
-                    grid.describe().c_str(), grid.voxel, 2 * (grid.dims[0] + grid.dims[1] + grid.dims[2]),
-                    // RGBA32F radiance and R32F depth per texel, two faces per slice, three axes.
-                    20.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
+        std::printf("  indirect gather: %s; %s\n", indirect.describe().c_str(), indirect.methodReason.c_str());
+        if (indirect.method != "raytrace") {  // the others gather from voxels or a proxy cut to them
+            const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
+            std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
+                        "(empty faces are freed)\n",
+                        grid.describe().c_str(), grid.voxel, 2 * (grid.dims[0] + grid.dims[1] + grid.dims[2]),
+                        // RGBA32F radiance and R32F depth per texel, two faces per slice, three axes.
+                        20.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
+        }
         const CacheSettings& ic = indirect.solver.cache;
         std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene, split tolerance "
                     "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "

@@ -333,6 +333,7 @@ int runRender(const std::vector<std::string>& args) {
     sessionSettings.worker.seed = choice.seed;
     sessionSettings.worker.publishSeconds = o.number("publish", 0, 3600);
     sessionSettings.worker.threads = o.integer("sampling-threads", 0, 256);
+    sessionSettings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;
     sessionSettings.cachePath = cachePath;
 
     const auto t0 = Clock::now();

@@ -41,10 +41,12 @@ void declareIndirectOptions(Options& o) {
             concat(b.missingFraction));
     o.value("max-bounces", "N", "at most N bounces whatever the albedo", concat(b.maxBounces));
     o.value("indirect-method", "NAME",
-            "the hemispherical gather: slices (the paper's voxel slices), slice-quads (one quad per slice face), "
-            "raymarch (the voxels as a 3D texture), fisheye-triangles, perspective (one 160-degree image) or "
-            "hemicube (the proxy's triangles at --voxels, image --gather-size)",
-            std::string("slices"));
+            "the hemispherical gather: auto (chosen from the scene, plan says which and why), raytrace "
+            "(--gather-size^2/4 Embree rays reading the cache where they land: consistent), slices (the paper's "
+            "voxel slices), slice-quads (one quad per slice face), raymarch (the voxels as a 3D texture), "
+            "fisheye-triangles, perspective (one 160-degree image) or hemicube (the proxy's triangles at --voxels, "
+            "image --gather-size)",
+            std::string("auto"));
     o.value("voxels", "N", "voxel slices: N voxels along the scene's longest side (32..128 typical)",
             concat(g.resolution));
     o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
@@ -56,7 +58,8 @@ IndirectChoice readIndirectOptions(const Options& o) {
     IndirectChoice c;
     c.enabled = !o.isSet("direct-only");
     c.method = o.str("indirect-method");
-    const std::vector<std::string> names = indirectMethodNames();
+    std::vector<std::string> names = indirectMethodNames();
+    names.insert(names.begin(), "auto");
     if (std::find(names.begin(), names.end(), c.method) == names.end()) {
         std::string list;
         for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;

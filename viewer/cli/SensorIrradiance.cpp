@@ -184,6 +184,7 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
     SessionSettings settings;
     settings.cache = s.cache;
     settings.worker.seed = choice.seed;
+    settings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;
     settings.indirect = s.indirect.solver;
     ProgressiveSession session(scene, settings, samplerFactory(scene, choice, s.indirect));
     session.start();

@@ -77,6 +77,7 @@ int runView(const std::vector<std::string>& args) {
     s.worker.seed = s.direct.seed;
     s.worker.publishSeconds = o.number("publish", 0, 3600);
     s.worker.threads = o.integer("sampling-threads", 0, 256);
+    s.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;
     if (o.has("samples")) s.worker.maxSamples = uint64_t(o.number("samples", 1, 1e15));
     s.cachePath = o.has("cache") ? o.str("cache") : "";
     if (!s.cachePath.empty()) checkOutputDirectory(s.cachePath);

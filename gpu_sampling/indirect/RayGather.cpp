@@ -1,0 +1,126 @@
+#include "RayGather.h"
+
+#include "RadianceProxy.h"
+#include "core/Error.h"
+#include "core/MeshUtil.h"
+#include "core/Random.h"
+#include "core/raytrace/EmbreeScene.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace ml {
+
+void RayGatherSettings::validate() const {
+    if (rays < 4 || rays > 65536) throw InputError(concat("ray gather: ", rays, " rays is not within 4..65536"));
+}
+
+RayGather::RayGather(const Scene& scene, const RayGatherSettings& settings)
+    : scene_(scene), settings_(settings), rays_(std::make_unique<EmbreeScene>(scene)) {
+    settings_.validate();
+    closed_ = closedMeshesOf(scene);
+}
+
+std::vector<char> closedMeshesOf(const Scene& scene) {
+    std::vector<char> closed;
+    for (const Mesh& m : scene.meshes) closed.push_back(isClosedMesh(m) ? 1 : 0);
+    return closed;
+}
+
+RayGather::~RayGather() = default;
+
+std::string RayGather::name() const { return "raytrace"; }
+
+void RayGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance) {
+    const auto start = std::chrono::steady_clock::now();
+    if (slot >= sources_.size()) sources_.resize(slot + 1);
+    auto source = std::make_unique<Source>();
+    source->meshes = irradiance;
+    // Lookup cells of about a cache triangle: 1/64 of the scene (the
+    // default indirect edge is 1/8, direct meshes refine far finer).
+    const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
+    for (const IrradianceMeshCopy& m : source->meshes) {
+        source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+        source->pointers.push_back(source->lookups.back().get());
+        source->bytes += m.positions.size() * (2 * sizeof(Vec3) + sizeof(Rgb) + 4) + m.triangles.size() * 12 * 2;
+    }
+    const double rays = std::max(16.0, settings_.rays * std::clamp(importance, 0.0, 1.0));
+    source->strata = std::max(4, int(std::lround(std::sqrt(rays))));
+    sources_[slot] = std::move(source);
+    stats_.buildSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    size_t held = 0;
+    for (const auto& s : sources_)
+        if (s) held += s->bytes;
+    stats_.sourceBytes = held;
+    stats_.source = concat(sources_[slot]->meshes.size(), " meshes looked up, ", sources_[slot]->strata *
+                                                                                   sources_[slot]->strata,
+                           " rays per gather");
+}
+
+void RayGather::releaseSource(size_t slot) {
+    if (slot < sources_.size()) sources_[slot].reset();
+}
+
+Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
+                         const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
+                         int strata, uint32_t seed) {
+    const Vec3 n = glm::normalize(nIn);
+    Vec3 t, b;
+    orthonormalBasis(n, t, b);
+    Vec3 origin = rays.spawnPoint(x, n, n);
+    // On an edge or in a corner a surface meets x's own: rays leaving along
+    // it would start on its plane and slip past it. So where a surface faces
+    // the point within ε along a tangent, the origin moves ε away from it,
+    // into its own surface (as NearField nudges the voxel gathers' eye).
+    const double eps = 1e-5 * std::max(scene.bounds.diagonal(), 1e-30);
+    RayFilter facing;
+    facing.frontOnly = true;
+    const Vec3 start = origin;
+    for (const Vec3& d : {t, -t, b, -b}) {
+        RayHit probe;
+        if (rays.intersect(start - eps * d, d, 0.0, 2 * eps, probe, facing)) origin -= eps * d;
+    }
+    const int s = strata;
+    Rgb sum(0.0);
+    uint32_t state = hash32(seed ^ 0x2545f491u);
+    const auto next = [&state] {
+        state = hash32(state + 0x9e3779b9u);
+        return (state >> 8) * (1.0 / 16777216.0);
+    };
+    for (int i = 0; i < s; ++i)
+        for (int j = 0; j < s; ++j) {
+            // Cosine-weighted by Malley's method over a jittered stratum.
+            const double u1 = (i + next()) / s, u2 = (j + next()) / s;
+            const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+            const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+            RayHit hit;
+            if (!rays.intersect(origin, w, 0.0, kInf, hit)) continue;
+            const SurfacePoint y = rays.surface(hit);
+            // The side the ray arrives on; a closed object's inside is black.
+            Vec3 side = y.geometricNormal;
+            if (glm::dot(side, w) > 0) {
+                if (closedMeshes[hit.mesh]) continue;
+                side = -side;
+            }
+            Rgb e(0.0);
+            for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(y.position, side);
+            sum += scene.materials[y.material].kd * e;
+        }
+    // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
+    return sum / double(s * s);
+}
+
+Rgb RayGather::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
+    ML_ASSERT(slot < sources_.size() && sources_[slot], "ray gather: source ", slot, " is not built");
+    const auto start = std::chrono::steady_clock::now();
+    const Source& source = *sources_[slot];
+    const Rgb result = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed);
+    stats_.estimates++;
+    stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+IndirectStats RayGather::stats() const { return stats_; }
+
+}  // namespace ml
