@@ -89,6 +89,8 @@ namespace ml {
     X(PFNGLCREATETEXTURESPROC, CreateTextures)                          \
     X(PFNGLTEXTURESTORAGE2DPROC, TextureStorage2D)                      \
     X(PFNGLTEXTUREPARAMETERIPROC, TextureParameteri)                    \
+    X(PFNGLTEXTURESUBIMAGE2DPROC, TextureSubImage2D)                    \
+    X(PFNGLGENERATETEXTUREMIPMAPPROC, GenerateTextureMipmap)            \
     X(PFNGLDELETETEXTURESPROC, DeleteTextures)                          \
     X(PFNGLCREATEFRAMEBUFFERSPROC, CreateFramebuffers)                  \
     X(PFNGLNAMEDFRAMEBUFFERTEXTUREPROC, NamedFramebufferTexture)        \

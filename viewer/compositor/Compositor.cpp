@@ -35,8 +35,29 @@ namespace {
 struct SceneVertex {
     glm::vec3 position, kd;
     int32_t light;  // index into Scene::lights, −1 for faces that emit nothing
+    glm::vec2 uv;   // Mesh::texcoords; (0, 0) for faces that draw no texture
 };
-static_assert(sizeof(SceneVertex) == 7 * sizeof(float), "SceneVertex is tightly packed");
+static_assert(sizeof(SceneVertex) == 9 * sizeof(float), "SceneVertex is tightly packed");
+
+// Whether a face draws its material's textures: the material has one and
+// the mesh has coordinates for it.
+bool drawsTexture(const Scene& scene, const Mesh& m, size_t triangle) {
+    const Material& mat = scene.materials[m.materials[triangle]];
+    return !m.texcoords.empty() && (mat.kdMap || mat.keMap);
+}
+
+glm::vec4 transformOf(const TextureMap& map) {
+    return glm::vec4(float(map.scale.x), float(map.scale.y), float(map.offset.x), float(map.offset.y));
+}
+
+GLint glWrap(TextureWrap w) {
+    switch (w) {
+        case TextureWrap::Repeat: return GL_REPEAT;
+        case TextureWrap::MirroredRepeat: return GL_MIRRORED_REPEAT;
+        case TextureWrap::ClampToEdge: return GL_CLAMP_TO_EDGE;
+    }
+    return GL_REPEAT;
+}
 
 int quantityCode(CompositeQuantity q) {
     switch (q) {
@@ -71,11 +92,28 @@ struct Compositor::Impl {
     GlVertexArray sceneVao, emptyVao;
     GLsizei sceneVertices = 0;
 
+    // Textures drawn per pixel. Without any, the scene is one draw and the
+    // shaders are those of before (TEXTURES 0): untextured scenes render
+    // bit for bit as they did. With some, the soup holds the untextured
+    // faces first, in the scene's order, then one range per textured
+    // material, each drawn with its own textures bound: a handful of
+    // draws, where an atlas or an array would need textures of one size
+    // or seams handled for every wrap mode.
+    bool textured = false;
+    struct DrawRange {
+        GLint first = 0;
+        GLsizei count = 0;
+        int material = -1;  // index into Scene::materials; −1: faces with their constant Kd
+    };
+    std::vector<DrawRange> ranges;
+    std::map<const Texture*, GlTexture> textures;  // sRGB8 alpha8, mipmapped
+    GLint anisotropy = 1;                          // GL_TEXTURE_MAX_ANISOTROPY when the GL offers it
+
     // Targets of one size, kept between frames; remade when the size changes.
     struct Targets {
         int width = 0, height = 0, supersample = 0;  // pixels, sub-pixels per side
         // Sub-pixel targets.
-        GlTexture surface, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth;
+        GlTexture surface, emissionScale, irradianceSum, irradianceMesh, composite, sceneDepth, cacheDepth;
         GlFramebuffer surfaceFb, irradianceFb, irradianceMeshFb, compositeFb;
         // Pixel targets: the box-filtered composite; the forward pass's image and depth.
         GlTexture pixels, forwardColour, forwardDepth;
@@ -94,6 +132,8 @@ struct Compositor::Impl {
     GlProgram program(const char* vertName, std::string vert, const char* fragName, std::string frag) const {
         return GlProgram(gl, {{GL_VERTEX_SHADER, vertName, std::move(vert)}, {GL_FRAGMENT_SHADER, fragName, std::move(frag)}});
     }
+    // "#define TEXTURES 0|1\n": set once per scene (common_textures.glsl).
+    std::string texturesDefine() const { return concat("#define TEXTURES ", textured ? 1 : 0, "\n"); }
 
     // Display variants: operator and contours matter only where they are used.
     static std::string displayDefines(CompositeQuantity q, int supersample, ToneOperator op, bool contours, int& key) {
@@ -108,7 +148,7 @@ struct Compositor::Impl {
         const int key = quantityCode(q);
         auto it = compositePrograms.find(key);
         if (it == compositePrograms.end()) {
-            const std::string defines = concat("#define QUANTITY ", key, "\n");
+            const std::string defines = concat("#define QUANTITY ", key, "\n", texturesDefine());
             it = compositePrograms
                      .emplace(key, program("composite.vert", glslSource({shaders::composite_vert}), "composite.frag",
                                            glslSource({defines.c_str(), shaders::common_constants_glsl,
@@ -120,7 +160,7 @@ struct Compositor::Impl {
 
     const GlProgram& displayProgram(CompositeQuantity q, int supersample, ToneOperator op, bool contours) {
         int key = 0;
-        const std::string defines = displayDefines(q, supersample, op, contours, key);
+        const std::string defines = displayDefines(q, supersample, op, contours, key) + texturesDefine();
         auto it = displayPrograms.find(key);
         if (it == displayPrograms.end())
             it = displayPrograms
@@ -134,24 +174,29 @@ struct Compositor::Impl {
 
     const GlProgram& forwardProgram(CompositeQuantity q, ToneOperator op, bool contours) {
         int key = 0;
-        const std::string defines = displayDefines(q, 1, op, contours, key);
+        const std::string defines = displayDefines(q, 1, op, contours, key) + texturesDefine();
         auto it = forwardPrograms.find(key);
         if (it == forwardPrograms.end())
             it = forwardPrograms
-                     .emplace(key, program("scene_forward.vert", glslSource({shaders::scene_forward_vert}),
+                     .emplace(key, program("scene_forward.vert",
+                                           glslSource({texturesDefine().c_str(), shaders::scene_forward_vert}),
                                            "scene_forward.frag",
                                            glslSource({defines.c_str(), shaders::common_constants_glsl,
-                                                       shaders::common_display_glsl, shaders::scene_forward_frag})))
+                                                       shaders::common_display_glsl, shaders::common_textures_glsl,
+                                                       shaders::scene_forward_frag})))
                      .first;
         return it->second;
     }
 
-    Impl(GlContext& ctx, const Scene& s) : gl(ctx.gl()), scene(s), origin(s.bounds.center()) {
-        surfaceProgram = program("scene_gbuffer.vert", glslSource({shaders::scene_gbuffer_vert}), "scene_gbuffer.frag",
-                                 glslSource({shaders::scene_gbuffer_frag}));
+    Impl(GlContext& ctx, const Scene& s)
+        : gl(ctx.gl()), scene(s), origin(s.bounds.center()), textured(s.hasTextures()) {
+        const std::string tex = texturesDefine();
+        surfaceProgram = program("scene_gbuffer.vert", glslSource({tex.c_str(), shaders::scene_gbuffer_vert}),
+                                 "scene_gbuffer.frag",
+                                 glslSource({tex.c_str(), shaders::common_textures_glsl, shaders::scene_gbuffer_frag}));
         irradianceProgram = program("irradiance.vert", glslSource({shaders::irradiance_vert}), "irradiance.frag",
                                     glslSource({shaders::irradiance_frag}));
-        occluderProgram = program("scene_gbuffer.vert", glslSource({shaders::scene_gbuffer_vert}), "occluder.frag",
+        occluderProgram = program("scene_gbuffer.vert", glslSource({tex.c_str(), shaders::scene_gbuffer_vert}), "occluder.frag",
                                   glslSource({shaders::occluder_frag}));
         accumulateProgram = program("composite.vert", glslSource({shaders::composite_vert}), "accumulate.frag",
                                     glslSource({shaders::accumulate_frag}));
@@ -168,20 +213,33 @@ struct Compositor::Impl {
             for (uint32_t tri : scene.lights[l].triangles) lightOf[{scene.lights[l].mesh, tri}] = int32_t(l);
         std::vector<SceneVertex> soup;
         soup.reserve(scene.triangleCount() * 3);
-        for (uint32_t mi = 0; mi < scene.meshes.size(); ++mi) {
-            const Mesh& m = scene.meshes[mi];
-            for (size_t tri = 0; tri < m.triangles.size(); ++tri) {
-                const Material& mat = scene.materials[m.materials[tri]];
-                int32_t light = -1;
-                if (mat.emissive()) {
-                    // Scene::finalize makes every emissive face part of a light.
-                    const auto it = lightOf.find({mi, uint32_t(tri)});
-                    ML_ASSERT(it != lightOf.end(), "emissive triangle ", tri, " of mesh '", m.name, "' in no light");
-                    light = it->second;
+        // Untextured faces first (range material −1), then each textured
+        // material's (see `ranges`).
+        for (int pass = -1; pass < (textured ? int(scene.materials.size()) : 0); ++pass) {
+            const size_t start = soup.size();
+            for (uint32_t mi = 0; mi < scene.meshes.size(); ++mi) {
+                const Mesh& m = scene.meshes[mi];
+                for (size_t tri = 0; tri < m.triangles.size(); ++tri) {
+                    const bool mapped = textured && drawsTexture(scene, m, tri);
+                    if (pass < 0 ? mapped : !mapped || int(m.materials[tri]) != pass) continue;
+                    const Material& mat = scene.materials[m.materials[tri]];
+                    int32_t light = -1;
+                    if (mat.emissive()) {
+                        // Scene::finalize makes every emissive face part of a light.
+                        const auto it = lightOf.find({mi, uint32_t(tri)});
+                        ML_ASSERT(it != lightOf.end(), "emissive triangle ", tri, " of mesh '", m.name,
+                                  "' in no light");
+                        light = it->second;
+                    }
+                    const Triangle3 p = m.triangle(tri);
+                    for (int k = 0; k < 3; ++k)
+                        soup.push_back({glm::vec3(p[k] - origin), glm::vec3(mat.kd), light,
+                                        mapped ? glm::vec2(m.texcoords[m.triangles[tri][k]]) : glm::vec2(0.0f)});
                 }
-                for (const Vec3& p : m.triangle(tri)) soup.push_back({glm::vec3(p - origin), glm::vec3(mat.kd), light});
             }
+            if (soup.size() > start || pass < 0) ranges.push_back({GLint(start), GLsizei(soup.size() - start), pass});
         }
+        if (textured) uploadTextures();
         sceneVertices = GLsizei(soup.size());
         sceneBuffer = makeBuffer(gl, std::max<size_t>(soup.size(), 1) * sizeof(SceneVertex), soup.data());
         sceneVao = makeVertexArray(gl);
@@ -193,6 +251,9 @@ struct Compositor::Impl {
         gl.EnableVertexArrayAttrib(sceneVao.id(), 2);
         gl.VertexArrayAttribIFormat(sceneVao.id(), 2, 1, GL_INT, GLuint(6 * sizeof(float)));
         gl.VertexArrayAttribBinding(sceneVao.id(), 2, 0);
+        gl.EnableVertexArrayAttrib(sceneVao.id(), 3);
+        gl.VertexArrayAttribFormat(sceneVao.id(), 3, 2, GL_FLOAT, GL_FALSE, GLuint(7 * sizeof(float)));
+        gl.VertexArrayAttribBinding(sceneVao.id(), 3, 0);
         gl.VertexArrayVertexBuffer(sceneVao.id(), 0, sceneBuffer.id(), 0, GLsizei(sizeof(SceneVertex)));
         lightEmissionBuffer = makeBuffer(gl, std::max<size_t>(scene.lights.size(), 1) * sizeof(glm::vec4), nullptr,
                                          GL_DYNAMIC_DRAW);
@@ -201,6 +262,82 @@ struct Compositor::Impl {
         paletteBuffer = makeBuffer(gl, palette.size() * sizeof(glm::vec4), palette.data());
         emptyVao = makeVertexArray(gl);
         checkGl(gl, "creating the compositor");
+    }
+
+    // Each texture a drawn material uses, once: sRGB 8-bit (the GL decodes
+    // to linear before it filters, as Texture::sample does), a full mip
+    // chain, trilinear, and anisotropic up to 16 where the GL has it, but
+    // not on llvmpipe: it offers GL_ARB_texture_filter_anisotropic, yet its
+    // anisotropic path ignores the magnification filter and blurs magnified
+    // texels by most of a pixel (tests/test_textures.cpp: a nearest texel
+    // came out blended with its neighbour, Kd wrong by up to 2.4×), and
+    // each of its taps costs CPU time.
+    void uploadTextures() {
+        const bool llvmpipe = gl.renderer.find("llvmpipe") != std::string::npos;
+        if (!llvmpipe && (gl.hasExtension("GL_ARB_texture_filter_anisotropic") ||
+                          gl.hasExtension("GL_EXT_texture_filter_anisotropic"))) {
+            GLint most = 1;
+            gl.GetIntegerv(GL_MAX_TEXTURE_MAX_ANISOTROPY, &most);
+            anisotropy = std::clamp(most, 1, 16);
+        }
+        for (const DrawRange& r : ranges) {
+            if (r.material < 0) continue;
+            const Material& mat = scene.materials[size_t(r.material)];
+            for (const TextureMap* map : {&mat.kdMap, &mat.keMap}) {
+                if (!*map || textures.count(map->image.get())) continue;
+                const Texture& image = *map->image;
+                GLuint n = 0;
+                gl.CreateTextures(GL_TEXTURE_2D, 1, &n);
+                GlTexture texture(gl, n);
+                int levels = 1;
+                while ((std::max(image.width, image.height) >> levels) > 0) ++levels;
+                gl.TextureStorage2D(n, levels, GL_SRGB8_ALPHA8, image.width, image.height);
+                gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+                gl.TextureSubImage2D(n, 0, 0, 0, image.width, image.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                                     image.rgba.data());
+                gl.GenerateTextureMipmap(n);
+                gl.TextureParameteri(n, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+                gl.TextureParameteri(n, GL_TEXTURE_MAG_FILTER, image.nearest ? GL_NEAREST : GL_LINEAR);
+                gl.TextureParameteri(n, GL_TEXTURE_WRAP_S, glWrap(image.wrapS));
+                gl.TextureParameteri(n, GL_TEXTURE_WRAP_T, glWrap(image.wrapT));
+                if (anisotropy > 1) gl.TextureParameteri(n, GL_TEXTURE_MAX_ANISOTROPY, anisotropy);
+                textures.emplace(&image, std::move(texture));
+            }
+        }
+    }
+
+    // The scene's faces with program `p` in use and its vertex array bound:
+    // one draw without textures, else a draw per range with its uniforms.
+    void drawSceneRanges(const GlProgram& p) {
+        gl.BindVertexArray(sceneVao.id());
+        if (!textured) {
+            gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+            return;
+        }
+        for (const DrawRange& r : ranges) {
+            if (r.count == 0) continue;
+            const Material* mat = r.material >= 0 ? &scene.materials[size_t(r.material)] : nullptr;
+            const bool kd = mat && mat->kdMap, ke = mat && mat->keMap;
+            gl.Uniform1i(p.uniform("uKdMapped"), kd ? 1 : 0);
+            gl.Uniform1i(p.uniform("uKeMapped"), ke ? 1 : 0);
+            if (kd) {
+                gl.BindTextureUnit(4, textures.at(mat->kdMap.image.get()).id());
+                const glm::vec3 f(mat->kdMap.factor);
+                const glm::vec4 x = transformOf(mat->kdMap);
+                gl.Uniform3f(p.uniform("uKdFactor"), f.r, f.g, f.b);
+                gl.Uniform4f(p.uniform("uKdTransform"), x.x, x.y, x.z, x.w);
+            }
+            if (ke) {
+                gl.BindTextureUnit(5, textures.at(mat->keMap.image.get()).id());
+                glm::vec3 scale(0.0f);
+                for (int c = 0; c < 3; ++c)
+                    if (mat->ke[c] > 0) scale[c] = float(mat->keMap.factor[c] / mat->ke[c]);
+                const glm::vec4 x = transformOf(mat->keMap);
+                gl.Uniform3f(p.uniform("uKeScale"), scale.r, scale.g, scale.b);
+                gl.Uniform4f(p.uniform("uKeTransform"), x.x, x.y, x.z, x.w);
+            }
+            gl.DrawArrays(GL_TRIANGLES, r.first, r.count);
+        }
     }
 
     void ensureTargets(int width, int height, int supersample) {
@@ -213,7 +350,12 @@ struct Compositor::Impl {
         t.sceneDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
         t.irradianceMesh = makeTexture2D(gl, GL_RGBA32F, w, h);
         t.cacheDepth = makeTexture2D(gl, GL_DEPTH_COMPONENT32F, w, h);
-        t.surfaceFb = makeFramebuffer(gl, {t.surface.id()}, t.sceneDepth.id(), "compositor");
+        if (textured) {
+            t.emissionScale = makeTexture2D(gl, GL_RGBA16F, w, h);
+            t.surfaceFb = makeFramebuffer(gl, {t.surface.id(), t.emissionScale.id()}, t.sceneDepth.id(), "compositor");
+        } else {
+            t.surfaceFb = makeFramebuffer(gl, {t.surface.id()}, t.sceneDepth.id(), "compositor");
+        }
         t.irradianceFb = makeFramebuffer(gl, {t.irradianceSum.id()}, t.cacheDepth.id(), "compositor");
         t.irradianceMeshFb = makeFramebuffer(gl, {t.irradianceMesh.id()}, t.cacheDepth.id(), "compositor");
         t.compositeFb = makeFramebuffer(gl, {t.composite.id()}, 0, "compositor");
@@ -441,13 +583,13 @@ struct Compositor::Impl {
         const float farDepth = 0.0f;  // reversed depth
         gl.BindFramebuffer(GL_FRAMEBUFFER, t.surfaceFb.id());
         gl.ClearBufferfv(GL_COLOR, 0, zero);
+        if (textured) gl.ClearBufferfv(GL_COLOR, 1, zero);
         gl.ClearBufferfv(GL_DEPTH, 0, &farDepth);
         gl.Enable(GL_DEPTH_TEST);
         gl.DepthFunc(GL_GREATER);
         surfaceProgram.use();
         gl.UniformMatrix4fv(surfaceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
-        gl.BindVertexArray(sceneVao.id());
-        gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+        drawSceneRanges(surfaceProgram);
         gl.Disable(GL_DEPTH_TEST);
         checkGl(gl, "drawing the surfaces");
         surfaced = true;
@@ -458,6 +600,7 @@ struct Compositor::Impl {
         setLuxFactors(p);
         gl.BindTextureUnit(0, t.surface.id());
         gl.BindTextureUnit(1, t.irradianceSum.id());
+        if (textured) gl.BindTextureUnit(6, t.emissionScale.id());
         gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
     }
 
@@ -528,8 +671,7 @@ struct Compositor::Impl {
             gl.BindTextureUnit(1, t.irradianceSum.id());
             gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
             bindDisplayUniforms(forward, d);
-            gl.BindVertexArray(sceneVao.id());
-            gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
+            drawSceneRanges(forward);
             gl.Disable(GL_DEPTH_TEST);
             gl.BlitNamedFramebuffer(t.forwardFb.id(), framebuffer, 0, 0, t.width, t.height, 0, 0, t.width, t.height,
                                     GL_COLOR_BUFFER_BIT, GL_NEAREST);

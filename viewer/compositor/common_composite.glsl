@@ -5,6 +5,9 @@
 // mask, so each variant is compiled with only its own code.
 layout(binding = 0) uniform sampler2D uSurface;     // rgb: Kd; a: 0 nothing, 1 a surface, 2 + l the front of light l
 layout(binding = 1) uniform sampler2D uIrradiance;  // Σ weighted cached irradiance, W·m⁻²
+#if TEXTURES
+layout(binding = 6) uniform sampler2D uEmissionScale;  // rgb: the emission texture over the light's radiance
+#endif
 
 // Each light's emitted radiance times its weight (LightWeights::light):
 // what its emitting faces show.
@@ -24,6 +27,9 @@ vec4 compositeValue(ivec2 p) {
     return vec4(vec3(dot(e, uLuxFactors)) * seen, seen);
 #else
     vec3 le = s.a >= 2.0 ? uLightEmission[max(int(s.a) - 2, 0)].rgb : vec3(0.0);
+#if TEXTURES
+    le *= texelFetch(uEmissionScale, p, 0).rgb;
+#endif
     return vec4((s.rgb * kInvPi * e + le) * seen, seen);
 #endif
 #endif

@@ -13,15 +13,15 @@ layout(location = 0) out vec4 outColor;
 
 void main() {
 #if QUANTITY == 1
-    vec3 value = vKd;
+    vec3 value = surfaceKd(vKd);
 #else
     vec3 e = texelFetch(uIrradiance, ivec2(gl_FragCoord.xy), 0).rgb;
 #if QUANTITY == 2
     vec3 value = vec3(dot(e, uLuxFactors));
 #else
     // Emitters radiate from their front (counter-clockwise) face only.
-    vec3 le = gl_FrontFacing && vLight >= 0 ? uLightEmission[max(vLight, 0)].rgb : vec3(0.0);
-    vec3 value = vKd * kInvPi * e + le;
+    vec3 le = gl_FrontFacing && vLight >= 0 ? uLightEmission[max(vLight, 0)].rgb * emissionScale() : vec3(0.0);
+    vec3 value = surfaceKd(vKd) * kInvPi * e + le;
 #endif
 #endif
     outColor = displayColour(value, 1.0);

@@ -3,10 +3,17 @@ flat in int vLight;
 
 // rgb: Kd. a: 1 for a surface, 2 + l where the front of light l is seen:
 // a light's radiance is uniform (one material), so the compositor looks it
-// up, times the light's weight, instead of storing it per sub-pixel.
+// up, times the light's weight, instead of storing it per sub-pixel; with
+// TEXTURES, a second target holds what an emission texture scales it by.
 layout(location = 0) out vec4 outSurface;
+#if TEXTURES
+layout(location = 1) out vec4 outEmissionScale;
+#endif
 
 void main() {
     // Emitters radiate from their front (counter-clockwise) face only.
-    outSurface = vec4(vKd, gl_FrontFacing && vLight >= 0 ? 2.0 + float(vLight) : 1.0);
+    outSurface = vec4(surfaceKd(vKd), gl_FrontFacing && vLight >= 0 ? 2.0 + float(vLight) : 1.0);
+#if TEXTURES
+    outEmissionScale = vec4(emissionScale(), 1.0);
+#endif
 }

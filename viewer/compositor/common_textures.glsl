@@ -1,0 +1,33 @@
+// A face's reflectance and emission per pixel, shared by the surface pass
+// (scene_gbuffer.frag) and the forward pass (scene_forward.frag).
+// TEXTURES is a #define: 0 for a scene with no texture drawn (the faces'
+// constant Kd, exactly as before textures existed), 1 otherwise. The scene
+// is drawn in ranges of one material; each textured range binds its
+// textures and sets these uniforms (Compositor's drawSceneRanges).
+#if TEXTURES
+in vec2 vUv;                                     // Mesh::texcoords (glTF's convention: v down)
+layout(binding = 4) uniform sampler2D uKdTexture;  // sRGB, mipmapped: decoded to linear before filtering
+layout(binding = 5) uniform sampler2D uKeTexture;
+uniform int uKdMapped;      // 1: Kd = clamp(factor × texture), else the face's constant
+uniform vec3 uKdFactor;     // TextureMap::factor
+uniform vec4 uKdTransform;  // TextureMap scale (xy) and offset (zw)
+uniform int uKeMapped;      // 1: emission scaled by the texture, else uniform
+uniform vec3 uKeScale;      // keMap.factor / Ke per channel (0 where Ke is 0): the texture relative to the light's radiance
+uniform vec4 uKeTransform;
+#endif
+
+vec3 surfaceKd(vec3 faceKd) {
+#if TEXTURES
+    if (uKdMapped != 0)
+        return clamp(uKdFactor * texture(uKdTexture, vUv * uKdTransform.xy + uKdTransform.zw).rgb, 0.0, 1.0);
+#endif
+    return faceKd;
+}
+
+// Emitted radiance here over the light's uniform radiance (Light::radiance).
+vec3 emissionScale() {
+#if TEXTURES
+    if (uKeMapped != 0) return uKeScale * texture(uKeTexture, vUv * uKeTransform.xy + uKeTransform.zw).rgb;
+#endif
+    return vec3(1.0);
+}
