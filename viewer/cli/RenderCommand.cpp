@@ -263,6 +263,10 @@ int runRender(const std::vector<std::string>& args) {
     declareCacheOptions(o);
     declareIndirectOptions(o);
     o.value("supersample", "S", "S×S sub-pixels per pixel (box filter)", std::string("4"));
+    o.value("subpixel-passes", "K",
+            "average K images, the sub-pixel grid shifted in a rook pattern: edges (an emitter's outline) get S·K "
+            "levels of coverage each way",
+            std::string("4"));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure (a walkthrough's is metered once, "
                               "from its first frame)",
             std::string("0"));
@@ -281,6 +285,7 @@ int runRender(const std::vector<std::string>& args) {
     comp.width = o.integer("width", 1, 16384);
     comp.height = o.integer("height", 1, 16384);
     comp.supersample = o.integer("supersample", 1, 16);
+    comp.passes = o.integer("subpixel-passes", 1, 64);
     comp.photometry = readPhotometryOption(o);
     comp.validate();
     const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));

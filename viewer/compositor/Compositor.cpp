@@ -10,6 +10,7 @@
 
 #include <array>
 #include <map>
+#include <numeric>
 
 namespace ml {
 
@@ -21,6 +22,7 @@ void CompositorSettings::validate() const {
     if (long(width) * supersample > 16384 || long(height) * supersample > 16384)
         throw InputError(concat("image ", width, "x", height, " with supersampling ", supersample,
                                 " exceeds 16384 sub-pixels per side: lower --supersample"));
+    if (passes < 1 || passes > 64) throw InputError(concat("sub-pixel passes ", passes, " is not within 1..64"));
     photometry.validate();
 }
 
@@ -370,12 +372,16 @@ struct Compositor::Impl {
     }
 
     // Right-handed view, reversed infinite projection (z_ndc = near / depth).
-    glm::mat4 clipFromLocal(const Camera& camera, double aspect) const {
+    // `shift`: the image moved by this much in NDC (x_ndc + shift.x).
+    glm::mat4 clipFromLocal(const Camera& camera, double aspect, const Vec2& shift = Vec2(0.0)) const {
         const double f = 1.0 / std::tan(glm::radians(camera.fovYDegrees) * 0.5);
         const double nearDistance = 1e-5 * std::max(scene.bounds.diagonal(), 1e-300);
         Mat4 p(0.0);
         p[0][0] = f / aspect;
         p[1][1] = f;
+        // w_clip = −z: x_ndc = (p00 x + p20 z) / (−z) = p00 x / (−z) − p20.
+        p[2][0] = -shift.x;
+        p[2][1] = -shift.y;
         p[3][2] = nearDistance;
         p[2][3] = -1.0;
         const Mat4 view = camera.view() * glm::translate(Mat4(1.0), origin);
@@ -541,7 +547,7 @@ struct Compositor::Impl {
         ML_ASSERT(weights.emission.empty() || weights.emission.size() == scene.lights.size(),
                   weights.emission.size(), " emission weights for ", scene.lights.size(), " lights");
         ensureTargets(s.width, s.height, s.supersample);
-        mvp = clipFromLocal(camera, double(s.width) / s.height);
+        mvp = clipFromLocal(camera, double(s.width) / s.height, Vec2(2 * s.shiftX / s.width, 2 * s.shiftY / s.height));
         setFrustum();
         quantity = s.quantity;
         photometry = s.photometry;
@@ -833,8 +839,43 @@ ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMe
     ML_ASSERT(direct.size() == impl_->scene.lights.size() || direct.size() == impl_->scene.lights.size() + 1,
               direct.size(), " meshes for ", impl_->scene.lights.size(), " lights");
     const GpuCacheMeshes meshes = upload(direct, indirect);
-    impl_->compose(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
-    return impl_->readImage();
+    return composite(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
+}
+
+ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                               const CompositorSettings& settings) {
+    const int passes = std::max(1, settings.passes);
+    if (passes == 1) {
+        impl_->compose(camera, meshes, weights, settings);
+        return impl_->readImage();
+    }
+    // Pass k shifts the grid by ((k + ½)/K − ½, (σ(k) + ½)/K − ½) sub-pixels,
+    // σ a permutation spreading the rows (bit reversal for powers of two,
+    // else k·⌊K/2 + 1⌋ mod K when coprime): a rook pattern in each sub-pixel.
+    const auto rows = [passes](int k) {
+        if ((passes & (passes - 1)) == 0) {
+            int r = 0;
+            for (int bit = 1, rev = passes >> 1; bit < passes; bit <<= 1, rev >>= 1)
+                if (k & bit) r |= rev;
+            return r;
+        }
+        int step = passes / 2 + 1;
+        while (std::gcd(step, passes) != 1) ++step;
+        return (k * step) % passes;
+    };
+    ImageRgb sum;
+    CompositorSettings s = settings;
+    for (int k = 0; k < passes; ++k) {
+        s.shiftX = ((k + 0.5) / passes - 0.5) / settings.supersample;
+        s.shiftY = ((rows(k) + 0.5) / passes - 0.5) / settings.supersample;
+        impl_->compose(camera, meshes, weights, s);
+        const ImageRgb image = impl_->readImage();
+        if (k == 0) sum = image;
+        else
+            for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += image.data[i];
+    }
+    for (float& v : sum.data) v /= float(passes);
+    return sum;
 }
 
 GpuCacheMeshes Compositor::upload(const std::vector<IrradianceMeshCopy>& direct,

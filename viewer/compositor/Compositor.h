@@ -47,6 +47,18 @@ struct CompositorSettings {
     // Sub-pixels per pixel side, typical 4 (16 samples, box filter): an EXR
     // pixel is the average radiance over its area. The viewer uses 1 or 2.
     int supersample = 4;
+    // Images averaged by composite() (and so render()), each with the
+    // sub-pixel grid shifted by a different fraction of a sub-pixel along
+    // both axes (a rook pattern): 16 sub-pixels × 4 passes give an edge 16
+    // levels of coverage each way where one pass gives 4. An emitter's
+    // outline is where a regular grid errs most against a path tracer's
+    // pixel average (tens of per cent on the Cornell box's light: 2.4% of the
+    // whole image's relative RMSE at 16 sub-pixels, 0.9% at 256). `render`
+    // uses 4, the viewer 1.
+    int passes = 1;
+    // The image shifted by this many output pixels (x right, y up); set per
+    // pass by composite(), 0 otherwise.
+    double shiftX = 0, shiftY = 0;
     CompositeQuantity quantity = CompositeQuantity::Radiance;
     // Irradiance to lux, CompositeQuantity::Illuminance only: efficacy and
     // luminance weights (core/image/Photometry.h), RADIANCE's by default.
@@ -134,6 +146,10 @@ public:
     // The last composite box-filtered on the CPU exactly as render() does:
     // for images that must equal render's output bit for bit.
     ImageRgb readImage();
+    // compose() and readImage() `settings.passes` times, the sub-pixel grid
+    // shifted each time, averaged: what render() returns.
+    ImageRgb composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                       const CompositorSettings& settings);
     // Cache triangles the last compose drew: large meshes' cells out of
     // view are skipped (GpuCacheMeshes::Cell).
     size_t drawnTriangles() const;

@@ -49,8 +49,7 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
     CompositorSettings radiance = settings;
     radiance.quantity = CompositeQuantity::Radiance;
     auto composite = [&](const LightWeights& w, const CompositorSettings& s) {
-        compositor.compose(camera, meshes, w, s);
-        return compositor.readImage();
+        return compositor.composite(camera, meshes, w, s);
     };
 
     RenderLayers out;
