@@ -303,11 +303,10 @@ CacheSettings effectiveSettings(const CacheState& s) {
     const double f = std::ldexp(1.0, -s.level);
     c.splitTolerance *= f;
     c.noiseTolerance *= f;
-    // The smallest edge in the scene shrinks (indirect light's corners
-    // refine on), the one on screen does not: a step finer than the view's
-    // pixels cannot be seen, and counting edges below it would make the
-    // estimate the error of detail no image shows.
-    c.minEdgeFraction *= f;
+    // The smallest edge stays: the estimate sums the predicted error of the
+    // edges that may still be split, and letting shorter ones in would make
+    // it jump at each level (by the error of detail no pixel shows, or of a
+    // later bounce's edges not yet refined again) rather than fall.
     c.maxSamplesPerVertex = uint32_t(std::min<double>(4096, std::ldexp(double(c.maxSamplesPerVertex), s.level)));
     return c;
 }

@@ -131,8 +131,7 @@ public:
     // The settings the cache was made with (what a cache file must match).
     const CacheSettings& settings() const;
     // Progressive refinement beyond them: one more level halves the split
-    // and noise tolerances and the smallest edge as a fraction of the scene
-    // (not in pixels) and doubles the samples a vertex may take, so a cache that
+    // and noise tolerances and doubles the samples a vertex may take, so a cache that
     // has converged at one level refines on toward the exact irradiance
     // (ProgressiveSession tightens when every mesh has converged and the
     // stop rule wants more). Returns false, changing nothing, at

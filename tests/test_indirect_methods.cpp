@@ -263,9 +263,12 @@ TEST(IndirectCornell, EveryMethodAgreesWithThePathTracer) {
         const std::unique_ptr<IndirectEstimator> e = make(m, scene);
         e->setSource(0, source);
         const bool voxels = m.name == "slices" || m.name == "slice-quads" || m.name == "raymarch";
-        // The ray gather: the exact gather of the source plus its noise (8 ×
-        // 400 rays: about 1% here), so 3% as for the triangles.
-        const double tolerance = voxels ? 0.10 : m.name == "perspective" ? 0.05 : 0.03;
+        // The ray gather is the exact gather of the source: the source's own
+        // error at its base resolution (bench indirect's floor: 2.2% RMS over
+        // its points, 3% at the floor point here) plus its noise (8 × 400
+        // rays: about 1.5%): 4.5%.
+        const double tolerance =
+            voxels ? 0.10 : m.name == "perspective" ? 0.05 : m.name == "raytrace" ? 0.045 : 0.03;
         for (size_t i = 0; i < std::size(kCornellPoints); ++i) {
             const CornellPoint& p = kCornellPoints[i];
             EXPECT_NEAR(meanOf(*e, p.x, p.n, 8) / reference[i], 1.0, tolerance) << m.name << " at the " << p.what;

@@ -66,8 +66,8 @@ constexpr uint32_t kGridSeedBase = 0x40000000u;
 
 struct CacheState {
     CacheSettings settings;       // as made (the cache file's fingerprint); refinement uses effective()
-    // Progressive refinement: each level halves the tolerances and the
-    // smallest edge (in the scene) and doubles the samples a vertex may take
+    // Progressive refinement: each level halves the tolerances and doubles
+    // the samples a vertex may take
     // (IrradianceCache::tighten). Saved in the cache file.
     int level = 0;
     double diagonal = 1;          // of the scene's bounds
@@ -85,8 +85,8 @@ struct CacheState {
 };
 
 // The settings at the cache's level: CacheState::level halvings of the
-// split and noise tolerances and of the smallest edge as a fraction of the
-// scene, and as many doublings of the samples per vertex (at most 4096).
+// split and noise tolerances, and as many doublings of the samples per
+// vertex (at most 4096).
 CacheSettings effectiveSettings(const CacheState& s);
 
 // A hash of everything in the scene that the cache depends on: geometry,

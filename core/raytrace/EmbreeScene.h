@@ -46,6 +46,13 @@ struct SurfacePoint {
     uint32_t material = 0;      // index into Scene::materials
     Vec2 texcoord{0.0};         // interpolated from Mesh::texcoords
     bool hasTexcoord = false;   // false when the mesh has none
+
+    // The diffuse reflectance here: the material's Kd texture at the hit's
+    // uv (clamped to [0, 1]), else its Kd.
+    Rgb kd(const Scene& scene) const {
+        const Material& m = scene.materials[material];
+        return m.kdMap && hasTexcoord ? glm::clamp(m.kdMap.value(texcoord), Rgb(0.0), Rgb(1.0)) : m.kd;
+    }
 };
 
 class EmbreeScene {

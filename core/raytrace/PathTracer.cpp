@@ -149,8 +149,7 @@ PathTracer::Vertex PathTracer::vertexAt(const SurfacePoint& s, const Vec3& incom
         v.ns = -v.ns;
     }
     v.material = &scene.materials[s.material];
-    v.kd = v.material->kdMap && s.hasTexcoord ? glm::clamp(v.material->kdMap.value(s.texcoord), Rgb(0.0), Rgb(1.0))
-                                              : v.material->kd;
+    v.kd = s.kd(scene);
     return v;
 }
 

@@ -105,7 +105,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
             }
             Rgb e(0.0);
             for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(y.position, side);
-            sum += scene.materials[y.material].kd * e;
+            sum += y.kd(scene) * e;  // the texture's Kd at the hit, as the path tracer takes it
         }
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
     return sum / double(s * s);

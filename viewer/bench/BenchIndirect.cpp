@@ -741,7 +741,7 @@ std::string verdictLine(const Comparison& c) {
 std::string summaryMarkdown(const BenchRun& run, const RunInfo& info, const std::vector<Row>& rows,
                             const std::vector<Comparison>& cs) {
     std::ostringstream md;
-    md << "# Indirect light: six gathers of one source, error against time (§6.2)\n\n"
+    md << "# Indirect light: seven gathers of one source, error against time (§6.2)\n\n"
        << "- OpenGL: " << run.glDescription() << "\n"
        << "- mode: " << run.mode() << ", seed " << run.options().seed << ", wall time "
        << benchNumber(info.wallSeconds) << " s\n"

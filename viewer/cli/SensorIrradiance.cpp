@@ -184,7 +184,10 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
     SessionSettings settings;
     settings.cache = s.cache;
     settings.worker.seed = choice.seed;
-    settings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;
+    // With --time, refine on past the tolerances for as long as asked (the
+    // caches tighten level by level); without, stop at them: converging
+    // through every level would take hours with the exact sampler.
+    settings.worker.refinementLevels = s.seconds ? IrradianceCache::kMaxRefinementLevel : 0;
     settings.indirect = s.indirect.solver;
     ProgressiveSession session(scene, settings, samplerFactory(scene, choice, s.indirect));
     session.start();
