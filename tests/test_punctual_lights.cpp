@@ -518,3 +518,33 @@ TEST_F(Luminaires, LayoutErrorsNameTheFileLineAndColumn) {
     write("broken.ies", "IESNA:LM-63-2002\nTILT=NONE\n1 100 1 x\n");
     EXPECT_NE(error("file,x,y,z\nbroken.ies,0,0,0\n").find("broken.ies:3"), std::string::npos);
 }
+
+// A hard case from the issue: a spot aimed edge-on along the floor, 1 mm
+// above it. The floor sees it at grazing angles only: finite, tiny next to
+// what faces it, zero behind the light, and the path tracer agrees.
+TEST(PunctualLight, SpotAimedEdgeOnAtTheFloor) {
+    Light spot = pointLight("spot", Vec3(0, 0.001, 0), 1000);
+    spot.emission.axis = Vec3(1, 0, 0);
+    spot.emission.profile.shape = IntensityProfile::Shape::Spot;
+    spot.emission.profile.cosInner = std::cos(0.2);
+    spot.emission.profile.cosOuter = std::cos(0.4);
+    const Scene scene = floorWith({spot});
+    const EmbreeScene rays(scene);
+    DirectChoice choice;
+    choice.backend = GlBackend::OsMesa;
+    ConfiguredDirectSampler sampler(scene, choice);
+    PathTracerSettings ps;
+    ps.maxDepth = 1;
+    ps.threads = 1;
+    const PathTracer tracer(rays, ps);
+    for (double x : {-2.0, 0.0, 0.5, 1.0, 3.0}) {
+        const Vec3 p(x, 0, 0);
+        const Rgb e = sampler.sample(0, p, kY, 1).irradiance;
+        ASSERT_TRUE(std::isfinite(e.g)) << "x " << x;
+        // I cos θ / d² with cos θ = 1 mm / d, inside the inner cone (ahead of the light).
+        const double d = std::hypot(x, 0.001);
+        const double expected = x > 0 ? (1000 / kRadianceEfficacy) * (0.001 / d) / (d * d) : 0.0;
+        EXPECT_NEAR(e.g, expected, 1e-9 * std::max(1.0, expected)) << "x " << x;
+        EXPECT_NEAR(tracer.irradiance(p, kY, 2, 0).direct.g, e.g, 1e-9 * std::max(1.0, e.g)) << "x " << x;
+    }
+}
