@@ -37,6 +37,19 @@ SamplerFactory functionSamplers(F f) {
     };
 }
 
+// ∫ E dA over a mesh copy, W per channel when E is in W·m⁻² and lengths in
+// metres: linear interpolation makes each triangle's integral exactly its
+// area times the mean of its corners.
+inline Rgb integrate(const IrradianceMeshCopy& m) {
+    Rgb sum(0.0);
+    for (const glm::uvec3& t : m.triangles) {
+        const double area = 0.5 * glm::length(glm::cross(m.positions[t.y] - m.positions[t.x],
+                                                         m.positions[t.z] - m.positions[t.x]));
+        sum += area * (m.irradiance[t.x] + m.irradiance[t.y] + m.irradiance[t.z]) / 3.0;
+    }
+    return sum;
+}
+
 // Closed forms: the irradiance alone (visibility 1, never partial), or a
 // whole VertexSample.
 using IrradianceFn = std::function<Rgb(size_t light, const Vec3& x, const Vec3& n, uint32_t seed)>;

@@ -4,6 +4,7 @@
 // the one-file report; and `probe` and `grid` interrupted by a signal
 // write what is done and exit 130.
 #include "CsvColumn.h"
+#include "ChildProcess.h"
 #include "RunCommand.h"
 #include "TempDirTest.h"
 #include "TestScenes.h"
@@ -278,49 +279,8 @@ TEST_F(Grid, ReportIsOneHtmlFileNamingEveryLight) {
 
 namespace {
 
-// The meshlight binary started with `args`, its output going to `log`.
-class Child {
-public:
-    Child(const std::vector<std::string>& args, const std::string& log) : log_(log) {
-        pid_ = ::fork();
-        if (pid_ == 0) {
-            const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-            ::dup2(fd, STDOUT_FILENO);
-            ::dup2(fd, STDERR_FILENO);
-            std::vector<char*> argv = {const_cast<char*>(MESHLIGHT_BINARY)};
-            for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-            argv.push_back(nullptr);
-            ::execv(MESHLIGHT_BINARY, argv.data());
-            ::_exit(127);
-        }
-    }
-    ~Child() {
-        if (pid_ > 0 && !exited_) {
-            ::kill(pid_, SIGKILL);
-            ::waitpid(pid_, nullptr, 0);
-        }
-    }
-    void signal(int s) const { ::kill(pid_, s); }
-    // The exit status, or -1 when killed by a signal or still running after `seconds`.
-    int wait(double seconds) {
-        const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
-        int status = 0;
-        while (::waitpid(pid_, &status, WNOHANG) == 0) {
-            if (Clock::now() > deadline) return -1;  // the destructor kills it
-            std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        }
-        exited_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    std::string output() const { return readFile(log_); }
-
-private:
-    std::string log_;
-    pid_t pid_ = -1;
-    bool exited_ = false;
-};
-
-void sleepFor(double seconds) { std::this_thread::sleep_for(std::chrono::duration<double>(seconds)); }
+using Child = test::ChildProcess;
+using test::sleepFor;
 
 class GridInterrupt : public test::TempDirTest {
 protected:

@@ -2,6 +2,7 @@
 // child processes and are sent SIGINT or SIGTERM while they work. The first
 // signal writes what is done (whole, atomically) and exits 130; a second one
 // exits 130 at once, leaving no partial or temporary file.
+#include "ChildProcess.h"
 #include "RunCommand.h"
 #include "TempDirTest.h"
 #include "core/image/Image.h"
@@ -32,55 +33,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The meshlight binary started with `args`, its output going to `log`.
-class Child {
-public:
-    Child(const std::vector<std::string>& args, const std::string& log) : log_(log) {
-        pid_ = ::fork();
-        if (pid_ == 0) {
-            const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-            ::dup2(fd, STDOUT_FILENO);
-            ::dup2(fd, STDERR_FILENO);
-            std::vector<char*> argv = {const_cast<char*>(MESHLIGHT_BINARY)};
-            for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-            argv.push_back(nullptr);
-            ::execv(MESHLIGHT_BINARY, argv.data());
-            ::_exit(127);
-        }
-    }
-    ~Child() {
-        if (pid_ > 0 && !exited_) {
-            ::kill(pid_, SIGKILL);
-            ::waitpid(pid_, nullptr, 0);
-        }
-    }
-    void signal(int s) const { ::kill(pid_, s); }
-    // The exit status, or -1 when killed by a signal or still running after
-    // `seconds` (then it is killed).
-    int wait(double seconds) {
-        const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
-        int status = 0;
-        while (::waitpid(pid_, &status, WNOHANG) == 0) {
-            if (Clock::now() > deadline) return -1;  // the destructor kills it
-            std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        }
-        exited_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    std::string output() const {
-        std::ifstream in(log_);
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
-
-private:
-    std::string log_;
-    pid_t pid_ = -1;
-    bool exited_ = false;
-};
-
-void sleepFor(double seconds) { std::this_thread::sleep_for(std::chrono::duration<double>(seconds)); }
+using Child = test::ChildProcess;
+using test::sleepFor;
 
 class Interrupt : public test::TempDirTest {
 protected:
@@ -267,7 +221,9 @@ TEST_F(Interrupt, TwentyInterruptsLeaveWholeFilesAndTheCacheResumes) {
         const double error = std::sqrt(sum / double(resumedImage.data.size()));
         worst = std::max(worst, error);
         EXPECT_LT(error, 1e-5) << "the resumed run's image is not the whole run's";
-        if (kExactResume) EXPECT_TRUE(same) << "the resumed run's image or cache differs from the whole run's";
+        if (kExactResume) {
+            EXPECT_TRUE(same) << "the resumed run's image or cache differs from the whole run's";
+        }
         fs::remove_all(dir);
     }
     std::printf("uninterrupted: %.2f s; of 20 interrupts: %d before any file, %d interrupted, %d after the end; "

@@ -48,17 +48,6 @@ struct HalfShadowed {
     }
 };
 
-// ∫ E dA over a mesh copy, W (per channel): linear interpolation is exact
-// for each triangle's mean of its corners.
-Rgb integrate(const IrradianceMeshCopy& m) {
-    Rgb sum(0.0);
-    for (const glm::uvec3& t : m.triangles) {
-        const double area = 0.5 * glm::length(glm::cross(m.positions[t.y] - m.positions[t.x],
-                                                         m.positions[t.z] - m.positions[t.x]));
-        sum += area * (m.irradiance[t.x] + m.irradiance[t.y] + m.irradiance[t.z]) / 3.0;
-    }
-    return sum;
-}
 
 }  // namespace
 
@@ -152,7 +141,7 @@ TEST(SharedLights, ARoomOfAHundredSmallLightsKeepsTheirPower) {
         for (int round = 0; round < 200; ++round)
             if (cache.refine(sampler, 1 << 16, 1).converged()) break;
         Rgb landed(0.0);
-        for (const IrradianceMeshCopy& m : cache.copyMeshes()) landed += integrate(m);
+        for (const IrradianceMeshCopy& m : cache.copyMeshes()) landed += test::integrate(m);
         EXPECT_NEAR(landed.r / power.r, 1.0, 0.01) << "light share " << share << ": " << cache.totalVertices()
                                                    << " vertices";
         if (share > 0) {

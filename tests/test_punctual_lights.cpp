@@ -259,16 +259,6 @@ TEST(PunctualSampler, BatchesMixAreaAndPunctualLights) {
 
 namespace {
 
-// ∫ E dA over a mesh copy (linear interpolation: exact per triangle).
-Rgb integrate(const IrradianceMeshCopy& m) {
-    Rgb sum(0.0);
-    for (const glm::uvec3& t : m.triangles) {
-        const double area = 0.5 * glm::length(glm::cross(m.positions[t.y] - m.positions[t.x],
-                                                         m.positions[t.z] - m.positions[t.x]));
-        sum += area * (m.irradiance[t.x] + m.irradiance[t.y] + m.irradiance[t.z]) / 3.0;
-    }
-    return sum;
-}
 
 }  // namespace
 
