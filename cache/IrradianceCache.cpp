@@ -431,6 +431,13 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
         const detail::VertexStats& st = lm.stats[size_t(v.idx())];
         out.irradiance.push_back(st.mean());
         out.samples.push_back(st.count);
+        Rgb se(0.0);
+        if (st.count >= 2) {
+            const double n = st.count, mean = st.sumLum / n;
+            const double variance = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
+            if (mean > 0) se = st.mean() * (std::sqrt(variance / n) / mean);
+        }
+        out.standardError.push_back(se);
     }
     // While the first pass runs, vertices without a sample take their
     // sampled neighbours' mean, ring after ring: a copy is a complete image,

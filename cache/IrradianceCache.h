@@ -77,6 +77,11 @@ struct IrradianceMeshCopy {
     std::vector<glm::uvec3> triangles;
     std::vector<Rgb> irradiance;           // W·m⁻², mean of the samples
     std::vector<uint32_t> samples;         // samples averaged at each vertex
+    // The standard error of each vertex's mean, W·m⁻²: the relative spread of
+    // its samples' luminance applied to its RGB mean; 0 where it has fewer
+    // than two samples (its noise is not measured). Empty in copies made
+    // elsewhere (tests, sources built by hand): read as 0.
+    std::vector<Rgb> standardError;
 };
 
 // A camera the refinement should serve: what it sees is refined first and

@@ -89,7 +89,7 @@ TEST_F(Layers, LayersAddUpToTheBeautyImage) {
     render("cornell --voxels 16 --gather-size 8 --samples 10000 --out " + path("o.exr"));
     const std::vector<std::string> names = readImageChannelNames(path("o.exr"));
     for (const char* c : {"R", "G", "B", "emission.R", "direct.G", "indirect.B", "light.light.R",
-                          "reflectance.R", "illuminance.Y"})
+                          "noise.G", "reflectance.R", "illuminance.Y"})
         EXPECT_TRUE(has(names, c)) << c << " missing from " << testing::PrintToString(names);
     const ImageRgb beauty = readImageLinear(path("o.exr"));
     const ImageRgb emission = readImageLayer(path("o.exr"), "emission");
@@ -109,6 +109,27 @@ TEST_F(Layers, LayersAddUpToTheBeautyImage) {
     render("cornell --voxels 16 --gather-size 8 --samples 10000 --layers none --out " + path("plain.exr"));
     EXPECT_EQ(readImageChannelNames(path("plain.exr")), (std::vector<std::string>{"R", "G", "B"}));
     EXPECT_EQ(readImageLinear(path("plain.exr")).data, beauty.data);
+}
+
+// The noise layer: the cache's standard errors composited. Never negative;
+// zero where every vertex was sampled once (the exact method: one sample, no
+// spread measured); with the jittered sampler, vertices the cache sampled
+// again (penumbrae, noisy gathers) show their spread, and the layer stays a
+// small fraction of the image.
+TEST_F(Layers, NoiseLayerIsTheCachesStandardError) {
+    render("cornell --direct-only --samples 12000 --out " + path("j.exr"));
+    const ImageRgb noise = readImageLayer(path("j.exr"), "noise");
+    const ImageRgb direct = readImageLayer(path("j.exr"), "direct");
+    double sumNoise = 0, sumDirect = 0;
+    for (size_t i = 0; i < noise.data.size(); ++i) {
+        ASSERT_GE(noise.data[i], 0.0f) << "value " << i;
+        sumNoise += noise.data[i];
+        sumDirect += direct.data[i];
+    }
+    EXPECT_GT(maxValue(noise), 0.0) << "some vertex was sampled twice";
+    EXPECT_LT(sumNoise, 0.05 * sumDirect) << "the cache's noise is a small part of its light";
+    render("cornell --direct-only --method exact --samples 3000 --out " + path("e.exr"));
+    EXPECT_EQ(maxValue(readImageLayer(path("e.exr"), "noise")), 0.0);
 }
 
 TEST_F(Layers, ManyLightsSharedMeshAndLightsPastTheCap) {

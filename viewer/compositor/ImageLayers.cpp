@@ -54,6 +54,20 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
 
     RenderLayers out;
     out.beauty = composite(LightWeights::unit(lights), radiance);
+    {
+        // The meshes' standard errors composited as if they were irradiance.
+        const auto errors = [](std::vector<IrradianceMeshCopy> meshes) {
+            for (IrradianceMeshCopy& m : meshes)
+                m.irradiance = m.standardError.size() == m.irradiance.size()
+                                   ? m.standardError
+                                   : std::vector<Rgb>(m.irradiance.size(), Rgb(0.0));
+            return meshes;
+        };
+        const GpuCacheMeshes noiseMeshes = compositor.upload(errors(direct), errors(indirect));
+        LightWeights w = LightWeights::unit(lights);
+        w.emission.assign(lights, Rgb(0.0));
+        out.noise = compositor.composite(camera, noiseMeshes, w, radiance);
+    }
     LightWeights w = none(lights);
     w.emission.assign(lights, Rgb(1.0));
     out.emission = composite(w, radiance);
@@ -96,6 +110,7 @@ std::vector<ImageLayer> RenderLayers::exrLayers() const {
     for (const Light& l : lights) layers.push_back(ImageLayer::rgb(l.layer, l.image));
     if (directShared) layers.push_back(ImageLayer::rgb("direct_shared", *directShared));
     if (directRest) layers.push_back(ImageLayer::rgb("direct_rest", *directRest));
+    layers.push_back(ImageLayer::rgb("noise", noise));
     layers.push_back(ImageLayer::rgb("reflectance", reflectance));
     layers.push_back(ImageLayer::single("illuminance", "Y", illuminance.lux));
     return layers;

@@ -12,6 +12,11 @@
 // direct_shared: where lights share one mesh (many lights), their direct
 // light cannot be told apart; direct_rest: the lights past the cap on
 // per-light layers, together.
+//   noise    = Kd/π × Σ_meshes (standard error of each mesh's interpolated
+//              mean): the cache's own noise estimate per pixel, an upper
+//              bound where meshes add (independent errors add in
+//              quadrature); vertices sampled once count as noiseless (their
+//              spread is not measured). Not part of the sum.
 #pragma once
 
 #include "Compositor.h"
@@ -43,6 +48,7 @@ struct RenderLayers {
     std::vector<Light> lights;
     std::optional<ImageRgb> directShared;  // the cache has a shared mesh
     std::optional<ImageRgb> directRest;    // more lights than LayerSettings::maxLightLayers
+    ImageRgb noise;        // the standard error of the direct and indirect light (see above)
     ImageRgb reflectance;  // Kd, box-filtered (black off every surface)
     LuxImage illuminance;  // as Compositor::renderIlluminance (render --quantity lux)
 
