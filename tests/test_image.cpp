@@ -294,6 +294,19 @@ TEST(ToneMap, AutoExposureMapsLogAverageToMiddleGrey) {
     EXPECT_EQ(autoExposureScale(ImageRgb(3, 3)), 1.0);
 }
 
+// Near-black pixels are left out like black ones: a frame whose unlit half
+// holds rounding (1e-12) is exposed for its lit half, not 10^5 times over.
+TEST(ToneMap, AutoExposureIgnoresNearBlackPixels) {
+    ImageRgb img(10, 10, Rgb(1e-12));
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 10; ++x) img.set(x, y, Rgb(0.5));
+    EXPECT_NEAR(autoExposureScale(img), 0.18 / 0.5, 1e-9);
+    // A pixel at 1e-3 of the lit level still counts.
+    img.set(0, 9, Rgb(5e-4));
+    EXPECT_LT(autoExposureScale(img), 0.18 / 0.5 * 1.2);
+    EXPECT_GT(autoExposureScale(img), 0.18 / 0.5);
+}
+
 TEST(ToneMap, ExposureAndClampOperator) {
     ToneMapSettings s;
     s.op = ToneOperator::Clamp;

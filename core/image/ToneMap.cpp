@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 #include <stdexcept>
 
 namespace ml {
@@ -30,15 +31,29 @@ void assertFinite(const ImageRgb& image) {
 
 // autoExposureScale without the finiteness scan, for callers that did it.
 double autoExposureScaleOfFinite(const ImageRgb& image) {
-    double sumLog = 0.0;
-    std::size_t count = 0;
+    std::vector<double> lum;
+    lum.reserve(image.pixelCount());
     for (std::size_t i = 0; i < image.data.size(); i += 3) {
         const double l = luminance(Rgb(image.data[i], image.data[i + 1], image.data[i + 2]));
-        if (l > 0.0) {
+        if (l > 0.0) lum.push_back(l);
+    }
+    if (lum.empty()) return 1.0;
+    // Pixels darker than 1e-4 of the 99th percentile carry no exposure
+    // information either: an unlit ceiling holding 1e-12 of rounding would
+    // otherwise drag the log average down by orders of magnitude and wash
+    // the lit part of the frame out. The percentile, not the maximum, so a
+    // visible emitter does not raise the cut.
+    std::vector<double> sorted = lum;
+    const std::size_t k = std::min(sorted.size() - 1, std::size_t(0.99 * double(sorted.size())));
+    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(k), sorted.end());
+    const double floor = 1e-4 * sorted[k];
+    double sumLog = 0.0;
+    std::size_t count = 0;
+    for (double l : lum)
+        if (l >= floor) {
             sumLog += std::log(l);
             ++count;
         }
-    }
     return count == 0 ? 1.0 : kMiddleGrey / std::exp(sumLog / double(count));
 }
 

@@ -40,9 +40,11 @@ struct ToneMapSettings {
 };
 
 // The factor that maps the log-average luminance of `image` to 0.18:
-// 0.18 / exp(mean(ln L)) over the pixels with luminance L > 0 (black pixels
-// carry no exposure information, and ln 0 would make the mean -inf); 1 when
-// every pixel is black. All values must be finite.
+// 0.18 / exp(mean(ln L)) over the pixels with luminance at least 1e-4 of the
+// 99th percentile (black and near-black pixels carry no exposure
+// information: ln 0 would make the mean -inf, and an unlit ceiling at 1e-12
+// would wash the lit part out); 1 when every pixel is black. All values
+// must be finite.
 double autoExposureScale(const ImageRgb& image);
 
 // The sRGB OETF (IEC 61966-2-1: linear below 0.0031308, then a 1/2.4 power),
