@@ -21,10 +21,9 @@ double IntensityProfile::operator()(double cosGamma, double cAngleDegrees) const
             return t * t;
         }
         case Shape::Table: {
-            const double peak = table->maxIntensity();
-            if (!(peak > 0)) return 0.0;
+            if (!(tablePeak > 0)) return 0.0;
             const double gamma = std::acos(std::clamp(cosGamma, -1.0, 1.0)) * 180.0 / kPi;
-            return std::clamp(table->intensity(gamma, cAngleDegrees) / peak, 0.0, 1.0);
+            return std::clamp(table->intensity(gamma, cAngleDegrees) / tablePeak, 0.0, 1.0);
         }
     }
     return 0.0;
@@ -42,10 +41,7 @@ double IntensityProfile::solidAngle() const {
             const double full = std::min(1.0, cosOuter + 1.0 / scale);  // where t = 1
             return 2 * kPi * ((1.0 - full) + (full - cosOuter) / 3.0);
         }
-        case Shape::Table: {
-            const double peak = table->maxIntensity();
-            return peak > 0 ? table->flux() / peak : 0.0;
-        }
+        case Shape::Table: return tablePeak > 0 ? table->flux() / tablePeak : 0.0;
     }
     return 0.0;
 }

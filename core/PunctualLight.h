@@ -50,6 +50,9 @@ struct IntensityProfile {
     double cosInner = 1, cosOuter = 0;
     // Table: the luminaire's distribution, absolute candela; profile = I/max.
     std::shared_ptr<const CandelaTable> table;
+    // Table: the table's largest value, cd, set by Scene::finalize (every
+    // shadow ray evaluates the profile; the maximum is a scan of the table).
+    double tablePeak = 0;
 
     // profile along `cosGamma` = axis·ω and, for a table, `cAngle` (degrees,
     // around the axis from the reference direction).

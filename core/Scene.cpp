@@ -1,5 +1,6 @@
 #include "Scene.h"
 
+#include "CandelaTable.h"
 #include "DisjointSets.h"
 #include "Error.h"
 
@@ -118,23 +119,24 @@ std::map<uint32_t, std::vector<uint32_t>> connectedEmitters(const Scene& scene, 
 void finalizePunctual(const Scene& scene, Light& l) {
     PunctualEmission& e = l.emission;
     const SourceLocation at{scene.name, 0};
-    const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-    if (!finite(e.position)) throwInputError(at, "light '", l.name, "': its position is not finite");
+    if (!isFinite(e.position)) throwInputError(at, "light '", l.name, "': its position is not finite");
     const double axisLength = glm::length(e.axis);
-    if (!finite(e.axis) || !(axisLength > 0)) throwInputError(at, "light '", l.name, "': its direction is zero or not finite");
+    if (!isFinite(e.axis) || !(axisLength > 0)) throwInputError(at, "light '", l.name, "': its direction is zero or not finite");
     e.axis /= axisLength;
     // The reference half-plane (C0) made perpendicular to the axis; any
     // perpendicular when it was given along the axis or not at all.
     Vec3 r = e.reference - glm::dot(e.reference, e.axis) * e.axis;
-    if (!finite(r) || glm::length(r) < 1e-9) {
+    if (!isFinite(r) || glm::length(r) < 1e-9) {
         Vec3 b;
         orthonormalBasis(e.axis, r, b);
     }
     e.reference = glm::normalize(r);
     for (double c : {e.intensity.r, e.intensity.g, e.intensity.b})
         if (!std::isfinite(c) || c < 0) throwInputError(at, "light '", l.name, "': intensity ", c, " is not a finite non-negative number");
-    if (e.profile.shape == IntensityProfile::Shape::Table && !e.profile.table)
-        throwInputError(at, "light '", l.name, "': a table profile without a table");
+    if (e.profile.shape == IntensityProfile::Shape::Table) {
+        if (!e.profile.table) throwInputError(at, "light '", l.name, "': a table profile without a table");
+        e.profile.tablePeak = e.profile.table->maxIntensity();
+    }
     if (e.profile.shape == IntensityProfile::Shape::Spot &&
         !(e.profile.cosOuter < e.profile.cosInner && e.profile.cosOuter >= -1 && e.profile.cosInner <= 1))
         throwInputError(at, "light '", l.name, "': spot cones are not 0 <= inner < outer <= 180 degrees");
