@@ -49,6 +49,12 @@ std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
     return "raytrace";
 }
 
+IndirectChoice IndirectChoice::resolved(const Scene& scene) const {
+    IndirectChoice c = *this;
+    if (c.method == "auto") c.method = chooseIndirectMethod(scene, c.methodReason);
+    return c;
+}
+
 void IndirectChoice::decide(const Scene& scene) {
     if (method == "auto") method = chooseIndirectMethod(scene, methodReason);
     else if (methodReason.empty()) methodReason = "as asked (--indirect-method)";
@@ -198,7 +204,7 @@ void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requ
     impl_->context->use();
     std::vector<DirectSample> samples;
     try {
-        impl_->sampler->sampleBatch(area.size() == requests.size() ? requests : area, samples);
+        impl_->sampler->sampleBatch(area, samples);
     } catch (const SampleBatchError& e) {
         throw SampleBatchError(areaIndex[e.index()], e.what());
     }
@@ -210,8 +216,7 @@ void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requ
 
 std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, const Scene& scene,
                                                          const IndirectChoice& given) {
-    IndirectChoice choice = given;
-    if (choice.method == "auto") choice.method = chooseIndirectMethod(scene, choice.methodReason);
+    const IndirectChoice choice = given.resolved(scene);
     if (choice.method == "slices") return std::make_unique<SliceGather>(context, scene, choice.gather);
     // The comparisons of `bench indirect`: the same proxy, gathered otherwise.
     if (choice.method == "slice-quads") {
@@ -276,8 +281,7 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
         samplers.direct = std::make_unique<ConfiguredDirectSampler>(scene, direct);
         if (indirect.active()) {
             // The ray gather draws nothing: no GL context of its own.
-            IndirectChoice resolved = indirect;
-            if (resolved.method == "auto") resolved.method = chooseIndirectMethod(scene, resolved.methodReason);
+            const IndirectChoice resolved = indirect.resolved(scene);
             if (resolved.method == "raytrace")
                 samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
             else

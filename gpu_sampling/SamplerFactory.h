@@ -59,6 +59,9 @@ struct IndirectChoice {
     void decide(const Scene& scene);
     // Some bounce is to be gathered.
     bool active() const { return enabled && solver.bounces > 0; }
+    // This choice with "auto" resolved (what decide() does to the method),
+    // for the factories given a choice that was never decided.
+    IndirectChoice resolved(const Scene& scene) const;
     std::string describe() const;      // "slices: 40x40 fish-eye gathers over 64 voxels ..."
 };
 
