@@ -311,17 +311,6 @@ struct PointReference {
     double source = 0;  // luminance of the exact-geometry gather of the source
 };
 
-// What a perfect gather of the source gives: the ray gather's own work
-// (gatherCachedRadiance: cosine-weighted rays on exact geometry, each taking
-// Kd/π × the cache's irradiance where it lands), side × side stratified.
-double sourceGather(const Scene& scene, const EmbreeScene& rays, const std::vector<MeshIrradianceLookup>& lookups,
-                    const Vec3& x, const Vec3& n, int side, uint32_t seed) {
-    const std::vector<char> closed = closedMeshesOf(scene);
-    std::vector<const MeshIrradianceLookup*> pointers;
-    for (const MeshIrradianceLookup& l : lookups) pointers.push_back(&l);
-    return luminance(gatherCachedRadiance(scene, rays, closed, pointers, x, n, side, seed));
-}
-
 // --- Measuring -----------------------------------------------------------------------------
 
 // Relative RMS error: sqrt(Σ (e − r)² / Σ r²) over the points (luminance),
@@ -860,11 +849,18 @@ int runBenchIndirect(const BenchOptions& options) {
             refs[i].pathSe = luminance(e.indirectError);
         }
         const double diagonal = scene.bounds.diagonal();
+        // What a perfect gather of the source gives: the ray gather's own
+        // work (gatherCachedRadiance: cosine-weighted rays on exact geometry,
+        // each taking Kd/π × the cache's irradiance where it lands), side ×
+        // side stratified.
         std::vector<MeshIrradianceLookup> lookups;
         for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, diagonal / 64, 1e-5 * diagonal);
+        std::vector<const MeshIrradianceLookup*> pointers;
+        for (const MeshIrradianceLookup& l : lookups) pointers.push_back(&l);
+        const std::vector<char> closed = closedMeshesOf(scene);
         parallelFor(points.size(), threads, [&](size_t i) {
-            refs[i].source = sourceGather(scene, rays, lookups, points[i].x, points[i].n, work.sourceRaysSide,
-                                          seedFor(options.seed, uint32_t(i), 7));
+            refs[i].source = luminance(gatherCachedRadiance(scene, rays, closed, pointers, points[i].x, points[i].n,
+                                                            work.sourceRaysSide, seedFor(options.seed, uint32_t(i), 7)));
         });
     }
     RunInfo info;
