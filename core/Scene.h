@@ -5,6 +5,7 @@
 #include "Camera.h"
 #include "Math.h"
 #include "PunctualLight.h"
+#include "SmoothSpecular.h"
 #include "Texture.h"
 
 #include <array>
@@ -30,6 +31,8 @@ struct Material {
     // [0, 1]) and keMap.value(uv) on the faces of meshes with texcoords.
     TextureMap kdMap;
     TextureMap keMap;
+    // A mirror or glass layer over Kd (SmoothSpecular.h); none by default.
+    SmoothSpecular smooth;
 
     bool emissive() const { return ke.r > 0 || ke.g > 0 || ke.b > 0; }
     // A Lambertian material (no Ks) emitting `ke` from its front face.
@@ -40,7 +43,11 @@ struct Material {
         m.ke = ke;
         return m;
     }
-    bool glossy() const { return ks.r > 0 || ks.g > 0 || ks.b > 0; }
+    // A Phong lobe (Ks > 0) on a surface without a smooth layer: the
+    // compositor's specular pass and the path tracer's glossy lobe.
+    bool glossy() const { return !smooth.active() && (ks.r > 0 || ks.g > 0 || ks.b > 0); }
+    // A mirror or glass surface: its rays are followed, never cached.
+    bool specular() const { return smooth.active(); }
 };
 
 using Triangle3 = std::array<Vec3, 3>;
