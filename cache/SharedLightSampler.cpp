@@ -1,5 +1,6 @@
 #include "SharedLightSampler.h"
 
+#include "core/EmitterTexture.h"
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/reference/Lambert.h"
@@ -17,6 +18,7 @@ SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const
                                        std::unique_ptr<DirectSampler> perLight, int lights)
     : scene_(scene), coverage_(std::move(coverage)), perLight_(std::move(perLight)), draws_(lights) {
     ML_ASSERT(coverage_ && perLight_ && draws_ >= 1, "a shared-light sampler needs its coverage and sampler");
+    for (const Light& l : scene_.lights) textured_.push_back(EmitterTexture(scene_, l).textured());
 }
 
 std::string SharedLightSampler::name() const {
@@ -102,8 +104,10 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         const double p = (cdf_[i] - (i ? cdf_[i - 1] : 0.0)) / sum;
         VertexSample e;
         if (!take(l, seedFor(seed, uint32_t(k), l), e)) return false;
-        // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative.
-        const Rgb o = glm::max(unoccluded_[i] - e.irradiance, Rgb(0.0)) * shared_[i];
+        // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative for a
+        // uniform light; a textured one's may be (see the header).
+        const Rgb difference = unoccluded_[i] - e.irradiance;
+        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * shared_[i];
         occluded += o / (p * double(draws_));
         visibleSum += e.visibility;
         partial = partial || e.partial;

@@ -11,6 +11,12 @@
 // wherever nothing occludes the drawn lights (the sampler answers those on
 // the CPU, exactly U_l). Noise comes only from occlusion, where refinement
 // resamples it away.
+//
+// A textured light (EmitterTexture.h): U_l is still Lambert's form at the
+// light's mean radiance, now only a control for the textured E_l the wrapped
+// sampler estimates, so O_l = U_l − E_l may be negative (the point sees the
+// light's brighter part) and is not clamped; such a light's shared estimate
+// is unbiased but no longer exact where nothing occludes.
 #pragma once
 
 #include "DirectSampler.h"
@@ -50,6 +56,7 @@ private:
     std::vector<Rgb> unoccluded_;  // U_l of each candidate
     std::vector<double> shared_;   // 1 − w_l of each candidate
     std::vector<uint32_t> candidates_;
+    std::vector<bool> textured_;   // per light: its emission has a texture (EmitterTexture)
 };
 
 // U_l at x: light l's irradiance with nothing in the way, from the light's

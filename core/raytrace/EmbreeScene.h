@@ -53,6 +53,13 @@ struct SurfacePoint {
         const Material& m = scene.materials[material];
         return m.kdMap && hasTexcoord ? glm::clamp(m.kdMap.value(texcoord), Rgb(0.0), Rgb(1.0)) : m.kd;
     }
+    // The radiance emitted here (front side): the material's Ke texture at
+    // the hit's uv, else its Ke (EmitterTexture.h: what a light sampler
+    // weighs its points by).
+    Rgb ke(const Scene& scene) const {
+        const Material& m = scene.materials[material];
+        return m.keMap && hasTexcoord ? m.keMap.value(texcoord) : m.ke;
+    }
 };
 
 class EmbreeScene {

@@ -88,7 +88,7 @@ size_t pick(const std::vector<double>& cdf, double u) {
 // --- Construction ---------------------------------------------------------------
 
 PathTracer::PathTracer(const EmbreeScene& rays, const PathTracerSettings& settings)
-    : rays_(rays), scene_(rays.scene()), settings_(settings) {
+    : rays_(rays), scene_(rays.scene()), settings_(settings), emitters_(EmitterTexture::forLights(scene_)) {
     settings_.validate();
     double total = 0;
     for (const Light& l : scene_.lights) {
@@ -123,11 +123,14 @@ int PathTracer::threadCount() const {
 
 // A uniform point of light `light` (triangle by area, then uniform in it)
 // and that triangle's unit front normal.
-bool PathTracer::lightPoint(size_t light, double u0, double u1, double u2, Vec3& y, Vec3& normal) const {
+bool PathTracer::lightPoint(size_t light, double u0, double u1, double u2, Vec3& y, Vec3& normal,
+                            Rgb& radiance) const {
     const Light& l = scene_.lights[light];
-    const Triangle3& t = l.geometry[pick(triangleCdf_[light], u0)];
+    const size_t k = pick(triangleCdf_[light], u0);
+    const Triangle3& t = l.geometry[k];
     const double r = std::sqrt(u1);
     y = t[0] + r * (1.0 - u2) * (t[1] - t[0]) + r * u2 * (t[2] - t[0]);
+    radiance = l.radiance * emitters_[light].weight(k, r * (1.0 - u2), r * u2);
     const Vec3 an = glm::cross(t[1] - t[0], t[2] - t[0]);
     const double len = glm::length(an);
     if (!(len > 0)) return false;
@@ -167,7 +170,8 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
         return bsdf.eval(v.wo, p.toLight) * p.irradiance / lightProbability_[l];
     }
     Vec3 y, nl;
-    if (!lightPoint(l, u0, u1, u2, y, nl)) return Rgb(0.0);
+    Rgb emitted;
+    if (!lightPoint(l, u0, u1, u2, y, nl, emitted)) return Rgb(0.0);
     const Vec3 d = y - v.position;
     const double d2 = glm::dot(d, d);
     if (!(d2 > 0)) return Rgb(0.0);
@@ -183,7 +187,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
     const Vec3 to = rays_.spawnPoint(y, nl, -wi);
     if (rays_.occluded(from, to - from, 0.0, 1.0)) return Rgb(0.0);
     const double w = powerHeuristic(pLight, bsdf.pdf(v.wo, wi));
-    return f * light.radiance * (glm::dot(wi, v.ns) * w / pLight);
+    return f * emitted * (glm::dot(wi, v.ns) * w / pLight);
 }
 
 // Radiance scattered at `first` towards first.wo by up to `depth`
@@ -219,7 +223,7 @@ Rgb PathTracer::scattered(const Vertex& first, Stream& rng, int depth) const {
                 const double pLight = lightProbability_[size_t(l)] * glm::dot(d, d) / (cosLight * scene_.lights[size_t(l)].area);
                 w = powerHeuristic(pdf, pLight);
             }
-            result += beta * m.ke * w;
+            result += beta * s.ke(scene_) * w;
         }
         if (k >= depth) break;
         if (k >= settings_.rouletteDepth) {
@@ -240,10 +244,9 @@ Rgb PathTracer::radiance(const Vec3& origin, const Vec3& direction, Stream& rng)
     const SurfacePoint s = rays_.surface(hit);
     Rgb result(0.0);
     const Material& m = scene_.materials[s.material];
-    // Emission seen directly shows its texture, as the compositor does;
-    // emitters met later show their mean Ke, which the light sampler uses.
-    if (m.emissive() && glm::dot(s.geometricNormal, direction) < 0)
-        result += m.keMap && s.hasTexcoord ? m.keMap.value(s.texcoord) : m.ke;
+    // Emission shows its texture, seen directly as the compositor does,
+    // and met later as the light sampler weighs it (EmitterTexture.h).
+    if (m.emissive() && glm::dot(s.geometricNormal, direction) < 0) result += s.ke(scene_);
     return result + scattered(vertexAt(s, direction, scene_), rng, settings_.maxDepth);
 }
 
@@ -433,7 +436,8 @@ IrradianceEstimate PathTracer::irradiance(const Vec3& x, const Vec3& nIn, int sa
                     continue;
                 }
                 Vec3 y, nl;
-                if (!lightPoint(l, u0, u1, u2, y, nl)) continue;
+                Rgb emitted;
+                if (!lightPoint(l, u0, u1, u2, y, nl, emitted)) continue;
                 const Vec3 d = y - x;
                 const double d2 = glm::dot(d, d);
                 if (!(d2 > 0)) continue;
@@ -443,7 +447,7 @@ IrradianceEstimate PathTracer::irradiance(const Vec3& x, const Vec3& nIn, int sa
                 const double pLight = d2 / (cosLight * scene_.lights[l].area);
                 const Vec3 to = rays_.spawnPoint(y, nl, -wi);
                 if (rays_.occluded(origin, to - origin, 0.0, 1.0)) continue;
-                perLight[l] += scene_.lights[l].radiance * (cosX / pLight * powerHeuristic(pLight, cosX / kPi));
+                perLight[l] += emitted * (cosX / pLight * powerHeuristic(pLight, cosX / kPi));
             }
             // One cosine-weighted direction: the rest of direct light (MIS)
             // and, beyond the first surface, the indirect light.
@@ -460,7 +464,7 @@ IrradianceEstimate PathTracer::irradiance(const Vec3& x, const Vec3& nIn, int sa
                 if (m.emissive() && cosLight > 0 && l >= 0) {
                     const Vec3 d = s.position - x;
                     const double pLight = glm::dot(d, d) / (cosLight * scene_.lights[size_t(l)].area);
-                    perLight[size_t(l)] += m.ke * (kPi * powerHeuristic(cosX / kPi, pLight));
+                    perLight[size_t(l)] += s.ke(scene_) * (kPi * powerHeuristic(cosX / kPi, pLight));
                 }
                 if (settings_.maxDepth >= 2) {
                     Vertex v;

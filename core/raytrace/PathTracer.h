@@ -47,6 +47,7 @@
 
 #include "EmbreeScene.h"
 #include "core/Camera.h"
+#include "core/EmitterTexture.h"
 #include "core/Scene.h"
 #include "core/image/Image.h"
 
@@ -140,13 +141,15 @@ private:
     std::vector<double> lightCdf_;                   // cumulative, last = 1 (empty: no light emits)
     std::vector<double> lightProbability_;           // per light
     std::vector<std::vector<double>> triangleCdf_;   // per light, cumulative area fraction
+    std::vector<EmitterTexture> emitters_;           // per light: L / L̄ of a textured light
 
     struct Vertex;
     struct Stream;
     static Vertex vertexAt(const SurfacePoint& s, const Vec3& incoming, const Scene& scene);
     Rgb scattered(const Vertex& first, Stream& rng, int depth) const;
     Rgb sampleLight(const Vertex& v, Stream& rng) const;
-    bool lightPoint(size_t light, double u0, double u1, double u2, Vec3& y, Vec3& normal) const;
+    // A point y of `light` (by area) with its normal and radiance there.
+    bool lightPoint(size_t light, double u0, double u1, double u2, Vec3& y, Vec3& normal, Rgb& radiance) const;
     Rgb radiance(const Vec3& origin, const Vec3& direction, Stream& rng) const;
     int threadCount() const;
 };

@@ -4,6 +4,7 @@
 #include "LightFrustum.h"
 #include "OccluderBvh.h"
 #include "OccluderPolygons.h"
+#include "core/EmitterTexture.h"
 #include "core/Error.h"
 #include "core/reference/Lambert.h"
 #include "gpu_sampling/gl/GlContext.h"
@@ -154,7 +155,28 @@ inline double addMasked(double sum, const double* w, uint32_t mask, int count) {
     return sum;
 }
 
+// A textured light's sums (EmitterTexture.h): Σ w·τ over the samples on the
+// light in `onLight` and over those of them in `occluded`, τ = L / L̄ where
+// the sample's ray meets the light, read on the CPU at the very point the GPU
+// tested (the GPU answers one bit per sample, no radiance).
+void addTextured(const EmitterTexture& texture, const SamplingFrustum& f, const double* u, const double* v,
+                 const double* w, uint32_t onLight, uint32_t occluded, int count, Rgb& lightSum, Rgb& occludedSum) {
+    for (int k = 0; k < count; ++k) {
+        if (!(onLight >> k & 1u) || !(w[k] > 0)) continue;
+        const Rgb tw = w[k] * texture.weightAlong(f.eye, f.direction(u[k], v[k]));
+        lightSum += tw;
+        if (occluded >> k & 1u) occludedSum += tw;
+    }
+}
+
 }  // namespace
+
+Rgb texturedIrradiance(const Rgb& radiance, bool controlVariate, double exactUnoccluded, double lightWeight,
+                       const Rgb& texturedLight, const Rgb& texturedOccluded, bool anyVisible) {
+    if (!controlVariate) return radiance * glm::max(texturedLight - texturedOccluded, Rgb(0.0));
+    if (!anyVisible) return Rgb(0.0);
+    return radiance * glm::max(exactUnoccluded + (texturedLight - Rgb(lightWeight)) - texturedOccluded, Rgb(0.0));
+}
 
 struct DirectLightSampler::Impl {
     const GlApi& gl;
@@ -163,6 +185,7 @@ struct DirectLightSampler::Impl {
     bool phaseTiming = false;
     DirectPhaseTimes times;
 
+    std::vector<EmitterTexture> emitters;  // per light: its emission texture, if any
     Vec3 origin;        // occluder positions are stored relative to this
     double sceneSize;   // bounding diagonal
     OccluderBvh bvh;
@@ -212,7 +235,7 @@ struct DirectLightSampler::Impl {
         : Impl(ctx, s, set, allTriangles(s)) {}
 
     Impl(GlContext& ctx, const Scene& s, const DirectSamplerSettings& set, const std::vector<Triangle3>& tris)
-        : gl(ctx.gl()), scene(s), settings(set), origin(s.bounds.center()),
+        : gl(ctx.gl()), scene(s), settings(set), emitters(EmitterTexture::forLights(s)), origin(s.bounds.center()),
           sceneSize(std::max(s.bounds.diagonal(), 1e-300)), bvh(tris) {
         settings.validate();
         buildBuffers(tris);
@@ -412,6 +435,9 @@ struct DirectLightSampler::Impl {
     struct ImageResult {
         double lightWeight = 0;     // Σ weights of samples on the light
         double occludedWeight = 0;  // Σ weights of those that are occluded
+        // A textured light's: the same sums, each weight × τ = L / L̄ at
+        // its sample (EmitterTexture.h); lightWeight is then always summed.
+        Rgb texturedLight{0.0}, texturedOccluded{0.0};
         uint32_t lightSamples = 0, visibleSamples = 0;
     };
 
@@ -453,9 +479,9 @@ struct DirectLightSampler::Impl {
     // An image of an analytic light with no occluder in it: no sample is
     // occluded, so only the samples on the light are counted, with no GL.
     ImageResult weighUnoccluded(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, const Vec3& n,
-                                uint32_t seed) {
+                                uint32_t seed, const EmitterTexture& texture) {
         ImageResult out;
-        weighAnalytic(f, pieces, gridFor(f, n, seed), bitsPerPixel(), nullptr, out);
+        weighAnalytic(f, pieces, gridFor(f, n, seed), bitsPerPixel(), nullptr, texture, out);
         return out;
     }
 
@@ -588,10 +614,12 @@ struct DirectLightSampler::Impl {
 
         const SampleGrid grid = gridFor(p.frusta[k], p.n, p.frustumSeed(k));
         ImageResult& out = p.images[k];
+        const EmitterTexture& texture = emitters[p.lightIndex];
         if (analytic)
-            weighAnalytic(p.frusta[k], p.pieces, grid, bitsPerPixel(), visiblePixels.data(), out);
+            weighAnalytic(p.frusta[k], p.pieces, grid, bitsPerPixel(), visiblePixels.data(), texture, out);
         else
-            weigh(grid, bitsPerPixel(), light.planar, visiblePixels.data(), lightPixels.data(), out);
+            weigh(p.frusta[k], grid, bitsPerPixel(), light.planar, visiblePixels.data(), lightPixels.data(), texture,
+                  out);
         t0 = Clock::now();
         times.weighting += seconds(t1, t0);
     }
@@ -691,12 +719,13 @@ struct DirectLightSampler::Impl {
     // Σ over samples of cosθ·dω, evaluated at each sample's own jittered
     // point. In camera coordinates the direction through window point (u, v)
     // is (u, v, 1), so cosθ·dω/dA = (n·s)/|s|⁴ with |s|² = 1 + u² + v² (eq. 3).
-    void weigh(const SampleGrid& grid, int bits, bool planar, const uint32_t* visiblePx, const uint32_t* lightPx,
-               ImageResult& out) const {
+    void weigh(const SamplingFrustum& f, const SampleGrid& grid, int bits, bool planar, const uint32_t* visiblePx,
+               const uint32_t* lightPx, const EmitterTexture& texture, ImageResult& out) const {
         const int size = settings.imageSize;
         // The control variate needs only the occluded samples' weights; the
-        // plain estimator needs every light sample's.
-        const bool onlyOccluded = settings.estimator == DirectEstimator::ControlVariate && planar;
+        // plain estimator, and a textured light's correction, every light sample's.
+        const bool onlyOccluded =
+            settings.estimator == DirectEstimator::ControlVariate && planar && !texture.textured();
         double lightSum = 0, occludedSum = 0;
         double u[32], v[32], w[32];
         for (int j = 0; j < size; ++j) {
@@ -713,11 +742,16 @@ struct DirectLightSampler::Impl {
                 grid.weights(u, v, w);
                 lightSum = addMasked(lightSum, w, toWeigh, grid.count);
                 occludedSum = addMasked(occludedSum, w, toWeigh & ~visible, grid.count);
+                if (texture.textured())
+                    addTextured(texture, f, u, v, w, toWeigh, toWeigh & ~visible, grid.count, out.texturedLight,
+                                out.texturedOccluded);
             }
         }
         const double sampleArea = grid.pw * grid.ph / bits;
         out.lightWeight = lightSum * sampleArea;
         out.occludedWeight = occludedSum * sampleArea;
+        out.texturedLight *= sampleArea;
+        out.texturedOccluded *= sampleArea;
     }
 
     // A convex piece of the light on the window plane: inside where every
@@ -742,9 +776,10 @@ struct DirectLightSampler::Impl {
     // their centre ± reach (edge functions are affine), so only pixels on the
     // light's outline test single samples. `visible`: the occluder pass's
     // bits per pixel (a sample is occluded where its bit is 0); null when no
-    // occluder lies in the frustum.
+    // occluder lies in the frustum. A textured light's samples on the light
+    // are all weighed, for its correction (texturedIrradiance).
     void weighAnalytic(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, const SampleGrid& grid,
-                       int bits, const uint32_t* visible, ImageResult& out) {
+                       int bits, const uint32_t* visible, const EmitterTexture& texture, ImageResult& out) {
         const int size = settings.imageSize;
         const double pw = grid.pw, ph = grid.ph;
         const uint32_t allBits = bits >= 32 ? ~0u : ((1u << bits) - 1u);
@@ -756,7 +791,8 @@ struct DirectLightSampler::Impl {
         };
         std::vector<Span> spans(light.size());
         pixelClass.resize(size_t(size));
-        double occludedSum = 0;
+        const bool textured = texture.textured();
+        double occludedSum = 0, lightSum = 0;
         double u[32], v[32], w[32];
         for (int j = 0; j < size; ++j) {
             const double vc = f.bottom + (j + 0.5) * ph;
@@ -792,10 +828,15 @@ struct DirectLightSampler::Impl {
                     const uint32_t occluded = visibleRow ? allBits & ~visibleRow[i] : 0u;
                     out.lightSamples += uint32_t(bits);
                     out.visibleSamples += uint32_t(bits) - bitCount(occluded);
-                    if (!occluded) continue;
+                    if (!occluded && !textured) continue;
                     grid.points(i, j, pixel, u, v);
                     grid.weights(u, v, w);
                     occludedSum = addMasked(occludedSum, w, occluded, bits);
+                    if (textured) {
+                        lightSum = addMasked(lightSum, w, onLight, bits);
+                        addTextured(texture, f, u, v, w, onLight, occluded, bits, out.texturedLight,
+                                    out.texturedOccluded);
+                    }
                     continue;
                 }
                 if (pixelClass[i] == 0) continue;
@@ -810,12 +851,20 @@ struct DirectLightSampler::Impl {
                 const uint32_t occluded = visibleRow ? onLight & ~visibleRow[i] : 0u;
                 out.lightSamples += bitCount(onLight);
                 out.visibleSamples += bitCount(onLight & ~occluded);
-                if (!occluded) continue;
+                if (!occluded && !(textured && onLight)) continue;
                 grid.weights(u, v, w);
                 occludedSum = addMasked(occludedSum, w, occluded, bits);
+                if (textured) {
+                    lightSum = addMasked(lightSum, w, onLight, bits);
+                    addTextured(texture, f, u, v, w, onLight, occluded, bits, out.texturedLight, out.texturedOccluded);
+                }
             }
         }
-        out.occludedWeight = occludedSum * pw * ph / bits;
+        const double sampleArea = pw * ph / bits;
+        out.occludedWeight = occludedSum * sampleArea;
+        out.lightWeight = lightSum * sampleArea;  // textured lights only (0 otherwise: unused)
+        out.texturedLight *= sampleArea;
+        out.texturedOccluded *= sampleArea;
     }
 
     // Setup of one pair: its frusta and their culls, or, where it needs no
@@ -876,6 +925,22 @@ struct DirectLightSampler::Impl {
             p.result.unoccluded = exactUnoccluded;
             p.result.cosineSolidAngle = exactUnoccluded;
             p.result.irradiance = light.radiance * exactUnoccluded;
+            const EmitterTexture& texture = emitters[lightIndex];
+            if (texture.textured()) {
+                // Lambert's form assumes the light's mean radiance
+                // everywhere: the samples on the light (weighed on the CPU,
+                // still no GL) add the texture's departure from it,
+                // Σ w (τ − 1), unbiased but no longer exact.
+                double lightWeight = 0;
+                Rgb texturedLight(0.0);
+                for (size_t k = 0; k < p.frusta.size(); ++k) {
+                    const ImageResult r = weighUnoccluded(p.frusta[k], p.pieces, n, p.frustumSeed(k), texture);
+                    lightWeight += r.lightWeight;
+                    texturedLight += r.texturedLight;
+                }
+                p.result.irradiance = texturedIrradiance(light.radiance, true, exactUnoccluded, lightWeight,
+                                                         texturedLight, Rgb(0.0), true);
+            }
             p.result.path = DirectPath::Unoccluded;
             times.setup += seconds(start, Clock::now());  // all of a CPU pair's time
             return true;
@@ -917,7 +982,7 @@ struct DirectLightSampler::Impl {
     static bool onCpu(const Pair& p, size_t k) { return p.cpuFrusta && !p.culls[k].occluders; }
 
     void weighOnCpu(Pair& p, size_t k, Clock::time_point& t0) {
-        p.images[k] = weighUnoccluded(p.frusta[k], p.pieces, p.n, p.frustumSeed(k));
+        p.images[k] = weighUnoccluded(p.frusta[k], p.pieces, p.n, p.frustumSeed(k), emitters[p.lightIndex]);
         const Clock::time_point t = Clock::now();
         times.weighting += seconds(t0, t);
         t0 = t;
@@ -929,17 +994,21 @@ struct DirectLightSampler::Impl {
         const Light& light = scene.lights[p.lightIndex];
         DirectSample& result = p.result;
         double lightWeight = 0, occludedWeight = 0;
+        Rgb texturedLight(0.0), texturedOccluded(0.0);
         for (const ImageResult& r : p.images) {
             lightWeight += r.lightWeight;
             occludedWeight += r.occludedWeight;
+            texturedLight += r.texturedLight;
+            texturedOccluded += r.texturedOccluded;
             result.lightSamples += r.lightSamples;
             result.visibleSamples += r.visibleSamples;
         }
         double e = 0;
+        const bool controlVariate = settings.estimator == DirectEstimator::ControlVariate && light.planar;
         if (settings.method == DirectMethod::OcclusionQuery) {
             result.unoccluded = p.exactUnoccluded;
             e = result.lightSamples ? p.exactUnoccluded * result.visibleSamples / result.lightSamples : 0.0;
-        } else if (settings.estimator == DirectEstimator::ControlVariate && light.planar) {
+        } else if (controlVariate) {
             result.unoccluded = p.exactUnoccluded;
             // Unbiased difference; clamped at 0 where the sampled occluded
             // part exceeds the exact total (a point nearly in umbra).
@@ -950,6 +1019,12 @@ struct DirectLightSampler::Impl {
         }
         result.cosineSolidAngle = e;
         result.irradiance = light.radiance * e;
+        // A textured light weighs each sample by its radiance there. (The
+        // occlusion query counts pixels, with no weights: it keeps the
+        // light's mean radiance, a comparison scheme only.)
+        if (emitters[p.lightIndex].textured() && settings.method != DirectMethod::OcclusionQuery)
+            result.irradiance = texturedIrradiance(light.radiance, controlVariate, p.exactUnoccluded, lightWeight,
+                                                   texturedLight, texturedOccluded, result.visibleSamples > 0);
         times.weighting += seconds(tw, Clock::now());
     }
 

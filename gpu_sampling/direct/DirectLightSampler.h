@@ -119,6 +119,22 @@ struct DirectSample {
 // more than about 1e-4 of it.
 double samplingEyeLift(const Light& light, const Vec3& x, double eyeOffset, double sceneSize);
 
+// The irradiance of a textured light (EmitterTexture.h) from one pair's
+// sums, shared by the raster and ray-traced samplers. Each sample's weight
+// w = cosθ·dω is multiplied by τ = L / L̄ where its ray meets the light:
+// `texturedLight` = Σ w·τ over the samples on the light, `texturedOccluded`
+// over those occluded, `lightWeight` = Σ w over the samples on the light.
+//   plain             L̄ (Σ_light w·τ − Σ_occluded w·τ)
+//   control variate   L̄ (U + Σ_light w (τ − 1) − Σ_occluded w·τ), U the
+//                     exact unoccluded value (Lambert's form), which assumes
+//                     the mean radiance everywhere: the samples on the light
+//                     correct it by the texture's departure from its mean.
+//                     Unbiased; exact only where the texture is uniform.
+//                     Zero when no sample is visible, as for untextured lights.
+// Clamped at 0 per channel.
+Rgb texturedIrradiance(const Rgb& radiance, bool controlVariate, double exactUnoccluded, double lightWeight,
+                       const Rgb& texturedLight, const Rgb& texturedOccluded, bool anyVisible);
+
 class DirectLightSampler {
 public:
     // `scene` must outlive the sampler; `context` must be current on the

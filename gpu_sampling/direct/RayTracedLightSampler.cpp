@@ -12,7 +12,8 @@ namespace ml {
 
 
 RayTracedLightSampler::RayTracedLightSampler(const EmbreeScene& rays, const DirectSamplerSettings& settings)
-    : rays_(rays), settings_(settings), sceneSize_(std::max(rays.scene().bounds.diagonal(), 1e-300)) {
+    : rays_(rays), settings_(settings), sceneSize_(std::max(rays.scene().bounds.diagonal(), 1e-300)),
+      emitters_(EmitterTexture::forLights(rays.scene())) {
     settings_.validate();
     if (settings_.method == DirectMethod::OcclusionQuery)
         throw InputError("the ray-traced sampler has no occlusion-query scheme: use jittered or regular");
@@ -58,8 +59,10 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
     RayFilter lightFaces;
     lightFaces.onlyLight = int(lightIndex);
     lightFaces.frontOnly = true;
+    const EmitterTexture& texture = emitters_[lightIndex];
 
     double lightWeight = 0, occludedWeight = 0;
+    Rgb texturedLight(0.0), texturedOccluded(0.0);
     for (size_t k = 0; k < frusta.size(); ++k) {
         const SamplingFrustum& f = frusta[k];
         const uint32_t frustumSeed = jitter::hash(seed + uint32_t(k) * 0x9e3779b9u);
@@ -67,6 +70,7 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
         const double pw = (f.rightEdge - f.left) / size, ph = (f.top - f.bottom) / size;
         const double nx = glm::dot(n, f.right), ny = glm::dot(n, f.up), nz = glm::dot(n, f.forward);
         double lightSum = 0, occludedSum = 0;
+        Rgb texturedLightSum(0.0), texturedOccludedSum(0.0);
         for (int j = 0; j < size; ++j)
             for (int i = 0; i < size; ++i) {
                 const uint32_t pixel = uint32_t(j * size + i);
@@ -97,20 +101,27 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
                     const double r2 = 1.0 + u * u + v * v;
                     const double w = cosine > 0 ? cosine / (r2 * r2) : 0.0;
                     lightSum += w;
-                    if (rays_.occluded(eye, d, nearDistance, tFar, occluders))
+                    const Rgb tw = texture.textured() && w > 0 ? w * texture.weightAlong(eye, d) : Rgb(w);
+                    texturedLightSum += tw;
+                    if (rays_.occluded(eye, d, nearDistance, tFar, occluders)) {
                         occludedSum += w;
-                    else
+                        texturedOccludedSum += tw;
+                    } else {
                         ++result.visibleSamples;
+                    }
                 }
             }
         const double sampleArea = pw * ph / bits;
         lightWeight += lightSum * sampleArea;
         occludedWeight += occludedSum * sampleArea;
+        texturedLight += texturedLightSum * sampleArea;
+        texturedOccluded += texturedOccludedSum * sampleArea;
     }
     result.frusta = uint32_t(frusta.size());
 
     double e = 0;
-    if (settings_.estimator == DirectEstimator::ControlVariate && planar) {
+    const bool controlVariate = settings_.estimator == DirectEstimator::ControlVariate && planar;
+    if (controlVariate) {
         result.unoccluded = exactUnoccluded;
         e = result.visibleSamples == 0 ? 0.0 : std::max(0.0, exactUnoccluded - occludedWeight);
     } else {
@@ -119,6 +130,9 @@ DirectSample RayTracedLightSampler::sample(size_t lightIndex, const Vec3& x, con
     }
     result.cosineSolidAngle = e;
     result.irradiance = light.radiance * e;
+    if (texture.textured())
+        result.irradiance = texturedIrradiance(light.radiance, controlVariate, exactUnoccluded, lightWeight,
+                                               texturedLight, texturedOccluded, result.visibleSamples > 0);
     return result;
 }
 

@@ -23,10 +23,13 @@
 //                  lights) in front of the light's nearest front face: the
 //                  raster sampler's rules, per sample, instead of rasterised
 //                  occluders with jittered membership tests.
+// A textured light's samples are weighed by its texture where their rays
+// meet it, as the raster sampler does (texturedIrradiance).
 // The occlusion-query scheme has no ray-traced peer (it counts pixels).
 #pragma once
 
 #include "DirectLightSampler.h"
+#include "core/EmitterTexture.h"
 
 namespace ml {
 
@@ -51,6 +54,7 @@ private:
     const EmbreeScene& rays_;
     DirectSamplerSettings settings_;
     double sceneSize_;
+    std::vector<EmitterTexture> emitters_;  // per light
 };
 
 }  // namespace ml
