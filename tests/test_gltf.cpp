@@ -288,9 +288,84 @@ TEST_F(Gltf, MissingMaterialIsDefaultAndMetalIsDiffuseWithAWarning) {
     EXPECT_EQ(scene.materials[0].name, "default");
     EXPECT_EQ(scene.materials[0].kd, Rgb(0.8));
     EXPECT_EQ(scene.materials[1].kd, Rgb(1.0));  // baseColorFactor's default
-    EXPECT_TRUE(hasWarning(scene, "materials[0] 'steel': metallic 1, KHR_materials_clearcoat not rendered; "
-                                  "rendered as diffuse"))
+    EXPECT_TRUE(hasWarning(scene, "materials[0] 'steel': metallic 1 (roughness 1), KHR_materials_clearcoat not "
+                                  "rendered; rendered as diffuse"))
         << joined(scene.warnings);
+}
+
+// Smooth metals become mirrors and transmitting materials glass
+// (core/SmoothSpecular.h); what those cannot show is reported once per material.
+TEST_F(Gltf, SmoothMetalIsAMirrorAndTransmissionIsGlass) {
+    GltfFile f;
+    const int chrome = f.add("materials", {{"name", "chrome"},
+                                           {"pbrMetallicRoughness",
+                                            {{"baseColorFactor", {0.9, 0.8, 0.7, 1}},
+                                             {"metallicFactor", 1},
+                                             {"roughnessFactor", 0.05}}}});
+    const int brushed = f.add("materials", {{"name", "brushed"},
+                                            {"pbrMetallicRoughness", {{"metallicFactor", 1}, {"roughnessFactor", 0.3}}}});
+    const int water = f.add("materials", {{"name", "water"},
+                                          {"pbrMetallicRoughness",
+                                           {{"baseColorFactor", {0.5, 1, 1, 1}},
+                                            {"metallicFactor", 0},
+                                            {"roughnessFactor", 0}}},
+                                          {"extensions",
+                                           {{"KHR_materials_transmission", {{"transmissionFactor", 0.8}}},
+                                            {"KHR_materials_ior", {{"ior", 1.33}}}}}});
+    const int frosted = f.add("materials", {{"name", "frosted"},
+                                            {"pbrMetallicRoughness", {{"metallicFactor", 0}, {"roughnessFactor", 0.5}}},
+                                            {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 1}}}}}});
+    const int opaque = f.add("materials", {{"name", "opaque"},
+                                           {"pbrMetallicRoughness", {{"metallicFactor", 0}}},
+                                           {"extensions", {{"KHR_materials_transmission", json::object()}}}});
+    std::vector<int> nodes;
+    for (int m : {chrome, brushed, water, frosted, opaque})
+        nodes.push_back(f.add("nodes", {{"mesh", f.addMesh(unitQuad(f, true, m))}, {"translation", {0, 0, m}}}));
+    f.setRoots(nodes);
+    const Scene scene = loadGltf(f.writeGltf(path("smooth.gltf")));
+    ASSERT_EQ(scene.materials.size(), 5u);
+    const Material& c = scene.materials[0];
+    EXPECT_EQ(c.smooth.kind, SpecularKind::Mirror);
+    EXPECT_EQ(c.smooth.reflectance, Rgb(0.9, 0.8, 0.7));  // the base colour is a metal's F0
+    EXPECT_TRUE(c.smooth.schlick);
+    EXPECT_EQ(c.kd, Rgb(0.0));  // a metal scatters nothing diffusely
+    EXPECT_FALSE(scene.materials[1].specular());  // rough: still reported, drawn diffuse
+    const Material& w = scene.materials[2];
+    EXPECT_EQ(w.smooth.kind, SpecularKind::Glass);
+    EXPECT_EQ(w.smooth.ior, 1.33);
+    EXPECT_NEAR(w.smooth.transmission.r, 0.4, 1e-15);  // transmissionFactor × base colour
+    EXPECT_NEAR(w.smooth.transmission.g, 0.8, 1e-15);
+    EXPECT_NEAR(w.kd.r, 0.1, 1e-15);  // base colour × (1 − transmissionFactor)
+    EXPECT_NEAR(w.kd.g, 0.2, 1e-15);
+    const Material& fr = scene.materials[3];
+    EXPECT_EQ(fr.smooth.kind, SpecularKind::Glass);
+    EXPECT_EQ(fr.smooth.ior, 1.5);  // KHR_materials_ior's default
+    EXPECT_EQ(fr.smooth.transmission, Rgb(1.0));
+    EXPECT_EQ(fr.kd, Rgb(0.0));
+    EXPECT_FALSE(scene.materials[4].specular());  // transmissionFactor's default is 0
+    EXPECT_FALSE(hasWarning(scene, "'chrome'")) << joined(scene.warnings);
+    EXPECT_FALSE(hasWarning(scene, "'water'")) << joined(scene.warnings);
+    EXPECT_TRUE(hasWarning(scene, "materials[1] 'brushed': metallic 1 (roughness 0.3) not rendered; rendered as "
+                                  "diffuse"))
+        << joined(scene.warnings);
+    EXPECT_TRUE(hasWarning(scene, "materials[3] 'frosted': roughness 0.5 of transmission (smooth glass) not "
+                                  "rendered; rendered as glass"))
+        << joined(scene.warnings);
+}
+
+TEST_F(Gltf, BadTransmissionOrIorIsAnInputError) {
+    auto glass = [&](json extensions, const std::string& name) {
+        return quadScene({}, {{"name", "glass"}, {"extensions", std::move(extensions)}}).writeGltf(path(name));
+    };
+    EXPECT_NE(loadError(glass({{"KHR_materials_transmission", {{"transmissionFactor", 1.5}}}}, "factor.gltf"))
+                  .find("materials[0].extensions.KHR_materials_transmission.transmissionFactor is not a number in "
+                        "[0, 1]"),
+              std::string::npos);
+    EXPECT_NE(loadError(glass({{"KHR_materials_transmission", {{"transmissionFactor", 1}}},
+                               {"KHR_materials_ior", {{"ior", -1}}}},
+                              "ior.gltf"))
+                  .find("materials[0].extensions.KHR_materials_ior.ior is not a positive number"),
+              std::string::npos);
 }
 
 TEST_F(Gltf, EmissiveStrengthScalesKeAndMakesOneLight) {

@@ -536,8 +536,6 @@ TEST_F(ObjLoaderTextures, OtherStatementsAndOptionsAreReported) {
         mtl + ":4: texture map_Ks 'spec.png' is not supported yet; using Ks",
         mtl + ":5: texture bump 'bumps.png' is not supported yet; ignored",
         mtl + ":8: d 0.5 (transparency) is not supported; rendered opaque",
-        mtl + ":9: illum 7 (reflection, refraction or transparency) is not supported; rendered "
-              "as Lambert + Phong",
         mtl + ":2: texture option -bm is not supported; ignored",
         mtl + ":6: unknown statement 'Pr' ignored (2 lines)",
         obj + ":6: unknown statement 'vp' ignored",
@@ -624,6 +622,12 @@ const ErrorCase kErrorCases[] = {
     {"kd_not_a_number", "mtllib case.mtl\n", "newmtl a\nKd 0.5 abc 0.5\n", true, 2, "Kd value 'abc' is not a number"},
     {"kd_nan", "mtllib case.mtl\n", "newmtl a\n\nKd nan\n", true, 3, "Kd value 'nan' is not a finite number"},
     {"illum_not_integer", "mtllib case.mtl\n", "newmtl a\nillum 2.5\n", true, 2, "illum value '2.5' is not an integer"},
+    {"ni_zero", "mtllib case.mtl\n", "newmtl a\nillum 7\nNi 0\n", true, 3, "Ni 0 is not positive"},
+    {"ni_negative", "mtllib case.mtl\n", "newmtl a\nNi -1.5\nillum 2\n", true, 2, "Ni -1.5 is not positive"},
+    {"ni_nan", "mtllib case.mtl\n", "newmtl a\nNi nan\n", true, 2, "Ni value 'nan' is not a finite number"},
+    {"ni_values", "mtllib case.mtl\n", "newmtl a\nNi 1.5 1.5\n", true, 2, "Ni has 2 values, expected 1"},
+    {"tf_values", "mtllib case.mtl\n", "newmtl a\nTf 0.5 0.5\n", true, 2, "Tf has 2 values, expected 1 or 3"},
+    {"tf_negative", "mtllib case.mtl\n", "newmtl a\nillum 7\nTf 1 -0.5 1\n", true, 3, "Tf 1 -0.5 1 has a negative value"},
     {"before_newmtl", "mtllib case.mtl\n", "Kd 1 1 1\n", true, 1, "Kd before any newmtl"},
     {"newmtl_without_name", "mtllib case.mtl\n", "newmtl\n", true, 1, "newmtl without a name"},
     {"usemtl_without_name", "usemtl   # none\n", nullptr, false, 1, "usemtl without a material name"},
@@ -657,6 +661,65 @@ INSTANTIATE_TEST_SUITE_P(Cases, ObjLoaderError, ::testing::ValuesIn(kErrorCases)
                          [](const ::testing::TestParamInfo<ErrorCase>& info) {
                              return std::string(info.param.label);
                          });
+
+// MTL's ray-traced illumination models become smooth layers
+// (core/SmoothSpecular.h), whatever the order of the statements of a newmtl.
+TEST(ObjLoader, IllumModelsBecomeMirrorsAndGlass) {
+    const fs::path dir = scratchDir();
+    const std::string mtl = writeFile(dir, "s.mtl",
+                                      "newmtl mirror\nillum 3\nKs 0.9 0.8 0.7\n"            // 1-3
+                                      "newmtl metal\nKs 0.95\nKd 0.01\nillum 5\n"          // 4-7
+                                      "newmtl water\nillum 7\nNi 1.33\nTf 0.5 0.6 0.7\n"   // 8-11
+                                      "newmtl glass\nKd 0.01\nillum 7\n"                    // 12-14
+                                      "newmtl clear\nillum 4\nTf 1.5 1 1\nNi 1.7\n"        // 15-18
+                                      "newmtl chrome\nKs 0.5\nillum 8\n"                    // 19-21
+                                      "newmtl shadows\nillum 10\n"                           // 22-23
+                                      "newmtl plain\nNi 2\nTf 0.1\nKs 0.3\nillum 2\n");   // 24-28
+    std::string obj = "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    for (const char* name : {"mirror", "metal", "water", "glass", "clear", "chrome", "shadows", "plain"})
+        obj += std::string("usemtl ") + name + "\nf 1 2 3\n";
+    const Scene scene = loadObj(writeFile(dir, "s.obj", obj));
+    auto material = [&](const std::string& name) -> const Material& {
+        for (const Material& m : scene.materials)
+            if (m.name == name) return m;
+        throw std::runtime_error("no material " + name);
+    };
+    const SmoothSpecular& mirror = material("mirror").smooth;
+    EXPECT_EQ(mirror.kind, SpecularKind::Mirror);
+    EXPECT_EQ(mirror.reflectance, Rgb(0.9, 0.8, 0.7));  // Ks, given after illum
+    EXPECT_FALSE(mirror.schlick);
+    const SmoothSpecular& metal = material("metal").smooth;
+    EXPECT_EQ(metal.kind, SpecularKind::Mirror);
+    EXPECT_EQ(metal.reflectance, Rgb(0.95));
+    EXPECT_TRUE(metal.schlick);
+    EXPECT_EQ(material("metal").kd, Rgb(0.01));  // the diffuse under the layer stays
+    const SmoothSpecular& water = material("water").smooth;
+    EXPECT_EQ(water.kind, SpecularKind::Glass);
+    EXPECT_EQ(water.ior, 1.33);
+    EXPECT_EQ(water.transmission, Rgb(0.5, 0.6, 0.7));
+    const SmoothSpecular& glass = material("glass").smooth;  // no Ni, no Tf: the defaults
+    EXPECT_EQ(glass.kind, SpecularKind::Glass);
+    EXPECT_EQ(glass.ior, 1.5);
+    EXPECT_EQ(glass.transmission, Rgb(1.0));
+    const SmoothSpecular& clear = material("clear").smooth;  // illum 4: as 7, Tf clamped
+    EXPECT_EQ(clear.kind, SpecularKind::Glass);
+    EXPECT_EQ(clear.ior, 1.7);
+    EXPECT_EQ(clear.transmission, Rgb(1.0));
+    const SmoothSpecular& chrome = material("chrome").smooth;  // illum 8: as 3
+    EXPECT_EQ(chrome.kind, SpecularKind::Mirror);
+    EXPECT_EQ(chrome.reflectance, Rgb(0.5));
+    EXPECT_FALSE(material("shadows").specular());
+    EXPECT_FALSE(material("plain").specular());  // Ni and Tf alone make no glass
+    EXPECT_TRUE(material("plain").glossy());
+    EXPECT_FALSE(material("mirror").glossy());   // its Ks is the mirror's, not a Phong lobe's
+    const std::vector<std::string> expected = {
+        mtl + ":17: Tf 1.5 1 1 exceeds 1 (transmits more than it receives); clamped to 1",
+        mtl + ":16: illum 4 is rendered as glass of index Ni and filter Tf (as illum 7)",
+        mtl + ":21: illum 8 is rendered as a mirror of reflectance Ks (as illum 3)",
+        mtl + ":23: illum 10 is not supported; rendered as Lambert + Phong",
+    };
+    EXPECT_EQ(scene.warnings, expected);
+}
 
 TEST(ObjLoader, MissingFile) {
     const std::string path = scratchDir().string() + "/absent.obj";
@@ -782,4 +845,32 @@ TEST(ObjLoader, McGuireCornellBox) {
     EXPECT_EQ(light.radiance, Rgb(17, 12, 4));
     EXPECT_EQ(light.triangles.size(), 2u);
     EXPECT_LT(light.normal.y, -0.99);
+}
+
+// The McGuire sphere box: a mirror (illum 5) and a dark glass (illum 7, Ni
+// 2.5, Tf 0.1), with their Kd 0.01 under the layer; nothing to warn about.
+TEST(ObjLoader, McGuireSpheresAreAMirrorAndGlass) {
+    const std::string path = std::string(MESHLIGHT_SHARED_SCENES) + "/mcguire-cornellbox/CornellBox-Sphere.obj";
+    if (!fs::exists(path)) GTEST_SKIP() << path << " is absent";
+    const Scene scene = loadObj(path);
+    EXPECT_TRUE(scene.warnings.empty()) << joined(scene.warnings);
+    int mirrors = 0, glasses = 0;
+    for (const Material& m : scene.materials) {
+        if (m.name == "leftSphere") {
+            ++mirrors;
+            EXPECT_EQ(m.smooth.kind, SpecularKind::Mirror);
+            EXPECT_TRUE(m.smooth.schlick);
+            EXPECT_EQ(m.smooth.reflectance, Rgb(0.95));
+            EXPECT_EQ(m.kd, Rgb(0.01));
+        } else if (m.name == "rightSphere") {
+            ++glasses;
+            EXPECT_EQ(m.smooth.kind, SpecularKind::Glass);
+            EXPECT_EQ(m.smooth.ior, 2.5);
+            EXPECT_EQ(m.smooth.transmission, Rgb(0.1));
+        } else {
+            EXPECT_FALSE(m.specular()) << m.name;
+        }
+    }
+    EXPECT_EQ(mirrors, 1);
+    EXPECT_EQ(glasses, 1);
 }

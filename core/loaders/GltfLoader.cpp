@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -49,6 +50,12 @@ constexpr double kDegenerateRelTol = 1e-6;
 // An accessor without a buffer view (zeros, or sparse values only) may not
 // have more elements than this: its count is not bounded by any data.
 constexpr size_t kMaxUnbackedCount = size_t(1) << 26;
+
+// A metal or a transmitting material this smooth or smoother is drawn as a
+// perfect mirror or perfect glass (core/SmoothSpecular.h): at roughness 0.05
+// (α = 0.0025 in glTF's GGX) the lobe is a fraction of a degree wide, less
+// than a pixel of a typical view of what it reflects.
+constexpr double kMirrorRoughness = 0.05;
 
 // "meshes[2]"
 std::string item(const std::string& array, size_t index) { return concat(array, "[", index, "]"); }
@@ -263,6 +270,8 @@ private:
     // Materials
     void chooseMaterials();
     MaterialChoice chooseMaterial(int index);
+    bool chooseSmoothLayer(const tg::Material& m, const std::string& at, Material& out,
+                           const std::function<void(const std::string&)>& ignore);
     std::shared_ptr<const Texture> texture(const tg::TextureInfo& info, const std::string& field);
     Rgb textureMean(const Texture& tex, int texCoord, int material, const std::string& field,
                     bool perTriangle = false);
@@ -933,14 +942,79 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
 
     std::string ignored;
     auto ignore = [&](const std::string& what) { ignored += (ignored.empty() ? "" : ", ") + what; };
-    if (pbr.metallicFactor >= 0.5)
-        ignore(concat("metallic ", pbr.metallicFactor,
+    const bool mirror = chooseSmoothLayer(m, at, choice.material, ignore);
+    if (pbr.metallicFactor >= 0.5 && !mirror)
+        ignore(concat("metallic ", pbr.metallicFactor, " (roughness ", pbr.roughnessFactor, ")",
                       pbr.metallicRoughnessTexture.index >= 0 ? " (× metallicRoughnessTexture)" : ""));
     if (m.normalTexture.index >= 0) ignore("normalTexture");
     for (const auto& e : m.extensions)
-        if (e.first != "KHR_materials_emissive_strength") ignore(e.first);
-    if (!ignored.empty()) warn(named, ": ", ignored, " not rendered; rendered as diffuse");
+        if (e.first != "KHR_materials_emissive_strength" && e.first != "KHR_materials_transmission" &&
+            e.first != "KHR_materials_ior")
+            ignore(e.first);
+    if (!ignored.empty())
+        warn(named, ": ", ignored, " not rendered; rendered as ",
+             choice.material.smooth.kind == SpecularKind::Mirror  ? "a mirror"
+             : choice.material.smooth.kind == SpecularKind::Glass ? "glass"
+                                                                  : "diffuse");
     return choice;
+}
+
+// The smooth layer (core/SmoothSpecular.h) of a glTF material, if it has
+// one. A metal (metallicFactor 1) of roughness <= kMirrorRoughness is a
+// mirror whose F0 is the base colour, rising to 1 at grazing incidence as
+// glTF's metals do (Schlick); it scatters nothing diffusely (Kd 0). A
+// material with KHR_materials_transmission is glass of index
+// KHR_materials_ior (1.5 by default) whose filter is transmissionFactor ×
+// base colour; its diffuse part keeps the fraction the transmission leaves,
+// Kd × (1 − transmissionFactor), as glTF's mix of the two lobes does. What
+// these models cannot show (textures on their factors, rough metals and
+// rough glass, ior without transmission) goes to `ignore`. Returns true for
+// a mirror.
+bool GltfReader::chooseSmoothLayer(const tg::Material& m, const std::string& at, Material& out,
+                                   const std::function<void(const std::string&)>& ignore) {
+    const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    SmoothSpecular& s = out.smooth;
+    const bool metalMap = pbr.metallicRoughnessTexture.index >= 0;
+    if (pbr.metallicFactor == 1 && pbr.roughnessFactor <= kMirrorRoughness && !metalMap) {
+        s.kind = SpecularKind::Mirror;
+        s.schlick = true;
+        s.reflectance = out.kd;  // the base colour factor, × its texture's mean when it has one
+        out.kd = Rgb(0.0);
+        if (out.kdMap) {
+            out.kdMap = TextureMap{};
+            ignore("baseColorTexture on a mirror (its mean is the reflectance)");
+        }
+        return true;
+    }
+    const auto transmission = m.extensions.find("KHR_materials_transmission");
+    if (transmission == m.extensions.end()) {
+        if (m.extensions.count("KHR_materials_ior")) ignore("KHR_materials_ior without transmission");
+        return false;
+    }
+    const std::string tAt = at + ".extensions.KHR_materials_transmission";
+    double factor = 0;  // the extension's default
+    if (transmission->second.Has("transmissionFactor")) {
+        const tg::Value& v = transmission->second.Get("transmissionFactor");
+        factor = v.IsNumber() ? v.GetNumberAsDouble() : -1;
+        if (!(factor >= 0 && factor <= 1)) fail(tAt, ".transmissionFactor is not a number in [0, 1]");
+    }
+    if (transmission->second.Has("transmissionTexture")) ignore("transmissionTexture");
+    if (!(factor > 0)) return false;
+    s.kind = SpecularKind::Glass;
+    s.transmission = factor * out.kd;
+    out.kd *= 1.0 - factor;
+    if (out.kdMap) out.kdMap.factor *= 1.0 - factor;
+    if (pbr.roughnessFactor > kMirrorRoughness || metalMap)
+        ignore(concat("roughness ", pbr.roughnessFactor, metalMap ? " (× metallicRoughnessTexture)" : "",
+                      " of transmission (smooth glass)"));
+    const auto ior = m.extensions.find("KHR_materials_ior");
+    if (ior != m.extensions.end() && ior->second.Has("ior")) {
+        const tg::Value& v = ior->second.Get("ior");
+        s.ior = v.IsNumber() ? v.GetNumberAsDouble() : -1;
+        if (!(s.ior > 0 && std::isfinite(s.ior)))
+            fail(at, ".extensions.KHR_materials_ior.ior is not a positive number");
+    }
+    return false;
 }
 
 // The texture a material refers to, decoded once; null when there is none.

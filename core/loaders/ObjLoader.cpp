@@ -149,7 +149,7 @@ bool isTextureStatement(string_view kw) {
 
 bool isMaterialStatement(string_view kw) {
     return isTextureStatement(kw) || kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ns" ||
-           kw == "Ka" || kw == "Ni" || kw == "d" || kw == "Tr" || kw == "illum";
+           kw == "Ka" || kw == "Ni" || kw == "Tf" || kw == "d" || kw == "Tr" || kw == "illum";
 }
 
 // MTL texture options (the MTL specification's), with how many values each
@@ -265,6 +265,10 @@ struct TextureStatement {
 struct LibraryMaterial {
     Material material;
     SourceLocation definedAt;
+    // The illum model and where it was given: resolved once the whole
+    // material is read (finishMaterial), since Ks, Ni and Tf may follow it.
+    long long illum = 2;
+    SourceLocation illumAt;
     int sceneIndex = -1;  // set when a face first uses it
     std::optional<TextureStatement> mapKd, mapKe, mapD;
 };
@@ -293,7 +297,8 @@ private:
 
     // MTL
     void loadMaterialLibrary(string_view name, const SourceLocation& at);
-    void parseMaterialStatement(const Statement& st, const SourceLocation& at, Material& m);
+    void parseMaterialStatement(const Statement& st, const SourceLocation& at, LibraryMaterial& lm);
+    void finishMaterial(LibraryMaterial& lm);
     void parseAveragedTexture(const Statement& st, const SourceLocation& at, LibraryMaterial& m,
                               RepeatedWarnings& repeated);
 
@@ -622,6 +627,7 @@ void ObjParser::loadMaterialLibrary(string_view name, const SourceLocation& at) 
         const string_view kw = st.keyword;
         if (kw == "newmtl") {
             if (st.rest.empty()) throwInputError(where, "newmtl without a name");
+            if (current) finishMaterial(*current);
             const std::string matName(st.rest);
             auto [it, inserted] = library_.try_emplace(matName);
             if (inserted) {
@@ -642,13 +648,15 @@ void ObjParser::loadMaterialLibrary(string_view name, const SourceLocation& at) 
         } else if (isAveragedTexture(kw)) {
             parseAveragedTexture(st, where, *current, repeated);
         } else {
-            parseMaterialStatement(st, where, current->material);
+            parseMaterialStatement(st, where, *current);
         }
     }
+    if (current) finishMaterial(*current);
     repeated.flushInto(mtlPath, scene_.warnings);
 }
 
-void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation& at, Material& m) {
+void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation& at, LibraryMaterial& lm) {
+    Material& m = lm.material;
     const string_view kw = st.keyword;
     const std::string valueName = concat(kw, " value");
     if (isTextureStatement(kw)) {
@@ -663,7 +671,12 @@ void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation
                                          hasConstant ? concat("using ", suffix) : "ignored"));
         return;
     }
-    if (kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ka") {
+    if (kw == "Tf" && !st.args.empty() && (st.args[0] == "xyz" || st.args[0] == "spectral")) {
+        scene_.warnings.push_back(concat(at.str(), ": Tf ", st.args[0],
+                                         " is not supported (only RGB); transmission filter 1 1 1 used"));
+        return;
+    }
+    if (kw == "Kd" || kw == "Ks" || kw == "Ke" || kw == "Ka" || kw == "Tf") {
         const size_t n = st.args.size();
         if (n != 1 && n != 3)
             throwInputError(at, kw, " has ", count(n, "value", "values"), ", expected 1 or 3");
@@ -675,12 +688,14 @@ void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation
             throwInputError(at, kw, " ", c.r, " ", c.g, " ", c.b, " has a negative value");
         if (kw != "Ke" && (c.r > 1 || c.g > 1 || c.b > 1)) {
             scene_.warnings.push_back(concat(at.str(), ": ", kw, " ", c.r, " ", c.g, " ", c.b,
-                                             " exceeds 1 (reflects more than it receives); "
+                                             kw == "Tf" ? " exceeds 1 (transmits more than it receives); "
+                                                        : " exceeds 1 (reflects more than it receives); ",
                                              "clamped to 1"));
             c = glm::min(c, Rgb(1.0));
         }
         if (kw == "Kd") m.kd = c;
         else if (kw == "Ks") m.ks = c;
+        else if (kw == "Tf") m.smooth.transmission = c;  // used by glass only (finishMaterial)
         else m.ke = c;
         return;
     }
@@ -688,24 +703,56 @@ void ObjParser::parseMaterialStatement(const Statement& st, const SourceLocation
     if (st.args.size() != 1)
         throwInputError(at, kw, " has ", count(st.args.size(), "value", "values"), ", expected 1");
     if (kw == "illum") {
-        long long model = 0;
-        if (!parseInteger(st.args[0], model))
+        if (!parseInteger(st.args[0], lm.illum))
             throwInputError(at, "illum value '", st.args[0], "' is not an integer");
-        if (model > 2)
-            scene_.warnings.push_back(concat(at.str(), ": illum ", model,
-                                             " (reflection, refraction or transparency) is not "
-                                             "supported; rendered as Lambert + Phong"));
+        lm.illumAt = at;
         return;
     }
     const double v = parseNumber(st.args[0], at, valueName.c_str());
     if (kw == "Ns") {
         if (v < 0) throwInputError(at, "Ns ", v, " is negative");
         m.ns = v;
+    } else if (kw == "Ni") {
+        // Kept whatever the illum model; only glass uses it (finishMaterial).
+        if (!(v > 0)) throwInputError(at, "Ni ", v, " is not positive (an index of refraction)");
+        m.smooth.ior = v;
     } else if ((kw == "d" && v < 1) || (kw == "Tr" && v > 0)) {
         scene_.warnings.push_back(concat(at.str(), ": ", kw, " ", v,
                                          " (transparency) is not supported; rendered opaque"));
     }
-    // Ni (index of refraction) matters only for refraction, which illum reports.
+}
+
+// The illum model, once Ks, Ni and Tf are all known (statements of a newmtl
+// come in any order). 3 and 5 are mirrors of reflectance Ks (5 with
+// Fresnel's rise towards grazing incidence, by Schlick), 7 is glass of index
+// Ni (1.5 when absent) and filter Tf (1 1 1 when absent); the others that
+// ray trace are drawn as the nearest of these (core/SmoothSpecular.h).
+void ObjParser::finishMaterial(LibraryMaterial& lm) {
+    Material& m = lm.material;
+    SmoothSpecular& s = m.smooth;
+    const long long model = lm.illum;
+    const char* nearest = nullptr;
+    switch (model) {
+    case 3: s.kind = SpecularKind::Mirror; break;
+    case 5: s.kind = SpecularKind::Mirror; s.schlick = true; break;
+    case 7: s.kind = SpecularKind::Glass; break;
+    // 8: reflection without ray tracing, drawn as illum 3's mirror.
+    case 8: s.kind = SpecularKind::Mirror; nearest = "a mirror of reflectance Ks (as illum 3)"; break;
+    // 4, 6, 9: glass without Fresnel, or refraction without it, drawn as illum 7's glass.
+    case 4: case 6: case 9:
+        s.kind = SpecularKind::Glass;
+        nearest = "glass of index Ni and filter Tf (as illum 7)";
+        break;
+    default:
+        s.kind = SpecularKind::None;
+        if (model > 2)
+            scene_.warnings.push_back(concat(lm.illumAt.str(), ": illum ", model,
+                                             " is not supported; rendered as Lambert + Phong"));
+        break;
+    }
+    if (nearest)
+        scene_.warnings.push_back(concat(lm.illumAt.str(), ": illum ", model, " is rendered as ", nearest));
+    if (s.kind == SpecularKind::Mirror) s.reflectance = m.ks;
 }
 
 // Options come first, each with its values; the file name is the rest of
