@@ -3,6 +3,7 @@
 #include "PunctualShadow.h"
 
 #include "PhongBsdf.h"
+#include "SmoothSpecularBsdf.h"
 #include "core/Error.h"
 #include "core/Random.h"
 
@@ -13,6 +14,7 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace ml {
@@ -59,6 +61,7 @@ struct PathTracer::Vertex {
     Vec3 wo{0.0};  // towards where the path came from, unit
     const Material* material = nullptr;
     Rgb kd{0.0};   // the material's Kd here: its texture's at the hit, else Material::kd
+    bool front = true;  // wo is on the triangle's front side (outside a closed glass object)
 };
 
 namespace {
@@ -82,6 +85,32 @@ size_t pick(const std::vector<double>& cdf, double u) {
     const size_t i = size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin());
     return std::min(i, cdf.size() - 1);
 }
+
+// The BSDF at a path vertex: Phong, or the smooth layer over Kd for a mirror
+// or glass. eval() and pdf() are what next-event estimation and MIS see:
+// for the layer, its diffuse lobe only (a delta lobe has no value to
+// evaluate towards a light).
+class VertexBsdf {
+public:
+    VertexBsdf(const Material& m, const Vec3& ns, const Vec3& ng, const Vec3& wo, bool front, const Rgb& kd) {
+        if (m.specular()) smooth_.emplace(m, ns, ng, wo, front, kd);
+        else phong_.emplace(m, ns, kd);
+    }
+    bool black() const { return phong_ ? phong_->black() : smooth_->black(); }
+    Rgb eval(const Vec3& wo, const Vec3& wi) const { return phong_ ? phong_->eval(wo, wi) : smooth_->evalDiffuse(wi); }
+    double pdf(const Vec3& wo, const Vec3& wi) const { return phong_ ? phong_->pdf(wo, wi) : smooth_->pdfDiffuse(wi); }
+    const PhongBsdf* phong() const { return phong_ ? &*phong_ : nullptr; }
+    const SmoothSpecularBsdf* smooth() const { return smooth_ ? &*smooth_ : nullptr; }
+
+private:
+    std::optional<PhongBsdf> phong_;
+    std::optional<SmoothSpecularBsdf> smooth_;
+};
+
+// Delta bounces a path may take in all (a light trapped between two mirrors
+// facing each other, or by total internal reflection): Russian roulette ends
+// such paths in expectation, this bounds them.
+constexpr int kMaxDeltaBounces = 256;
 
 }  // namespace
 
@@ -148,6 +177,7 @@ PathTracer::Vertex PathTracer::vertexAt(const SurfacePoint& s, const Vec3& incom
     v.ng = s.geometricNormal;
     v.ns = s.shadingNormal;
     if (glm::dot(v.ng, v.wo) < 0) {  // seen from the back: reflect on that side
+        v.front = false;
         v.ng = -v.ng;
         v.ns = -v.ns;
     }
@@ -166,7 +196,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
         // A delta light: only this strategy can reach it (no MIS).
         const PunctualSample p = punctualIrradiance(rays_, l, v.position, v.ns, v.ng);
         if (!p.visible) return Rgb(0.0);
-        const PhongBsdf bsdf(*v.material, v.ns, v.kd);
+        const VertexBsdf bsdf(*v.material, v.ns, v.ng, v.wo, v.front, v.kd);
         return bsdf.eval(v.wo, p.toLight) * p.irradiance / lightProbability_[l];
     }
     Vec3 y, nl;
@@ -178,7 +208,7 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
     const Vec3 wi = d / std::sqrt(d2);
     const double cosLight = -glm::dot(nl, wi);
     if (cosLight <= 0 || glm::dot(wi, v.ng) <= 0) return Rgb(0.0);  // light's back, or behind the surface
-    const PhongBsdf bsdf(*v.material, v.ns, v.kd);
+    const VertexBsdf bsdf(*v.material, v.ns, v.ng, v.wo, v.front, v.kd);
     const Rgb f = bsdf.eval(v.wo, wi);
     if (maxComponent(f) <= 0) return Rgb(0.0);
     const Light& light = scene_.lights[l];
@@ -195,18 +225,41 @@ Rgb PathTracer::sampleLight(const Vertex& v, Stream& rng) const {
 Rgb PathTracer::scattered(const Vertex& first, Stream& rng, int depth) const {
     Rgb result(0.0), beta(1.0);
     Vertex v = first;
-    for (int k = 1;; ++k) {
-        const PhongBsdf bsdf(*v.material, v.ns, v.kd);
+    // k: the depth level of v (the header's D), which delta bounces do not
+    // raise; n: the vertices so far, for Russian roulette. A level beyond
+    // `depth` is reached only at a mirror or glass, whose delta lobes may
+    // still carry the emission that the previous level's scattering sees
+    // (direct light through glass, which no shadow ray finds); nothing else
+    // is gathered there.
+    int deltaBounces = 0;
+    for (int k = 1, n = 1;; ++n) {
+        const bool beyond = k > depth;
+        if (beyond && !v.material->specular()) break;
+        const VertexBsdf bsdf(*v.material, v.ns, v.ng, v.wo, v.front, v.kd);
         if (bsdf.black()) break;
-        result += beta * sampleLight(v, rng);
+        if (!beyond) result += beta * sampleLight(v, rng);
 
         const double uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         Vec3 wi;
-        if (!bsdf.sample(v.wo, uLobe, u1, u2, wi)) break;
-        if (glm::dot(wi, v.ng) <= 0) break;  // below the true surface (shading normal): blocked
-        const double pdf = bsdf.pdf(v.wo, wi);
-        if (!(pdf > 0)) break;
-        beta *= bsdf.eval(v.wo, wi) * (glm::dot(wi, v.ns) / pdf);
+        double pdf = 0;
+        bool delta = false;
+        if (const SmoothSpecularBsdf* smooth = bsdf.smooth()) {
+            SmoothSpecularBsdf::Sample sample;
+            if (!smooth->sample(uLobe, u1, u2, sample)) break;
+            wi = sample.wi;
+            pdf = sample.pdf;
+            delta = sample.delta;
+            if (beyond && !delta) break;
+            if (!delta && glm::dot(wi, v.ng) <= 0) break;  // below the true surface, as for Phong
+            beta *= sample.weight;
+        } else {
+            const PhongBsdf& phong = *bsdf.phong();
+            if (!phong.sample(v.wo, uLobe, u1, u2, wi)) break;
+            if (glm::dot(wi, v.ng) <= 0) break;  // below the true surface (shading normal): blocked
+            pdf = phong.pdf(v.wo, wi);
+            if (!(pdf > 0)) break;
+            beta *= phong.eval(v.wo, wi) * (glm::dot(wi, v.ns) / pdf);
+        }
 
         RayHit hit;
         if (!rays_.intersect(rays_.spawnPoint(v.position, v.ng, wi), wi, 0.0, kInf, hit)) break;
@@ -217,16 +270,23 @@ Rgb PathTracer::scattered(const Vertex& first, Stream& rng, int depth) const {
             // The BSDF-sampling half of MIS: weigh against the light
             // strategy's density for the same point.
             const int l = rays_.lightOf(hit.mesh, hit.triangle);
+            // After a delta bounce only this strategy can reach the
+            // emitter (no MIS): it counts fully.
             double w = 1.0;
-            if (l >= 0) {
+            if (l >= 0 && !delta) {
                 const Vec3 d = s.position - v.position;
                 const double pLight = lightProbability_[size_t(l)] * glm::dot(d, d) / (cosLight * scene_.lights[size_t(l)].area);
                 w = powerHeuristic(pdf, pLight);
             }
             result += beta * s.ke(scene_) * w;
         }
-        if (k >= depth) break;
-        if (k >= settings_.rouletteDepth) {
+        if (delta) {
+            if (++deltaBounces > kMaxDeltaBounces) break;
+        } else {
+            if (k >= depth && !m.specular()) break;
+            ++k;
+        }
+        if (n >= settings_.rouletteDepth) {
             const double q = std::min(0.95, maxComponent(beta));
             if (!(rng.uniform() < q)) break;
             beta /= q;
@@ -466,7 +526,9 @@ IrradianceEstimate PathTracer::irradiance(const Vec3& x, const Vec3& nIn, int sa
                     const double pLight = glm::dot(d, d) / (cosLight * scene_.lights[size_t(l)].area);
                     perLight[size_t(l)] += s.ke(scene_) * (kPi * powerHeuristic(cosX / kPi, pLight));
                 }
-                if (settings_.maxDepth >= 2) {
+                // Through a mirror or glass even at depth 1: light that
+                // reaches x that way is found by this ray alone.
+                if (settings_.maxDepth >= 2 || m.specular()) {
                     Vertex v;
                     v = vertexAt(s, wi, scene_);
                     indirect = kPi * scattered(v, rng, settings_.maxDepth - 1);

@@ -11,6 +11,20 @@
 // Emitters radiate from their front (counter-clockwise) face only, as in
 // core/Scene.h; every other surface reflects on both sides.
 //
+// Mirrors and glass (core/SmoothSpecular.h, SmoothSpecularBsdf.h). At a
+// surface with a smooth layer the path goes on by reflection, refraction or
+// the diffuse Kd under the layer, chosen in proportion to their weights
+// (unbiased: the throughput is divided by the probability of the choice).
+// Next-event estimation sees the diffuse lobe only; an emitter hit after a
+// reflection or refraction counts fully (no other strategy can find it),
+// and so does one seen from the camera through a chain of them. Shadow rays
+// (area and punctual lights alike, PunctualShadow.h) treat mirrors and
+// glass as opaque: light that reaches a surface through glass or off a
+// mirror is a caustic, which this tracer finds by BSDF sampling alone (so
+// caustics of small lights are noisy, but never missing). Refracted rays
+// leave from the far side of the surface, and whether a ray enters or
+// leaves a closed object is read from the geometric normal's side.
+//
 // Depth. A path of depth D counts the emission seen directly, the direct
 // light at the first surface and D − 1 indirect bounces:
 //   D = 1   emission + direct light (what `render --direct-only` computes)
@@ -19,6 +33,9 @@
 // Le·(1 + a + … + a^D) = Le·(1 − a^(D+1))/(1 − a), tending to Le/(1 − a).
 // For irradiance at a point (irradiance()), the point itself is the first
 // vertex: D = 1 is direct irradiance only, D = 2 adds light that bounced once.
+// A reflection or refraction by a smooth layer adds no level: a mirror shows
+// at depth D what the scene shows at depth D (as the compositor, which
+// follows such rays to the cache, does), up to 256 such bounces a path.
 //
 // Russian roulette. From the `rouletteDepth`-th scattering vertex on, a path
 // survives each bounce with probability q = min(0.95, max channel of its

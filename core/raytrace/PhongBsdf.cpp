@@ -13,7 +13,9 @@ Vec3 mirror(const Vec3& wo, const Vec3& n) { return 2.0 * glm::dot(wo, n) * n - 
 }  // namespace
 
 PhongBsdf::PhongBsdf(const Material& material, const Vec3& n, const Rgb& kd)
-    : n_(n), kd_(kd), ks_(material.ks), exponent_(std::max(material.ns, 0.0)) {
+    // A mirror's or glass's Ks is its smooth layer's business
+    // (SmoothSpecularBsdf), not a Phong lobe's: glossy() leaves it out.
+    : n_(n), kd_(kd), ks_(material.glossy() ? material.ks : Rgb(0.0)), exponent_(std::max(material.ns, 0.0)) {
     orthonormalBasis(n_, t_, b_);
     const double wd = std::max(mean(kd_), 0.0), ws = std::max(mean(ks_), 0.0);
     const double sum = wd + ws;
