@@ -54,12 +54,11 @@ Rgb highlight(const CachedRadiance& cache, const SurfacePoint& y, const Vec3& wo
         if (source.light < 0 || source.weight == Rgb(0.0)) continue;
         Vec3 wl;
         if (!towardsLight(cache.scene.lights[size_t(source.light)], y.position, n, wl)) continue;
-        const double cosLight = glm::dot(wl, n);
         const double cosAlpha = glm::dot(wl, mirror);
-        if (cosLight <= 0 || cosAlpha <= 0) continue;
-        const Rgb e = source.weight * source.lookup->at(y.position, side);
-        // E_l / cos θ_l is the light's radiance times its solid angle.
-        sum += e * (norm * std::pow(cosAlpha, exponent) / cosLight);
+        if (glm::dot(wl, n) <= 0 || cosAlpha <= 0) continue;
+        // ∫ f L cos θ dω over a small light is f(ω_l) × E_l: the irradiance
+        // already holds the cosine the BRDF's integral takes.
+        sum += source.weight * source.lookup->at(y.position, side) * (norm * std::pow(cosAlpha, exponent));
     }
     return m.ks * sum;
 }

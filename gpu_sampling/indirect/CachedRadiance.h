@@ -16,12 +16,14 @@
 //
 // Phong highlights (Material::glossy, the paper's §3 pass): each light l
 // whose own direct mesh is read gives
-//   L_s = Ks × E_l × (Ns + 2)/(2π) × cosⁿα / cos θ_l,
-// the normalised modified Phong lobe of core/raytrace/PhongBsdf.h evaluated
-// for light arriving from one direction ω_l: towards the area light's
-// centroid, a point light's position, against a directional light's
-// direction. α is the angle between ω_l's mirror and the view, θ_l that of
-// ω_l to the normal. Exact for a light small against the lobe; a large light
+//   L_s = Ks × (Ns + 2)/(2π) × cosⁿα × E_l,
+// the normalised modified Phong BRDF of core/raytrace/PhongBsdf.h for light
+// arriving from one direction ω_l (∫ f L cos θ dω = f(ω_l) E_l when f is
+// constant over the light; E_l holds the cosine, so there is no 1/cos θ_l,
+// which would belong to a lobe without the cosine, not the path tracer's):
+// towards the area light's centroid, a point light's position, against a
+// directional light's direction. α is the angle between ω_l's mirror and the
+// view. Exact for a light small against the lobe; a large light
 // (solid angle comparable to the lobe's, about 2π/(Ns + 1)) is blurred
 // towards its centroid. The mesh many lights share (IrradianceCache::
 // hasSharedMesh) has no one direction and gives no highlight.

@@ -85,6 +85,63 @@ std::string describeLight(const Light& l, const Scene& scene, const DirectChoice
                   "; direct light by ", choice.describe());
 }
 
+// The display-time specular pass (viewer/compositor/SpecularPaths.h): what
+// runs, and where its Phong highlights are an approximation.
+static void printSpecularPass(const Scene& scene) {
+    size_t smooth = 0, glossy = 0;
+    double widestLobe = 0, sharpest = 0;  // sr: ∫cosⁿα dω = 2π/(Ns + 1)
+    std::vector<char> used(scene.materials.size(), 0);  // by some face, as SpecularPaths::needed counts
+    for (const Mesh& m : scene.meshes)
+        for (uint32_t material : m.materials) used[material] = 1;
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        if (!used[i]) continue;
+        smooth += m.specular() ? 1 : 0;
+        if (!m.glossy()) continue;
+        ++glossy;
+        const double lobe = 2 * kPi / (std::max(m.ns, 0.0) + 1);
+        widestLobe = std::max(widestLobe, lobe);
+        sharpest = sharpest > 0 ? std::min(sharpest, lobe) : lobe;
+    }
+    if (smooth + glossy == 0) {
+        std::printf("  specular: no pass (no material is glossy, Ks > 0, or a mirror or glass)\n");
+        return;
+    }
+    std::printf("  specular: a display-time pass, traced on the CPU (Embree) for the sub-pixels inside the screen "
+                "rectangles of glossy and specular surfaces, again whenever the view, the lights' switches or the "
+                "cache change, and added to the composite (render's EXR: layer 'specular')\n");
+    if (smooth > 0)
+        std::printf("    mirrors and glass (%zu materials): reflected and refracted (Fresnel, Ni, Tf) to the surface "
+                    "where each path ends, read from the cache there; glass splits into both branches while a "
+                    "branch's weight is at least 1e-3; a path still on a specular surface after 8 is black\n",
+                    smooth);
+    if (glossy == 0) return;
+    // A light's largest solid angle seen from a glossy triangle's centroid,
+    // against the lobe's: where it is not small, the highlight (the lobe
+    // evaluated towards the light's centroid) is blurred.
+    std::printf("    Phong highlights (%zu materials, lobes of %.3g to %.3g sr): each light's cached direct "
+                "irradiance times the lobe towards the light's centroid (a punctual light's position); exact for a "
+                "light small against the lobe; the mesh lights share (if the cache makes one) gives none\n",
+                glossy, sharpest, widestLobe);
+    for (const Light& l : scene.lights) {
+        if (l.punctual()) continue;
+        double widest = 0;
+        for (const Mesh& m : scene.meshes)
+            for (size_t t = 0; t < m.triangles.size(); ++t) {
+                if (!scene.materials[m.materials[t]].glossy()) continue;
+                const Triangle3 p = m.triangle(t);
+                const Vec3 d = l.centroid - (p[0] + p[1] + p[2]) / 3.0;
+                const double d2 = glm::dot(d, d);
+                if (d2 > 0) widest = std::max(widest, std::min(2 * kPi, l.area * std::abs(glm::dot(l.normal, d)) /
+                                                                             (d2 * std::sqrt(d2))));
+            }
+        if (widest > 0.1 * sharpest)
+            std::printf("    light '%s' subtends up to %.3g sr from glossy surfaces, not small against the %.3g sr "
+                        "lobe: its highlights there are blurred towards its centre\n",
+                        l.name.c_str(), widest, sharpest);
+    }
+}
+
 void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
                const IndirectChoice& indirect) {
     std::printf("plan:\n");
@@ -147,11 +204,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                            "again when direct light is complete), and shares the worker with direct light by their "
                            "errors").c_str());
     }
-    if (scene.hasGlossy())
-        std::printf("  specular: some materials have Ks > 0, but the Phong specular pass is not implemented yet:"
-                    " they render as Lambertian\n");
-    else
-        std::printf("  specular: no pass (no material has Ks > 0)\n");
+    printSpecularPass(scene);
 }
 
 int runPlan(const std::vector<std::string>& args) {

@@ -1,5 +1,7 @@
 #include "Compositor.h"
 
+#include "SpecularPaths.h"
+
 #include "core/image/Illuminance.h"
 #include "core/Error.h"
 #include "gpu_sampling/gl/GlContext.h"
@@ -81,6 +83,17 @@ int operatorCode(ToneOperator op) {
 
 glm::vec3 toVec3(const Rgb& c) { return glm::vec3(c); }
 
+// 0: no specular image in this composite; 1: added; 2: alone (SpecularPart).
+int specularCode(SpecularPart p) { return p == SpecularPart::Only ? 2 : 1; }
+
+bool sameCamera(const Camera& a, const Camera& b) {
+    return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
+}
+
+bool sameWeights(const LightWeights& a, const LightWeights& b) {
+    return a.light == b.light && a.indirect == b.indirect && a.shared == b.shared && a.emission == b.emission;
+}
+
 }  // namespace
 
 struct Compositor::Impl {
@@ -131,6 +144,23 @@ struct Compositor::Impl {
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
 
+    // The specular pass, in scenes with a glossy or specular material: the
+    // last traced image (RGBA32F, a texel per reduction² sub-pixels, row 0
+    // at the top) and what it was traced for.
+    std::unique_ptr<SpecularPaths> specularPaths;
+    uint64_t specularCacheGeneration = 0;  // setSpecularCache calls
+    GlTexture specularTexture;
+    struct SpecularTrace {
+        bool valid = false;
+        Camera camera;
+        LightWeights weights;
+        CompositorSettings settings;
+        int reduction = 1;
+        uint64_t cacheGeneration = 0;
+        int width = 0, height = 0;  // texels
+    } specularTrace;
+    int specular = 0;  // what the last compose does with it: specularCode, 0 none
+
     GlProgram program(const char* vertName, std::string vert, const char* fragName, std::string frag) const {
         return GlProgram(gl, {{GL_VERTEX_SHADER, vertName, std::move(vert)}, {GL_FRAGMENT_SHADER, fragName, std::move(frag)}});
     }
@@ -146,15 +176,20 @@ struct Compositor::Impl {
                       "\n#define OPERATOR ", operatorKey, "\n#define CONTOURS ", contourKey, "\n");
     }
 
+    // "#define SPECULAR 0|1|2\n" of the last compose (common_specular.glsl).
+    std::string specularDefine() const { return concat("#define SPECULAR ", specular, "\n"); }
+
     const GlProgram& compositeProgram(CompositeQuantity q) {
-        const int key = quantityCode(q);
+        const int key = quantityCode(q) + 4 * specular;
         auto it = compositePrograms.find(key);
         if (it == compositePrograms.end()) {
-            const std::string defines = concat("#define QUANTITY ", key, "\n", texturesDefine());
+            const std::string defines =
+                concat("#define QUANTITY ", quantityCode(q), "\n", texturesDefine(), specularDefine());
             it = compositePrograms
                      .emplace(key, program("composite.vert", glslSource({shaders::composite_vert}), "composite.frag",
                                            glslSource({defines.c_str(), shaders::common_constants_glsl,
-                                                       shaders::common_composite_glsl, shaders::composite_frag})))
+                                                       shaders::common_specular_glsl, shaders::common_composite_glsl,
+                                                       shaders::composite_frag})))
                      .first;
         }
         return it->second;
@@ -162,21 +197,24 @@ struct Compositor::Impl {
 
     const GlProgram& displayProgram(CompositeQuantity q, int supersample, ToneOperator op, bool contours) {
         int key = 0;
-        const std::string defines = displayDefines(q, supersample, op, contours, key) + texturesDefine();
+        const std::string defines = displayDefines(q, supersample, op, contours, key) + texturesDefine() +
+                                    specularDefine();
+        key = key * 3 + specular;
         auto it = displayPrograms.find(key);
         if (it == displayPrograms.end())
             it = displayPrograms
                      .emplace(key, program("composite.vert", glslSource({shaders::composite_vert}), "display.frag",
                                            glslSource({defines.c_str(), shaders::common_constants_glsl,
-                                                       shaders::common_composite_glsl, shaders::common_display_glsl,
-                                                       shaders::display_frag})))
+                                                       shaders::common_specular_glsl, shaders::common_composite_glsl,
+                                                       shaders::common_display_glsl, shaders::display_frag})))
                      .first;
         return it->second;
     }
 
     const GlProgram& forwardProgram(CompositeQuantity q, ToneOperator op, bool contours) {
         int key = 0;
-        const std::string defines = displayDefines(q, 1, op, contours, key) + texturesDefine();
+        const std::string defines = displayDefines(q, 1, op, contours, key) + texturesDefine() + specularDefine();
+        key = key * 3 + specular;
         auto it = forwardPrograms.find(key);
         if (it == forwardPrograms.end())
             it = forwardPrograms
@@ -185,7 +223,7 @@ struct Compositor::Impl {
                                            "scene_forward.frag",
                                            glslSource({defines.c_str(), shaders::common_constants_glsl,
                                                        shaders::common_display_glsl, shaders::common_textures_glsl,
-                                                       shaders::scene_forward_frag})))
+                                                       shaders::common_specular_glsl, shaders::scene_forward_frag})))
                      .first;
         return it->second;
     }
@@ -263,6 +301,7 @@ struct Compositor::Impl {
         for (const Rgb& c : falseColourPalette()) palette.emplace_back(glm::vec3(c), 1.0f);
         paletteBuffer = makeBuffer(gl, palette.size() * sizeof(glm::vec4), palette.data());
         emptyVao = makeVertexArray(gl);
+        if (SpecularPaths::needed(scene)) specularPaths = std::make_unique<SpecularPaths>(scene);
         checkGl(gl, "creating the compositor");
     }
 
@@ -551,6 +590,14 @@ struct Compositor::Impl {
         setFrustum();
         quantity = s.quantity;
         photometry = s.photometry;
+        // The last traced specular image, if it is of this view's grid.
+        const SpecularTrace& st = specularTrace;
+        const bool specularFits = st.valid && st.settings.width == s.width && st.settings.height == s.height &&
+                                  st.settings.supersample == s.supersample;
+        specular = specularPaths && specularFits && s.quantity == CompositeQuantity::Radiance &&
+                           s.specular != SpecularPart::Off
+                       ? specularCode(s.specular)
+                       : 0;
         if (!scene.lights.empty()) {
             std::vector<glm::vec4> emission;
             for (size_t l = 0; l < scene.lights.size(); ++l)
@@ -608,6 +655,53 @@ struct Compositor::Impl {
         gl.BindTextureUnit(1, t.irradianceSum.id());
         if (textured) gl.BindTextureUnit(6, t.emissionScale.id());
         gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
+        bindSpecular(p, t.height * t.supersample);
+    }
+
+    // The specular image for common_specular.glsl; `rows`: sub-pixel rows
+    // of the target drawn.
+    void bindSpecular(const GlProgram& p, int rows) {
+        if (!specular) return;
+        gl.BindTextureUnit(7, specularTexture.id());
+        gl.Uniform1i(p.uniform("uSpecularReduction"), specularTrace.reduction);
+        gl.Uniform1i(p.uniform("uSpecularRows"), rows);
+    }
+
+    void uploadSpecular(const ImageRgb& image) {
+        if (specularTrace.width != image.width || specularTrace.height != image.height || !specularTexture.id()) {
+            specularTexture = makeTexture2D(gl, GL_RGBA32F, image.width, image.height);
+            specularTrace.width = image.width;
+            specularTrace.height = image.height;
+        }
+        gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        gl.TextureSubImage2D(specularTexture.id(), 0, 0, 0, image.width, image.height, GL_RGB, GL_FLOAT,
+                             image.data.data());
+        checkGl(gl, "uploading the specular image");
+    }
+
+    // An image's composite: every sub-pixel traced, where it is shown.
+    void traceSpecularFor(const Camera& camera, const LightWeights& weights, const CompositorSettings& s) {
+        if (s.quantity == CompositeQuantity::Radiance && s.specular != SpecularPart::Off)
+            traceSpecular(camera, weights, s, 1);
+    }
+
+    bool traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& s, int reduction) {
+        if (!specularPaths || !specularPaths->hasCache()) return false;
+        SpecularTrace& st = specularTrace;
+        if (st.valid && st.reduction == reduction && st.cacheGeneration == specularCacheGeneration &&
+            sameCamera(st.camera, camera) && sameWeights(st.weights, weights) && st.settings.width == s.width &&
+            st.settings.height == s.height && st.settings.supersample == s.supersample &&
+            st.settings.shiftX == s.shiftX && st.settings.shiftY == s.shiftY)
+            return false;
+        const ImageRgb image = specularPaths->trace(camera, s, weights, reduction);
+        uploadSpecular(image);
+        st.valid = true;
+        st.camera = camera;
+        st.weights = weights;
+        st.settings = s;
+        st.reduction = reduction;
+        st.cacheGeneration = specularCacheGeneration;
+        return true;
     }
 
     void setLuxFactors(const GlProgram& p) {
@@ -676,6 +770,7 @@ struct Compositor::Impl {
             setLuxFactors(forward);
             gl.BindTextureUnit(1, t.irradianceSum.id());
             gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightEmissionBuffer.id());
+            bindSpecular(forward, t.height);
             bindDisplayUniforms(forward, d);
             drawSceneRanges(forward);
             gl.Disable(GL_DEPTH_TEST);
@@ -839,13 +934,29 @@ ImageRgb Compositor::render(const Camera& camera, const std::vector<IrradianceMe
     ML_ASSERT(direct.size() == impl_->scene.lights.size() || direct.size() == impl_->scene.lights.size() + 1,
               direct.size(), " meshes for ", impl_->scene.lights.size(), " lights");
     const GpuCacheMeshes meshes = upload(direct, indirect);
+    setSpecularCache(direct, indirect);
     return composite(camera, meshes, LightWeights::unit(impl_->scene.lights.size()), settings);
+}
+
+bool Compositor::hasSpecularPass() const { return impl_->specularPaths != nullptr; }
+
+void Compositor::setSpecularCache(const std::vector<IrradianceMeshCopy>& direct,
+                                  const std::vector<IrradianceMeshCopy>& indirect) {
+    if (!impl_->specularPaths) return;
+    impl_->specularPaths->setCache(direct, indirect);
+    ++impl_->specularCacheGeneration;
+}
+
+bool Compositor::traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings,
+                               int reduction) {
+    return impl_->traceSpecular(camera, weights, settings, reduction);
 }
 
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings) {
     const int passes = std::max(1, settings.passes);
     if (passes == 1) {
+        impl_->traceSpecularFor(camera, weights, settings);
         impl_->compose(camera, meshes, weights, settings);
         return impl_->readImage();
     }
@@ -868,6 +979,7 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
     for (int k = 0; k < passes; ++k) {
         s.shiftX = ((k + 0.5) / passes - 0.5) / settings.supersample;
         s.shiftY = ((rows(k) + 0.5) / passes - 0.5) / settings.supersample;
+        impl_->traceSpecularFor(camera, weights, s);
         impl_->compose(camera, meshes, weights, s);
         const ImageRgb image = impl_->readImage();
         if (k == 0) sum = image;

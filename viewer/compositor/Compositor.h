@@ -41,6 +41,14 @@ enum class CompositeQuantity {
     Illuminance,
 };
 
+// What a Radiance composite does with the specular pass (SpecularPaths:
+// mirrors, glass, Phong highlights), in scenes that have one.
+enum class SpecularPart {
+    Add,   // Kd/π × E + Le + the specular radiance: the image
+    Off,   // Kd/π × E + Le alone (render's diffuse layers)
+    Only,  // the specular radiance alone (render's specular layer)
+};
+
 struct CompositorSettings {
     int width = 512;      // output pixels
     int height = 512;
@@ -63,6 +71,8 @@ struct CompositorSettings {
     // Irradiance to lux, CompositeQuantity::Illuminance only: efficacy and
     // luminance weights (core/image/Photometry.h), RADIANCE's by default.
     Photometry photometry;
+    // Radiance only; ignored in scenes without a glossy or specular material.
+    SpecularPart specular = SpecularPart::Add;
     void validate() const;
 };
 
@@ -116,6 +126,25 @@ public:
     GpuCacheMeshes upload(const std::vector<IrradianceMeshCopy>& direct,
                           const std::vector<IrradianceMeshCopy>& indirect) const;
 
+    // --- The specular pass (issue 16) ---------------------------------------
+    // Mirrors, glass and Phong highlights: traced on the CPU (SpecularPaths)
+    // where a scene has a glossy or specular material, and added by the
+    // composite (CompositorSettings::specular). render() and composite()
+    // trace it themselves; the viewer traces it with traceSpecular() before
+    // compose().
+    bool hasSpecularPass() const;
+    // The cache the specular paths read (copied), as render() takes it;
+    // render() sets it itself. Nothing without a specular pass.
+    void setSpecularCache(const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect);
+    // Traces the specular image of the view compose() makes with these
+    // arguments, a value per `reduction`² sub-pixels (1: every sub-pixel),
+    // and keeps it for the composites that follow; again only when the
+    // camera, weights, settings, reduction or cache changed since the last
+    // trace. False when nothing was traced (no pass, no cache, unchanged).
+    bool traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings,
+                       int reduction = 1);
+
     // --- Interactive frames -------------------------------------------------
     // Composites `settings.quantity` into the compositor's own targets
     // (width·s × height·s sub-pixels, kept between calls of one size).
@@ -147,7 +176,9 @@ public:
     // for images that must equal render's output bit for bit.
     ImageRgb readImage();
     // compose() and readImage() `settings.passes` times, the sub-pixel grid
-    // shifted each time, averaged: what render() returns.
+    // shifted each time, averaged: what render() returns. The specular
+    // pass, if any, is traced for each shifted grid from the cache last
+    // given to setSpecularCache (none given: no specular pass).
     ImageRgb composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                        const CompositorSettings& settings);
     // Cache triangles the last compose drew: large meshes' cells out of

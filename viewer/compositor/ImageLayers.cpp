@@ -46,14 +46,23 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
     ML_ASSERT(direct.size() == lights || direct.size() == lights + 1, direct.size(), " meshes for ", lights,
               " lights");
     const GpuCacheMeshes meshes = compositor.upload(direct, indirect);
-    CompositorSettings radiance = settings;
-    radiance.quantity = CompositeQuantity::Radiance;
+    compositor.setSpecularCache(direct, indirect);
+    CompositorSettings beauty = settings;
+    beauty.quantity = CompositeQuantity::Radiance;
+    // Every part but `specular` without the specular pass, so that they add up.
+    CompositorSettings radiance = beauty;
+    radiance.specular = SpecularPart::Off;
     auto composite = [&](const LightWeights& w, const CompositorSettings& s) {
         return compositor.composite(camera, meshes, w, s);
     };
 
     RenderLayers out;
-    out.beauty = composite(LightWeights::unit(lights), radiance);
+    out.beauty = composite(LightWeights::unit(lights), beauty);
+    if (compositor.hasSpecularPass()) {
+        CompositorSettings alone = beauty;
+        alone.specular = SpecularPart::Only;
+        out.specular = composite(LightWeights::unit(lights), alone);
+    }
     {
         // The meshes' standard errors composited as if they were irradiance.
         const auto errors = [](std::vector<IrradianceMeshCopy> meshes) {
@@ -107,6 +116,7 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
 std::vector<ImageLayer> RenderLayers::exrLayers() const {
     std::vector<ImageLayer> layers = {ImageLayer::rgb("", beauty), ImageLayer::rgb("emission", emission),
                                       ImageLayer::rgb("direct", direct), ImageLayer::rgb("indirect", indirect)};
+    if (specular) layers.push_back(ImageLayer::rgb("specular", *specular));
     for (const Light& l : lights) layers.push_back(ImageLayer::rgb(l.layer, l.image));
     if (directShared) layers.push_back(ImageLayer::rgb("direct_shared", *directShared));
     if (directRest) layers.push_back(ImageLayer::rgb("direct_rest", *directRest));

@@ -6,9 +6,12 @@
 // Per sub-pixel the compositor adds Kd/π × E per mesh and Le per emitting
 // face, so the parts add up to the beauty image up to float rounding
 // (the sum's order on the GPU and the box filter's on the CPU):
-//   beauty   = emission + direct + indirect
+//   beauty   = emission + direct + indirect [+ specular]
 //   direct   = Σ light.<name> + direct_shared + direct_rest
 //   indirect = Kd/π × Σ_b E_b (every bounce)
+//   specular = mirrors, glass and Phong highlights (SpecularPaths), in
+//              scenes with a glossy or specular material; the other layers
+//              leave it out (CompositorSettings::specular)
 // direct_shared: where lights share one mesh (many lights), their direct
 // light cannot be told apart; direct_rest: the lights past the cap on
 // per-light layers, together.
@@ -41,6 +44,7 @@ struct RenderLayers {
     ImageRgb emission;     // the emitting faces' radiance
     ImageRgb direct;       // Kd/π × Σ direct irradiance
     ImageRgb indirect;     // Kd/π × Σ indirect irradiance
+    std::optional<ImageRgb> specular;  // the specular pass (Compositor::hasSpecularPass)
     struct Light {
         std::string layer;  // "light.<sanitised name>" (lightLayerNames)
         ImageRgb image;     // Kd/π × E_l, without its emission

@@ -30,7 +30,13 @@ vec4 compositeValue(ivec2 p) {
 #if TEXTURES
     le *= texelFetch(uEmissionScale, p, 0).rgb;
 #endif
+#if SPECULAR == 1
+    return vec4((s.rgb * kInvPi * e + le + specularAt(p)) * seen, seen);
+#elif SPECULAR == 2
+    return vec4(specularAt(p) * seen, seen);
+#else
     return vec4((s.rgb * kInvPi * e + le) * seen, seen);
+#endif
 #endif
 #endif
 }

@@ -22,6 +22,11 @@ void main() {
     // Emitters radiate from their front (counter-clockwise) face only.
     vec3 le = gl_FrontFacing && vLight >= 0 ? uLightEmission[max(vLight, 0)].rgb * emissionScale() : vec3(0.0);
     vec3 value = surfaceKd(vKd) * kInvPi * e + le;
+#if SPECULAR == 1
+    value += specularAt(ivec2(gl_FragCoord.xy));
+#elif SPECULAR == 2
+    value = specularAt(ivec2(gl_FragCoord.xy));
+#endif
 #endif
 #endif
     outColor = displayColour(value, 1.0);
