@@ -142,6 +142,32 @@ static void printSpecularPass(const Scene& scene) {
     }
 }
 
+// The mirrors and glass the faces use, as the loaders read them, and how
+// the reference path tracer treats them.
+static void printSpecularMaterials(const Scene& scene) {
+    std::vector<char> used(scene.materials.size(), 0);
+    for (const Mesh& m : scene.meshes)
+        for (uint32_t material : m.materials) used[material] = 1;
+    std::string list;
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        if (!used[i] || !m.specular()) continue;
+        const SmoothSpecular& s = m.smooth;
+        list += concat(list.empty() ? "" : ", ", "'", m.name, "' ");
+        if (s.kind == SpecularKind::Mirror)
+            list += concat("mirror (reflectance ", s.reflectance.r, " ", s.reflectance.g, " ", s.reflectance.b,
+                           s.schlick ? ", rising to 1 at grazing incidence)" : ")");
+        else
+            list += concat("glass (ior ", s.ior, ", Tf ", s.transmission.r, " ", s.transmission.g, " ",
+                           s.transmission.b, ")");
+    }
+    if (list.empty()) return;
+    std::printf("  specular materials: %s; the path tracer (reference) follows their reflections and refractions, "
+                "and finds light reaching other surfaces through them by path sampling only (shadow rays stop at "
+                "them)\n",
+                list.c_str());
+}
+
 void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
                const IndirectChoice& indirect) {
     std::printf("plan:\n");
@@ -205,6 +231,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                            "errors").c_str());
     }
     printSpecularPass(scene);
+    printSpecularMaterials(scene);
 }
 
 int runPlan(const std::vector<std::string>& args) {
