@@ -6,6 +6,7 @@
 #include "core/Scene.h"
 
 #include <array>
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,6 +55,40 @@ inline Scene sceneOf(std::string name, std::vector<Material> materials, std::vec
 // facing up.
 inline Mesh unitLight() { return quadMesh("light", 0, Vec3(-0.5, 1.0, -0.5), kX, kZ); }
 inline Mesh floorMesh() { return quadMesh("floor", 1, Vec3(-1.5, 0.0, -1.5), 3.0 * kZ, 3.0 * kX); }
+
+// A UV sphere of `material`: 2 poles and (stacks-1) rings of `slices`
+// vertices, shared around the seam, each with its exact normal as shading
+// normal; 2·slices·(stacks-1) triangles, counter-clockwise from outside.
+inline Mesh uvSphere(const Vec3& center, double radius, int stacks, int slices, uint32_t material = 0) {
+    Mesh m;
+    m.name = "sphere";
+    auto add = [&](const Vec3& n) {
+        m.positions.push_back(center + radius * n);
+        m.normals.push_back(n);
+    };
+    add(Vec3(0, 0, 1));
+    for (int i = 1; i < stacks; ++i) {
+        const double th = kPi * i / stacks;
+        for (int j = 0; j < slices; ++j) {
+            const double ph = 2 * kPi * j / slices;
+            add(Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+        }
+    }
+    add(Vec3(0, 0, -1));
+    const unsigned south = unsigned(m.positions.size() - 1);
+    auto ring = [&](int i, int j) { return unsigned(1 + (i - 1) * slices + (j % slices)); };
+    for (int j = 0; j < slices; ++j) {
+        m.triangles.push_back({0u, ring(1, j), ring(1, j + 1)});
+        for (int i = 1; i + 1 < stacks; ++i) {
+            m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+        m.triangles.push_back({ring(stacks - 1, j), south, ring(stacks - 1, j + 1)});
+    }
+    m.materials.assign(m.triangles.size(), material);
+    m.sourceLines.assign(m.triangles.size(), 0);
+    return m;
+}
 
 // A furnace: the closed cube centre ± halfSide (scene units) on every axis,
 // one mesh of one material, every face inward (counter-clockwise seen from

@@ -3,6 +3,8 @@
 #include "core/Error.h"
 #include "core/loaders/ObjLoader.h"
 
+#include "TestScenes.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +14,7 @@
 #include <string>
 
 using namespace ml;
+using ml::test::uvSphere;
 
 namespace {
 
@@ -19,37 +22,6 @@ Mesh withTriangleArrays(Mesh m) {
     m.materials.assign(m.triangles.size(), 0);
     m.sourceLines.assign(m.triangles.size(), 0);
     return m;
-}
-
-// A UV sphere: 2 poles and (stacks-1) rings of `slices` vertices, shared
-// around the seam; 2·slices·(stacks-1) triangles, counter-clockwise from outside.
-Mesh uvSphere(const Vec3& center, double radius, int stacks, int slices) {
-    Mesh m;
-    m.name = "sphere";
-    auto add = [&](const Vec3& n) {
-        m.positions.push_back(center + radius * n);
-        m.normals.push_back(n);
-    };
-    add(Vec3(0, 0, 1));
-    for (int i = 1; i < stacks; ++i) {
-        const double th = kPi * i / stacks;
-        for (int j = 0; j < slices; ++j) {
-            const double ph = 2 * kPi * j / slices;
-            add(Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
-        }
-    }
-    add(Vec3(0, 0, -1));
-    const unsigned south = unsigned(m.positions.size() - 1);
-    auto ring = [&](int i, int j) { return unsigned(1 + (i - 1) * slices + (j % slices)); };
-    for (int j = 0; j < slices; ++j) {
-        m.triangles.push_back({0u, ring(1, j), ring(1, j + 1)});
-        for (int i = 1; i + 1 < stacks; ++i) {
-            m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-            m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-        }
-        m.triangles.push_back({ring(stacks - 1, j), south, ring(stacks - 1, j + 1)});
-    }
-    return withTriangleArrays(std::move(m));
 }
 
 // An n×n lattice of vertices spanning [0, size]² at height z, normal ±z,

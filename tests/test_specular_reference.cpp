@@ -347,3 +347,31 @@ TEST(SpecularReference, GlassAndMirrorLeaveAFurnaceUnchanged) {
 }
 
 }  // namespace
+
+namespace {
+
+// A closed glass sphere in the furnace: rays enter and leave it through
+// triangles seen from either side (the geometric normal tells which), bent
+// about interpolated shading normals. Where a shading normal sends a ray to
+// the wrong side of its flat triangle the path is lost (SmoothSpecularBsdf.h),
+// a loss that shrinks with the tessellation: measured 1.1 % at 8 stacks,
+// 0.34 % at 16, 0.05 % at 32, none visible at 64 (SE 0.07 %). At 32 stacks
+// the check allows 4 standard errors plus 0.2 %.
+TEST(SpecularReference, GlassSphereLeavesAFurnaceUnchanged) {
+    const Scene box = test::furnaceBox(0.5, 1.0);
+    std::vector<Material> materials = box.materials;
+    materials.push_back(glassMaterial("glass", 1.5));
+    const Vec3 centre(0.1, -0.2, 0.0);
+    const Scene scene = test::sceneOf("furnace with a glass sphere", std::move(materials),
+                                      {box.meshes[0], test::uvSphere(centre, 0.5, 32, 64, 1)});
+    Camera camera;
+    camera.position = Vec3(0.1, -0.2, 0.95);
+    camera.target = centre;
+    camera.fovYDegrees = 60;
+    constexpr int kDepth = 4;
+    const double expected = (1 - std::pow(0.5, kDepth + 1)) / (1 - 0.5);
+    const RegionMean m = regionMean(trace(scene, camera, 32, 128, kDepth, 9), 1, 0, 0, 32, 32);
+    EXPECT_NEAR(m.mean, expected, 4 * m.standardError + 0.002 * expected);
+}
+
+}  // namespace
