@@ -346,10 +346,6 @@ TEST(SpecularReference, GlassAndMirrorLeaveAFurnaceUnchanged) {
     EXPECT_NEAR(all.mean, expected, 4 * all.standardError);
 }
 
-}  // namespace
-
-namespace {
-
 // A closed glass sphere in the furnace: rays enter and leave it through
 // triangles seen from either side (the geometric normal tells which), bent
 // about interpolated shading normals. Where a shading normal sends a ray to
