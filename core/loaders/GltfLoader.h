@@ -58,10 +58,15 @@ struct GltfOptions {
 //   are added again, reversed, as a separate Mesh "<mesh> (back)" (so that
 //   front and back make separate, planar lights). Meshlight shows both sides of
 //   every surface, so doubleSided changes nothing else.
-//   Rendered as diffuse, with one warning per material naming what is left
-//   out: metallicFactor >= 0.5, normalTexture, and material extensions other
-//   than the emissive strength (KHR_materials_specular, _transmission,
-//   _clearcoat, ...). alphaMode MASK with a baseColorFactor alpha below
+//   A mirror (core/SmoothSpecular.h): metallicFactor 1, roughnessFactor <=
+//   0.05, no metallicRoughnessTexture; F0 = the base colour (Schlick), Kd 0.
+//   Glass: KHR_materials_transmission with transmissionFactor > 0; index
+//   KHR_materials_ior (default 1.5), filter transmissionFactor × base colour,
+//   Kd × (1 − transmissionFactor).
+//   Otherwise rendered as diffuse, with one warning per material naming what
+//   is left out: metallicFactor >= 0.5 (rough metals), roughness of glass,
+//   normalTexture, and material extensions other than those above
+//   (KHR_materials_specular, _clearcoat, ...). alphaMode MASK with a baseColorFactor alpha below
 //   alphaCutoff removes the material's triangles (warning); alpha that would
 //   cut out or blend otherwise is ignored and rendered opaque (warning).
 // Camera: the first node in traversal order with a perspective camera gives

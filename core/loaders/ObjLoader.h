@@ -25,11 +25,15 @@ struct ObjOptions {
 // groups), comments, blank lines, CRLF. Polygons are split as a fan from their
 // first corner, which is right for convex polygons; a polygon that is not
 // convex gets one counted warning per file.
-// MTL: newmtl, Kd, Ks, Ke (1 or 3 values), Ns; Ka and Ni are checked and
-// unused; d < 1, Tr > 0 and illum > 2 (transparency, mirrors, glass) are
-// checked and warned about since they render as opaque Lambert + Phong.
-// Kd or Ks above 1 is clamped to 1 with a warning (it would create energy);
-// negative Kd, Ks, Ke or Ns is an error.
+// MTL: newmtl, Kd, Ks, Ke, Tf (1 or 3 values), Ns, Ni, illum; Ka is checked
+// and unused. illum 3 and 5 make a mirror of reflectance Ks (5: Schlick), 7 a
+// glass of index Ni (1.5 when absent) and filter Tf (1 1 1 when absent), 4,
+// 6, 9 and 8 the nearest of these with a warning (core/SmoothSpecular.h);
+// they are resolved at the end of each newmtl, whatever the statements'
+// order. Other illum values above 2, d < 1 and Tr > 0 (transparency) are
+// warned about since they render as opaque Lambert + Phong.
+// Kd, Ks or Tf above 1 is clamped to 1 with a warning (it would create
+// energy); negative Kd, Ks, Ke, Tf or Ns, and Ni <= 0, are errors.
 // Textures: map_Kd, map_Ke and map_d are read (PNG, JPEG or TGA; paths
 // relative to the MTL's folder, backslashes read as slashes; the file name is
 // the rest of the line after the options, so it may hold blanks), only for
