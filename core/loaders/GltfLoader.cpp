@@ -1003,7 +1003,10 @@ bool GltfReader::chooseSmoothLayer(const tg::Material& m, const std::string& at,
     s.kind = SpecularKind::Glass;
     s.transmission = factor * out.kd;
     out.kd *= 1.0 - factor;
-    if (out.kdMap) out.kdMap.factor *= 1.0 - factor;
+    if (out.kdMap) {
+        out.kdMap.factor *= 1.0 - factor;
+        ignore("baseColorTexture on transmission (its mean filters it)");
+    }
     if (pbr.roughnessFactor > kMirrorRoughness || metalMap)
         ignore(concat("roughness ", pbr.roughnessFactor, metalMap ? " (× metallicRoughnessTexture)" : "",
                       " of transmission (smooth glass)"));
