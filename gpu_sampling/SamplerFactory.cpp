@@ -5,6 +5,7 @@
 #include "core/raytrace/PunctualShadow.h"
 #include "core/reference/ExactIrradiance.h"
 #include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/indirect/IrradianceVolume.h"
 #include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
@@ -39,7 +40,7 @@ std::string DirectChoice::describe() const {
 }
 
 std::vector<std::string> indirectMethodNames() {
-    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace"};
+    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace", "volume"};
 }
 
 std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
@@ -87,6 +88,11 @@ std::string IndirectChoice::describe() const {
         return concat("raytrace: ", rayGatherSettings(*this).rays,
                       " stratified cosine-weighted rays (Embree) per gather, reading the cache meshes' radiance where "
                       "they land (consistent: no proxy)");
+    if (method == "volume")
+        return concat("volume: order-2 SH probes, ", volume.probes, " along the scene's longest side, each from ",
+                      6 * volume.faceSize * volume.faceSize, " cube-map rays (Embree) reading the cache; 8 probes "
+                      "blended per point", volume.visibility ? ", weighted by a ray test to each" : "",
+                      volume.skipInside ? ", those inside objects left out" : "");
     return concat(method, ": the radiance proxy's triangles (", gather.resolution,
                   " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }
@@ -226,6 +232,7 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
     }
     if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
     if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
+    if (choice.method == "volume") return std::make_unique<IrradianceVolume>(scene, choice.volume);
     for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
         if (choice.method == triangleProjectionName(p)) {
             TriangleGatherSettings t;
@@ -280,10 +287,12 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
         WorkerSamplers samplers;
         samplers.direct = std::make_unique<ConfiguredDirectSampler>(scene, direct);
         if (indirect.active()) {
-            // The ray gather draws nothing: no GL context of its own.
+            // The ray gather and the volume draw nothing: no GL context of their own.
             const IndirectChoice resolved = indirect.resolved(scene);
             if (resolved.method == "raytrace")
                 samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
+            else if (resolved.method == "volume")
+                samplers.indirect = std::make_unique<IrradianceVolume>(scene, resolved.volume);
             else
                 samplers.indirect = std::make_unique<OwnContextGather>(scene, resolved, direct.backend);
         }

@@ -21,6 +21,7 @@
 #include "core/raytrace/BounceCount.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/indirect/GatherSettings.h"
+#include "gpu_sampling/indirect/IrradianceVolume.h"
 
 #include <memory>
 #include <string>
@@ -50,6 +51,7 @@ struct IndirectChoice {
     std::string method = "auto";
     std::string methodReason;          // filled by decide(): "as asked (--indirect-method)" or why auto chose
     GatherSettings gather;
+    IrradianceVolumeSettings volume;   // method "volume": the probe grid (--probes, --probe-face)
     BounceCountSettings bounces;
     IndirectSettings solver;           // bounces and albedo come from decide()
     BounceCount bounceCount;            // filled by decide()
@@ -65,7 +67,8 @@ struct IndirectChoice {
     std::string describe() const;      // "slices: 40x40 fish-eye gathers over 64 voxels ..."
 };
 
-// "slices" (the paper's), "raytrace" (consistent), and the comparisons of `bench indirect`.
+// "slices" (the paper's), "raytrace" (consistent), "volume" (the irradiance
+// volume of SH probes), and the comparisons of `bench indirect`.
 std::vector<std::string> indirectMethodNames();
 
 // The gather "auto" stands for, and why: the ray gather (RayGather.h),

@@ -44,14 +44,17 @@ void declareIndirectOptions(Options& o) {
             "the hemispherical gather: auto (chosen from the scene, plan says which and why), raytrace "
             "(--gather-size^2/4 Embree rays reading the cache where they land: consistent), slices (the paper's "
             "voxel slices), slice-quads (one quad per slice face), raymarch (the voxels as a 3D texture), "
-            "fisheye-triangles, perspective (one 160-degree image) or hemicube (the proxy's triangles at --voxels, "
-            "image --gather-size)",
+            "fisheye-triangles, perspective (one 160-degree image), hemicube (the proxy's triangles at --voxels, "
+            "image --gather-size) or volume (an irradiance volume of SH probes, --probes, --probe-face)",
             std::string("auto"));
     o.value("voxels", "N", "voxel slices: N voxels along the scene's longest side (32..128 typical)",
             concat(g.resolution));
     o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
+    const IrradianceVolumeSettings v;
+    o.value("probes", "N", "volume: N probes along the scene's longest side (4..16 typical)", concat(v.probes));
+    o.value("probe-face", "N", "volume: each probe's cube map N x N rays per face", concat(v.faceSize));
 }
 
 IndirectChoice readIndirectOptions(const Options& o) {
@@ -70,6 +73,9 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.gather.nearVoxels = o.integer("near-voxels", 0, 8);
     c.gather.sliceSupersample = o.integer("slice-supersample", 1, 8);
     c.gather.validate();
+    c.volume.probes = o.integer("probes", 1, 64);
+    c.volume.faceSize = o.integer("probe-face", 2, 128);
+    c.volume.validate();
     c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
     c.bounces.maxBounces = o.integer("max-bounces", 1, 256);
     if (o.has("bounces")) c.bounces.forced = o.integer("bounces", 0, 256);
