@@ -129,7 +129,7 @@ void IrradianceCache::save(const std::string& path) const {
     file.bytes().append(kMagic, sizeof kMagic);
     file.put(kFormatVersion);
     file.put(s.sceneFingerprint);
-    file.put(detail::settingsFingerprint(s.settings));
+    file.put(detail::settingsFingerprint(s.settings) ^ s.gatheredSalt);
     file.put(uint64_t(payload.bytes().size()));
     file.bytes() += payload.bytes();
     file.put(fnv1a(payload.bytes()));
@@ -162,7 +162,7 @@ void IrradianceCache::load(const std::string& path) {
     if (in.get<uint64_t>("the header") != s.sceneFingerprint)
         throw InputError(concat(path, ": the cache was made for another scene (geometry, materials or lights "
                                       "differ); delete it or name another file"));
-    if (in.get<uint64_t>("the header") != detail::settingsFingerprint(s.settings))
+    if (in.get<uint64_t>("the header") != (detail::settingsFingerprint(s.settings) ^ s.gatheredSalt))
         throw InputError(concat(path, ": the cache was made with other cache settings; use the same settings, "
                                       "or delete it or name another file"));
     const uint64_t payloadBytes = in.get<uint64_t>("the header");
@@ -181,6 +181,7 @@ void IrradianceCache::load(const std::string& path) {
     next.settings = s.settings;
     next.diagonal = s.diagonal;
     next.sceneFingerprint = s.sceneFingerprint;
+    next.gatheredSalt = s.gatheredSalt;
     next.grids = s.grids;  // made from the scene, which matches
     next.gridSamples = s.gridSamples;
     next.rounds = p.get<uint64_t>("the counters");

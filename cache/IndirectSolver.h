@@ -56,6 +56,11 @@ struct IndirectSettings {
     // gather, so short first passes are waited for.
     double startFraction = 0.1;
     double startSeconds = 2.0;
+    // Per scene light, 1 when bounce 1's gather reads its emission where its
+    // rays land instead of the direct sampler sampling it (GatheredLights.h;
+    // empty: none). The direct meshes then leave it out (LightCoverage), so
+    // the gather must be one that reads it (RayGather).
+    std::vector<char> gatheredLights;
     static CacheSettings defaultCache();
     void validate() const;
 };

@@ -237,6 +237,9 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     s.sceneFingerprint = detail::sceneFingerprint(scene);
     s.insetBorders = layout.insetBorders;
+    if (layout.coverage)
+        for (size_t l = 0; l < scene.lights.size(); ++l)
+            if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
     for (const Light& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
@@ -268,8 +271,11 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     for (size_t l = 0; l < s.meshes.size(); ++l) {
         detail::LightMesh& lm = s.meshes[l];
         lm.mesh = base;
-        // A light's own mesh keeps the faces where it has weight.
-        if (share && l < scene.lights.size()) {
+        // A light's own mesh keeps the faces where it has weight; a gathered
+        // light's keeps none (LightCoverage::gathered).
+        const bool gathered = layout.coverage && layout.meshes == 0 && l < scene.lights.size() &&
+                              layout.coverage->gathered(l);
+        if ((share && l < scene.lights.size()) || gathered) {
             for (const auto fh : lm.mesh.faces()) {
                 Triangle3 t;
                 int k = 0;

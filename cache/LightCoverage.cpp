@@ -35,8 +35,10 @@ double bound(const Light& light, const Vec3& p) {
 
 }  // namespace
 
-LightCoverage::LightCoverage(const Scene& scene, double share, int resolution)
-    : lights_(scene.lights.size()), share_(share) {
+LightCoverage::LightCoverage(const Scene& scene, double share, const std::vector<char>& gatheredLights, int resolution)
+    : lights_(scene.lights.size()), share_(share), gathered_(gatheredLights) {
+    if (!gathered_.empty() && gathered_.size() != lights_)
+        throw InputError(concat("gathered lights: ", gathered_.size(), " flags for ", lights_, " lights"));
     if (!(share >= 0 && share <= 1)) throw InputError(concat("light share ", share, " is not in [0, 1]"));
     if (resolution < 1) throw InputError(concat("light coverage grid of ", resolution, " cells"));
     const Bounds3& b = scene.bounds;
@@ -63,7 +65,8 @@ LightCoverage::LightCoverage(const Scene& scene, double share, int resolution)
             for (int i = 0; i <= dims_[0]; ++i) {
                 const Vec3 p = origin_ + cellSize_ * Vec3(i, j, k);
                 double& total = totals[node(i, j, k)];
-                for (size_t l = 0; l < lights_; ++l) total += bound(scene.lights[l], p);
+                for (size_t l = 0; l < lights_; ++l)
+                    if (!gathered(l)) total += bound(scene.lights[l], p);
                 level += total;
             }
     const double floor = 0.25 * level / double(nodes);
@@ -76,6 +79,7 @@ LightCoverage::LightCoverage(const Scene& scene, double share, int resolution)
                 const double total = std::max(totals[n], floor);
                 offsets_[n] = uint32_t(nodeLights_.size());
                 for (size_t l = 0; l < lights_; ++l) {
+                    if (gathered(l)) continue;  // w = 0, and not the shared mesh's either
                     // No light at all (no power anywhere): every light keeps
                     // its own, zero.
                     const double s = total > 0 ? bound(scene.lights[l], p) / total : 1.0;
@@ -115,7 +119,7 @@ void LightCoverage::locate(const Vec3& x, int cell[3], double t[3]) const {
 }
 
 double LightCoverage::weight(size_t light, const Vec3& x) const {
-    if (!sharing_) return 1.0;
+    if (!sharing_) return gathered(light) ? 0.0 : 1.0;
     int c[3];
     double t[3];
     locate(x, c, t);
@@ -135,7 +139,8 @@ double LightCoverage::weight(size_t light, const Vec3& x) const {
 void LightCoverage::weights(const Vec3& x, std::vector<std::pair<uint32_t, double>>& out) const {
     out.clear();
     if (!sharing_) {
-        for (size_t l = 0; l < lights_; ++l) out.emplace_back(uint32_t(l), 1.0);
+        for (size_t l = 0; l < lights_; ++l)
+            if (!gathered(l)) out.emplace_back(uint32_t(l), 1.0);
         return;
     }
     int c[3];
@@ -160,7 +165,7 @@ void LightCoverage::weights(const Vec3& x, std::vector<std::pair<uint32_t, doubl
 }
 
 bool LightCoverage::covers(size_t light, const Triangle3& tri) const {
-    if (!sharing_) return true;
+    if (!sharing_) return !gathered(light);
     Vec3 lo = glm::min(tri[0], glm::min(tri[1], tri[2])), hi = glm::max(tri[0], glm::max(tri[1], tri[2]));
     int clo[3], chi[3];
     double t[3];
@@ -175,18 +180,22 @@ bool LightCoverage::covers(size_t light, const Triangle3& tri) const {
 }
 
 double LightCoverage::coveredFraction(size_t light) const {
-    if (!sharing_) return 1.0;
+    if (!sharing_) return gathered(light) ? 0.0 : 1.0;
     const std::vector<bool>& covered = cellCovered_.at(light);
     return covered.empty() ? 0.0 : double(std::count(covered.begin(), covered.end(), true)) / double(covered.size());
 }
 
 std::string LightCoverage::describe() const {
     if (lights_ == 0) return "no lights";
+    const size_t sampled = lights_ - size_t(std::count(gathered_.begin(), gathered_.end(), 1));
+    const std::string gatheredNote =
+        sampled < lights_ ? concat(" (", lights_ - sampled, " gathered lights have none)") : std::string();
     if (!sharing_)
         return concat("every light's mesh covers the whole scene (each gives at least ", 100 * share_,
-                      "% of the direct light everywhere by its power bound)");
+                      "% of the direct light everywhere by its power bound)", gatheredNote);
     double sum = 0, lo = 1, hi = 0;
     for (size_t l = 0; l < lights_; ++l) {
+        if (gathered(l)) continue;
         const double f = coveredFraction(l);
         sum += f, lo = std::min(lo, f), hi = std::max(hi, f);
     }
@@ -195,8 +204,8 @@ std::string LightCoverage::describe() const {
                   "%zu lights: each keeps a mesh of its own where it gives at least %.3g%% of the direct light (by "
                   "a bound from power, distance and orientation), over %.0f%% of the scene's grid cells on average "
                   "(%.0f..%.0f%%); the rest of their light goes to one shared mesh",
-                  lights_, 100 * share_, 100 * sum / double(lights_), 100 * lo, 100 * hi);
-    return line;
+                  sampled, 100 * share_, 100 * sum / double(std::max<size_t>(sampled, 1)), 100 * lo, 100 * hi);
+    return line + gatheredNote;
 }
 
 }  // namespace ml

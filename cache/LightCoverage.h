@@ -24,6 +24,10 @@
 // so it is exactly reproducible at any point, and a face is covered when
 // any node of a cell its bounding box meets has w_l > 0: w_l is zero
 // everywhere outside the faces of l's mesh.
+//
+// A gathered light (GatheredLights.h) is in neither: w_l = 0, no face of
+// its own mesh, and the shared mesh leaves it out (its light comes through
+// bounce 1's gather); it does not count in the totals shares are taken of.
 #pragma once
 
 #include "core/Scene.h"
@@ -39,12 +43,15 @@ class LightCoverage {
 public:
     // `share`: τ in (0, 1]; typical 0.05..0.2 (CacheSettings::lightShare: 0.1). 0 keeps every light's mesh over
     // the whole scene (w = 1 everywhere, no shared mesh).
-    LightCoverage(const Scene& scene, double share, int resolution = 32);
+    // `gathered`: per light, 1 for a gathered light (empty: none).
+    LightCoverage(const Scene& scene, double share, const std::vector<char>& gatheredLights = {}, int resolution = 32);
 
     size_t lightCount() const { return lights_; }
     // Some light gives part of its light to the shared mesh somewhere.
     bool sharing() const { return sharing_; }
     double share() const { return share_; }
+    // Light l reaches the scene through the gather: no mesh, not shared.
+    bool gathered(size_t light) const { return light < gathered_.size() && gathered_[light]; }
 
     // w_l(x); 1 everywhere when not sharing.
     double weight(size_t light, const Vec3& x) const;
@@ -64,6 +71,7 @@ private:
 
     size_t lights_ = 0;
     double share_ = 0;
+    std::vector<char> gathered_;
     bool sharing_ = false;
     Vec3 origin_{0.0};
     double cellSize_ = 1;

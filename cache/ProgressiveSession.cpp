@@ -15,6 +15,13 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// Lights gathered by bounce 1 (GatheredLights.h): only when there is a
+// bounce to gather them.
+std::vector<char> gatheredLightsOf(const SessionSettings& settings) {
+    if (!settings.indirect || settings.indirect->bounces <= 0) return {};
+    return settings.indirect->gatheredLights;
+}
+
 CacheLayout layoutFor(const std::shared_ptr<const LightCoverage>& coverage) {
     CacheLayout layout;
     layout.coverage = coverage;
@@ -45,13 +52,15 @@ ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings
                                        const StopRule& stop)
     : scene_(scene),
       settings_(settings),
-      coverage_(std::make_shared<LightCoverage>(scene, settings.cache.lightShare)),
+      coverage_(std::make_shared<LightCoverage>(scene, settings.cache.lightShare, gatheredLightsOf(settings))),
       factory_(std::move(factory)),
       cache_(scene, settings.cache, layoutFor(coverage_)) {
     // Lights that share a mesh: each sampling thread's direct sampler is
     // wrapped to fill the lights' own meshes by weight and the shared one by
     // drawing lights (SharedLightSampler).
-    if (cache_.hasSharedMesh())
+    // A gathered light's mesh has no faces, but grid caches sample every
+    // light: the wrapper answers its zero weight with zero there too.
+    if (cache_.hasSharedMesh() || !gatheredLightsOf(settings).empty())
         factory_ = [&scene, coverage = coverage_, inner = factory_] {
             WorkerSamplers s = inner();
             s.direct = std::make_unique<SharedLightSampler>(scene, coverage, std::move(s.direct));

@@ -76,7 +76,7 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     for (size_t l = 0; l < lights; ++l) {
         double w = 0;
         if (next < weights_.size() && weights_[next].first == l) w = weights_[next++].second;
-        if (w >= 1) continue;
+        if (w >= 1 || coverage_->gathered(l)) continue;  // its own mesh, or the gather, carries it
         const Rgb full = unoccludedIrradiance(scene_.lights[l], x, n);
         const double y = (1 - w) * luminance(full);
         if (!(y > 0)) continue;

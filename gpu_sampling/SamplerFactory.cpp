@@ -4,6 +4,7 @@
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PunctualShadow.h"
 #include "core/reference/ExactIrradiance.h"
+#include "cache/GatheredLights.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
 #include "gpu_sampling/indirect/RayGather.h"
@@ -22,6 +23,7 @@ namespace {
 RayGatherSettings rayGatherSettings(const IndirectChoice& choice) {
     RayGatherSettings r;
     r.rays = std::max(4, choice.gather.imageSize * choice.gather.imageSize / 4);
+    r.gatheredLights = choice.solver.gatheredLights;
     return r;
 }
 
@@ -72,6 +74,16 @@ void IndirectChoice::decide(const Scene& scene) {
     solver.bounces = enabled ? bounceCount.bounces : 0;
     solver.albedo = bounceCount.meanAlbedo;
     solver.tailAlbedo = bounceCount.areaAlbedo;
+    // Dim, broad emitters come through bounce 1's rays, which read emission
+    // where they land (GatheredLights.h); the proxy gathers read none.
+    solver.gatheredLights.clear();
+    gatheredReason = solver.bounces > 0 ? "every light is sampled directly (the proxy gathers read no emission)"
+                                        : "every light is sampled directly (no indirect light)";
+    if (solver.bounces > 0 && method == "raytrace") {
+        GatheredLights g = chooseGatheredLights(scene, glowRatio);
+        solver.gatheredLights = std::move(g.gathered);
+        gatheredReason = std::move(g.reason);
+    }
     solver.validate();
 }
 

@@ -53,7 +53,12 @@ struct IndirectChoice {
     GatherSettings gather;
     IrradianceVolumeSettings volume;   // method "volume": the probe grid (--probes, --probe-face)
     BounceCountSettings bounces;
-    IndirectSettings solver;           // bounces and albedo come from decide()
+    // Area lights dimmer than this fraction of the brightest one's radiance
+    // are gathered by bounce 1 rather than sampled (GatheredLights.h), with
+    // the ray gather only; 0: none (--glow-ratio).
+    double glowRatio = 0.02;
+    std::string gatheredReason;        // filled by decide(): which lights are gathered and why, or why none
+    IndirectSettings solver;           // bounces, albedo and gathered lights come from decide()
     BounceCount bounceCount;            // filled by decide()
 
     // Decides the bounce count from the scene (or --bounces) and fills

@@ -74,6 +74,11 @@ struct CacheState {
     std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
     uint64_t sceneFingerprint = 0;
+    // Which lights are gathered rather than cached (LightCoverage::gathered),
+    // folded into the settings' fingerprint in the file: a cache made with
+    // other gathered lights has other meshes, and is refused like one made
+    // with other settings. 0 when none.
+    uint64_t gatheredSalt = 0;
     std::vector<LightMesh> meshes;  // one per light, in the scene's order (then the shared mesh)
     bool sharedMesh = false;        // the last mesh holds the light the lights share
     std::vector<GridObject> grids;  // the same for every light

@@ -20,6 +20,21 @@ RayGather::RayGather(const Scene& scene, const RayGatherSettings& settings)
     : scene_(scene), settings_(settings), rays_(std::make_unique<EmbreeScene>(scene)) {
     settings_.validate();
     closed_ = closedMeshesOf(scene);
+    emitting_ = emittingFacesOf(scene, settings_.gatheredLights);
+}
+
+EmittingFaces emittingFacesOf(const Scene& scene, const std::vector<char>& gatheredLights) {
+    EmittingFaces faces;
+    for (size_t l = 0; l < scene.lights.size() && l < gatheredLights.size(); ++l) {
+        const Light& light = scene.lights[l];
+        if (!gatheredLights[l] || light.punctual()) continue;
+        if (faces.empty()) {
+            faces.resize(scene.meshes.size());
+            for (size_t m = 0; m < scene.meshes.size(); ++m) faces[m].assign(scene.meshes[m].triangles.size(), 0);
+        }
+        for (uint32_t t : light.triangles) faces[light.mesh][t] = 1;
+    }
+    return faces;
 }
 
 std::vector<char> closedMeshesOf(const Scene& scene) {
@@ -67,7 +82,8 @@ void RayGather::releaseSource(size_t slot) {
 
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
-                         int strata, uint32_t seed) {
+                         int strata, uint32_t seed, const EmittingFaces* emitting) {
+    if (emitting && emitting->empty()) emitting = nullptr;
     const Vec3 n = glm::normalize(nIn);
     Vec3 t, b;
     orthonormalBasis(n, t, b);
@@ -109,6 +125,10 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
             Rgb e(0.0);
             for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(y.position, side);
             sum += y.kd(scene) * e;  // the texture's Kd at the hit, as the path tracer takes it
+            // A gathered light's face seen from its emitting side: π Le in
+            // this sum's units (π/N Σ L).
+            if (emitting && (*emitting)[hit.mesh][hit.triangle] && glm::dot(side, y.geometricNormal) > 0)
+                sum += kPi * y.ke(scene);
         }
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
     return sum / double(s * s);
@@ -118,7 +138,9 @@ Rgb RayGather::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed
     ML_ASSERT(slot < sources_.size() && sources_[slot], "ray gather: source ", slot, " is not built");
     const auto start = std::chrono::steady_clock::now();
     const Source& source = *sources_[slot];
-    const Rgb result = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed);
+    // Bounce 1 (source 0, direct light) also reads the gathered lights.
+    const Rgb result = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed,
+                                            slot == 0 ? &emitting_ : nullptr);
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

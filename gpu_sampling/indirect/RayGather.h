@@ -34,17 +34,29 @@ struct RayGatherSettings {
     // typical 64..1024. A weaker source (importance s) gets rays × s, at
     // least 16.
     int rays = 256;
+    // Per scene light, 1 when the gather of source 0 (bounce 1) adds the
+    // light's emitted radiance where its rays land on its emitting side
+    // (GatheredLights.h: the direct meshes leave such a light out); empty:
+    // none.
+    std::vector<char> gatheredLights;
     void validate() const;  // InputError unless 4 <= rays <= 65536
 };
 
+// Per scene mesh, per triangle: 1 where a gather adds the face's emitted
+// radiance (a gathered light's face); empty: no face.
+using EmittingFaces = std::vector<std::vector<char>>;
+EmittingFaces emittingFacesOf(const Scene& scene, const std::vector<char>& gatheredLights);
+
 // One gather: strata × strata jittered, cosine-weighted rays from x (unit
 // normal n), each taking Kd/π × Σ lookups' irradiance where it lands, on the
-// side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0);
-// returns the irradiance. RayGather::estimate's work, and bench indirect's
-// "exact gather of the source".
+// side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0),
+// plus the emitted radiance (its texture's, as the path tracer reads it)
+// where it lands on the emitting side of a face `emitting` marks (null or
+// empty: none); returns the irradiance. RayGather::estimate's work, and
+// bench indirect's "exact gather of the source".
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& n,
-                         int strata, uint32_t seed);
+                         int strata, uint32_t seed, const EmittingFaces* emitting = nullptr);
 // closedMeshes for gatherCachedRadiance: isClosedMesh of every scene mesh.
 std::vector<char> closedMeshesOf(const Scene& scene);
 
@@ -73,6 +85,7 @@ private:
     RayGatherSettings settings_;
     std::unique_ptr<EmbreeScene> rays_;
     std::vector<char> closed_;  // per scene mesh: its back is an inside (black)
+    EmittingFaces emitting_;    // the gathered lights' faces, read by source 0's gathers
     std::vector<std::unique_ptr<Source>> sources_;
     IndirectStats stats_;
 };

@@ -198,7 +198,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "where irradiance is not linear or visibility is partial; %s\n",
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
-    if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare).describe().c_str());
+    if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare, indirect.solver.gatheredLights).describe().c_str());
     const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
                 "largest channel\n",
@@ -211,6 +211,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
     } else {
         std::printf("  indirect light: %s\n", b.reason.c_str());
         std::printf("  indirect gather: %s; %s\n", indirect.describe().c_str(), indirect.methodReason.c_str());
+        std::printf("  gathered lights: %s\n", indirect.gatheredReason.c_str());
         if (indirect.method != "raytrace") {  // the others gather from voxels or a proxy cut to them
             const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
             std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "

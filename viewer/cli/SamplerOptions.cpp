@@ -52,6 +52,10 @@ void declareIndirectOptions(Options& o) {
     o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
+    o.value("glow-ratio", "F",
+            "area lights dimmer than F x the brightest light's radiance (glowing walls) reach the scene through "
+            "bounce 1's ray gather instead of being sampled as lights; 0: sample every light",
+            concat(IndirectChoice().glowRatio));
     const IrradianceVolumeSettings v;
     o.value("probes", "N", "volume: N probes along the scene's longest side (4..16 typical)", concat(v.probes));
     o.value("probe-face", "N", "volume: each probe's cube map N x N rays per face", concat(v.faceSize));
@@ -76,6 +80,7 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.volume.probes = o.integer("probes", 1, 64);
     c.volume.faceSize = o.integer("probe-face", 2, 128);
     c.volume.validate();
+    c.glowRatio = o.number("glow-ratio", 0, 0.999);
     c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
     c.bounces.maxBounces = o.integer("max-bounces", 1, 256);
     if (o.has("bounces")) c.bounces.forced = o.integer("bounces", 0, 256);
