@@ -42,6 +42,10 @@ struct Scenario {
     double cacheEdge = 1.0 / 32;  // CacheSettings::maxEdgeFraction
     bool lights = false;         // still camera, light changes
     double seconds = 15;
+    // The Cornell box with its tall block a mirror and its short block glass
+    // (specularCornell), with the compositor's specular pass on or off.
+    bool specularScene = false;
+    bool specularPass = true;
 };
 
 struct Result {
@@ -55,6 +59,8 @@ struct Result {
 struct Stats {
     size_t frames = 0;
     double fps = 0, medianMs = 0, p95Ms = 0, maxMs = 0, medianComposeMs = 0, maxUploadMs = 0;
+    size_t specularTraces = 0;  // frames that traced the specular pass
+    double medianSpecularMs = 0, maxSpecularMs = 0;
     size_t triangles = 0, medianDrawn = 0;
     uint64_t samplesStart = 0, samplesEnd = 0;
 };
@@ -74,7 +80,7 @@ Stats statsOf(const Result& r) {
             from = f.start + kWarmUp;
             break;
         }
-    std::vector<double> ms, compose, drawn;
+    std::vector<double> ms, compose, drawn, specular;
     double first = -1, last = 0;
     for (const FrameRecord& f : r.frames) {
         s.triangles = std::max(s.triangles, f.triangles);
@@ -89,6 +95,7 @@ Stats statsOf(const Result& r) {
         ms.push_back(1e3 * f.seconds);
         compose.push_back(f.composeMs);
         drawn.push_back(double(f.drawnTriangles));
+        if (f.specularMs > 0) specular.push_back(f.specularMs);
     }
     s.frames = ms.size();
     if (s.frames > 0 && last > first) s.fps = double(s.frames) / (last - first);
@@ -96,11 +103,35 @@ Stats statsOf(const Result& r) {
     s.p95Ms = percentile(ms, 0.95);
     s.maxMs = percentile(ms, 1.0);
     s.medianComposeMs = percentile(compose, 0.5);
+    s.specularTraces = specular.size();
+    s.medianSpecularMs = percentile(specular, 0.5);
+    s.maxSpecularMs = percentile(specular, 1.0);
     s.medianDrawn = size_t(percentile(drawn, 0.5));
     return s;
 }
 
 std::string vec(const Vec3& v) { return concat(v.x, ",", v.y, ",", v.z); }
+
+// The Cornell box with a mirror (the tall block, reflectance 0.95) and glass
+// (the short block, index 1.5): the specular pass's bench scene, of the
+// same geometry and cache as the others.
+Scene specularCornell() {
+    Scene scene = makeCornellBox();
+    Material mirror = Material::diffuse("mirror", Rgb(0.0));
+    mirror.smooth.kind = SpecularKind::Mirror;
+    mirror.smooth.reflectance = Rgb(0.95);
+    Material glass = Material::diffuse("glass", Rgb(0.0));
+    glass.smooth.kind = SpecularKind::Glass;
+    glass.smooth.ior = 1.5;
+    scene.materials.push_back(mirror);
+    scene.materials.push_back(glass);
+    for (Mesh& m : scene.meshes) {
+        if (m.name == "tallBlock") m.materials.assign(m.materials.size(), uint32_t(scene.materials.size() - 2));
+        if (m.name == "shortBlock") m.materials.assign(m.materials.size(), uint32_t(scene.materials.size() - 1));
+    }
+    scene.name = "cornell-specular";
+    return scene;
+}
 
 // A walk into the box, round the blocks and back out, in `d` seconds, once
 // the first snapshot is shown (the million-triangle cache's first round
@@ -145,6 +176,7 @@ Result runScenario(const Scene& scene, const Scenario& sc, const BenchOptions& o
     s.unit = LengthUnit::Millimetre;
     s.maxFps = 0;
     s.printProgress = false;
+    s.specular = sc.specularPass;
     const int changes = options.quick ? 8 : 20;
     const std::string text = sc.lights ? lightScript(changes) : walkScript(s.camera, sc.seconds, sc.paused);
     ViewScript script = parseViewScript(text, "bench-view-" + sc.name + ".txt");
@@ -234,6 +266,7 @@ int runBenchView(const BenchOptions& options) {
     if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) return runUnderXvfb(options);
     BenchRun run(options);
     const Scene scene = makeCornellBox();
+    const Scene specular = specularCornell();
     const double d = options.quick ? 4 : 15;
 
     std::vector<Scenario> scenarios = {
@@ -241,28 +274,35 @@ int runBenchView(const BenchOptions& options) {
         {"walk-refining", "walking while the worker refines", false, 1.0 / 32, false, d},
         {"million", "walking over a cache of about a million triangles, refining", false, kMillionEdge, false, d},
         {"lights", "still camera, a light changed every 0.3 s, refining", false, 1.0 / 32, true, d},
+        {"specular", "walking, paused, a mirror and a glass block, the specular pass on", true, 1.0 / 32, false, d,
+         true, true},
+        {"specular-off", "the same without the specular pass (the blocks' Kd 0 alone)", true, 1.0 / 32, false, d,
+         true, false},
     };
     std::vector<Result> results;
-    for (const Scenario& sc : scenarios) results.push_back(runScenario(scene, sc, options));
+    for (const Scenario& sc : scenarios) results.push_back(runScenario(sc.specularScene ? specular : scene, sc, options));
 
     BenchTable table({"scenario", "width", "height", "cache_triangles", "median_drawn_triangles", "frames", "fps",
-                      "median_ms", "p95_ms", "max_ms", "median_composite_ms", "max_upload_ms", "samples_during"});
+                      "median_ms", "p95_ms", "max_ms", "median_composite_ms", "max_upload_ms", "samples_during",
+                      "specular_traces", "median_specular_ms", "max_specular_ms"});
     BenchTable frames({"scenario", "seconds", "frame_ms", "composite_ms", "upload_ms", "samples", "cache_triangles",
-                       "drawn_triangles"});
+                       "drawn_triangles", "specular_ms"});
     for (const Result& r : results) {
         const Stats s = statsOf(r);
         table.addRow({r.scenario.name, std::to_string(kWidth), std::to_string(kHeight), std::to_string(s.triangles),
                       std::to_string(s.medianDrawn), std::to_string(s.frames), benchNumber(s.fps), benchNumber(s.medianMs), benchNumber(s.p95Ms),
                       benchNumber(s.maxMs), benchNumber(s.medianComposeMs), benchNumber(s.maxUploadMs),
-                      std::to_string(s.samplesEnd - s.samplesStart)});
+                      std::to_string(s.samplesEnd - s.samplesStart), std::to_string(s.specularTraces),
+                      benchNumber(s.medianSpecularMs), benchNumber(s.maxSpecularMs)});
         for (const FrameRecord& f : r.frames)
             frames.addRow({r.scenario.name, benchNumber(f.start), benchNumber(1e3 * f.seconds),
                            benchNumber(f.composeMs), benchNumber(f.uploadMs), std::to_string(f.samples),
-                           std::to_string(f.triangles), std::to_string(f.drawnTriangles)});
+                           std::to_string(f.triangles), std::to_string(f.drawnTriangles), benchNumber(f.specularMs)});
     }
     const Result& walk = results[1];
     const Result& million = results[2];
     const Result& lights = results[3];
+    const Stats withSpecular = statsOf(results[4]), withoutSpecular = statsOf(results[5]);
     BenchTable latency({"change", "latency_ms", "median_frame_ms"});
     const double lightFrameMs = statsOf(lights).medianMs;
     for (size_t i = 0; i < lights.latencies.size(); ++i)
@@ -280,6 +320,11 @@ int runBenchView(const BenchOptions& options) {
                     benchYesNo(ws.fps >= kTargetFps)});
     targets.addRow({concat("10 frames/s with ", ms.triangles, " cached triangles"), benchNumber(ms.fps),
                     benchYesNo(ms.fps >= kTargetMillionFps && ms.triangles >= 1000000)});
+    targets.addRow({"mirrors and glass at 1280x720 (issue 16; informative): frames/s with the pass vs without; "
+                    "median frame ms",
+                    concat(benchNumber(withSpecular.fps), " vs ", benchNumber(withoutSpecular.fps), "; ",
+                           benchNumber(withSpecular.medianMs), " vs ", benchNumber(withoutSpecular.medianMs)),
+                    "-"});
     // The change is applied before the frame is composited: shown by that frame.
     targets.addRow({"a light change shows in the next frame (max latency ms vs median frame ms)",
                     concat(benchNumber(1e3 * maxLatency), " vs ", benchNumber(lightFrameMs)),

@@ -11,6 +11,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <array>
+#include <atomic>
+#include <chrono>
+#include <future>
 #include <map>
 #include <numeric>
 
@@ -158,7 +161,31 @@ struct Compositor::Impl {
         int reduction = 1;
         uint64_t cacheGeneration = 0;
         int width = 0, height = 0;  // texels
+
+        // The same view, whatever the reduction.
+        bool sameView(const Camera& c, const LightWeights& w, const CompositorSettings& s, uint64_t generation) const {
+            return valid && cacheGeneration == generation && sameCamera(camera, c) && sameWeights(weights, w) &&
+                   settings.width == s.width && settings.height == s.height &&
+                   settings.supersample == s.supersample && settings.shiftX == s.shiftX &&
+                   settings.shiftY == s.shiftY;
+        }
     } specularTrace;
+    // A full-resolution trace on a thread of its own (requestSpecular).
+    struct SpecularJob {
+        SpecularTrace key;
+        std::shared_ptr<std::atomic<bool>> cancel;
+        std::future<ImageRgb> image;
+    };
+    std::optional<SpecularJob> specularJob;
+
+    ~Impl() { cancelSpecularJob(); }
+
+    void cancelSpecularJob() {
+        if (!specularJob) return;
+        *specularJob->cancel = true;
+        specularJob->image.wait();  // within a row of sub-pixels
+        specularJob.reset();
+    }
     int specular = 0;  // what the last compose does with it: specularCode, 0 none
 
     GlProgram program(const char* vertName, std::string vert, const char* fragName, std::string frag) const {
@@ -688,19 +715,59 @@ struct Compositor::Impl {
     bool traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& s, int reduction) {
         if (!specularPaths || !specularPaths->hasCache()) return false;
         SpecularTrace& st = specularTrace;
-        if (st.valid && st.reduction == reduction && st.cacheGeneration == specularCacheGeneration &&
-            sameCamera(st.camera, camera) && sameWeights(st.weights, weights) && st.settings.width == s.width &&
-            st.settings.height == s.height && st.settings.supersample == s.supersample &&
-            st.settings.shiftX == s.shiftX && st.settings.shiftY == s.shiftY)
-            return false;
+        if (st.sameView(camera, weights, s, specularCacheGeneration) && st.reduction <= reduction) return false;
         const ImageRgb image = specularPaths->trace(camera, s, weights, reduction);
         uploadSpecular(image);
-        st.valid = true;
-        st.camera = camera;
-        st.weights = weights;
-        st.settings = s;
-        st.reduction = reduction;
-        st.cacheGeneration = specularCacheGeneration;
+        const int width = st.width, height = st.height;
+        st = keyOf(camera, weights, s, reduction);
+        st.width = width;
+        st.height = height;
+        return true;
+    }
+
+    SpecularTrace keyOf(const Camera& camera, const LightWeights& weights, const CompositorSettings& s,
+                        int reduction) const {
+        SpecularTrace k;
+        k.valid = true;
+        k.camera = camera;
+        k.weights = weights;
+        k.settings = s;
+        k.reduction = reduction;
+        k.cacheGeneration = specularCacheGeneration;
+        return k;
+    }
+
+    void requestSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& s) {
+        if (!specularPaths || !specularPaths->hasCache()) return;
+        if (specularTrace.sameView(camera, weights, s, specularCacheGeneration) && specularTrace.reduction == 1)
+            return;
+        if (specularJob && specularJob->key.sameView(camera, weights, s, specularCacheGeneration)) return;
+        cancelSpecularJob();
+        SpecularJob job;
+        job.key = keyOf(camera, weights, s, 1);
+        job.cancel = std::make_shared<std::atomic<bool>>(false);
+        const SpecularPaths* paths = specularPaths.get();
+        job.image = std::async(std::launch::async, [paths, camera, weights, s, cancel = job.cancel] {
+            return paths->trace(camera, s, weights, 1, cancel.get());
+        });
+        specularJob = std::move(job);
+    }
+
+    bool collectSpecular() {
+        if (!specularJob ||
+            specularJob->image.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+            return false;
+        SpecularJob job = std::move(*specularJob);
+        specularJob.reset();
+        const ImageRgb image = job.image.get();  // rethrows the trace's exception
+        const SpecularTrace& k = job.key;
+        // Kept only while the view it was traced for is the one shown.
+        if (!specularTrace.sameView(k.camera, k.weights, k.settings, specularCacheGeneration)) return false;
+        uploadSpecular(image);
+        const int width = specularTrace.width, height = specularTrace.height;
+        specularTrace = k;
+        specularTrace.width = width;
+        specularTrace.height = height;
         return true;
     }
 
@@ -951,6 +1018,14 @@ bool Compositor::traceSpecular(const Camera& camera, const LightWeights& weights
                                int reduction) {
     return impl_->traceSpecular(camera, weights, settings, reduction);
 }
+
+void Compositor::requestSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings) {
+    impl_->requestSpecular(camera, weights, settings);
+}
+
+bool Compositor::collectSpecular() { return impl_->collectSpecular(); }
+
+bool Compositor::specularPending() const { return impl_->specularJob.has_value(); }
 
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings) {

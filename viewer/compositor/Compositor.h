@@ -139,11 +139,18 @@ public:
                           const std::vector<IrradianceMeshCopy>& indirect);
     // Traces the specular image of the view compose() makes with these
     // arguments, a value per `reduction`² sub-pixels (1: every sub-pixel),
-    // and keeps it for the composites that follow; again only when the
-    // camera, weights, settings, reduction or cache changed since the last
-    // trace. False when nothing was traced (no pass, no cache, unchanged).
+    // and keeps it for the composites that follow. Nothing is traced when
+    // the image kept is of this view (camera, weights, settings, cache) at
+    // `reduction` or finer. False when nothing was traced.
     bool traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings,
                        int reduction = 1);
+    // The viewer's full-resolution image: traced on a thread of its own,
+    // unless the image kept or the one under way is it already (a trace
+    // under way for another view is cancelled). collectSpecular() keeps it
+    // once done, if it is still of the view kept; true when it did.
+    void requestSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings);
+    bool collectSpecular();
+    bool specularPending() const;
 
     // --- Interactive frames -------------------------------------------------
     // Composites `settings.quantity` into the compositor's own targets

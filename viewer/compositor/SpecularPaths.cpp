@@ -33,9 +33,19 @@ struct SpecularPaths::Impl {
     // The bounds of each mesh's glossy and specular triangles (empty boxes
     // for meshes with none): what the screen rectangles are made from.
     std::vector<Bounds3> boxes;
-    std::vector<IrradianceMeshCopy> direct, indirect;
-    std::vector<std::unique_ptr<MeshIrradianceLookup>> directLookups, indirectLookups;
-    bool cached = false;
+    // The cache read, replaced whole by setCache while a trace on another
+    // thread may still read the one before.
+    struct CacheState {
+        std::vector<IrradianceMeshCopy> direct, indirect;
+        std::vector<std::unique_ptr<MeshIrradianceLookup>> directLookups, indirectLookups;
+    };
+    mutable std::mutex cacheMutex;
+    std::shared_ptr<const CacheState> cache;
+
+    std::shared_ptr<const CacheState> currentCache() const {
+        std::lock_guard<std::mutex> lock(cacheMutex);
+        return cache;
+    }
 
     Impl(const Scene& s, const SpecularSplitSettings& st) : scene(s), settings(st), rays(s), closed(closedMeshesOf(s)) {
         settings.validate();
@@ -48,13 +58,14 @@ struct SpecularPaths::Impl {
         }
     }
 
-    CachedRadiance radiance(const LightWeights& weights) const {
+    CachedRadiance radiance(const CacheState& state, const LightWeights& weights) const {
         CachedRadiance c{scene, rays, closed, {}, {}, true, settings};
         const size_t lights = scene.lights.size();
-        for (size_t m = 0; m < direct.size(); ++m)
-            c.meshes.push_back({directLookups[m].get(), m < lights ? weights.light[m] : weights.shared,
+        for (size_t m = 0; m < state.direct.size(); ++m)
+            c.meshes.push_back({state.directLookups[m].get(), m < lights ? weights.light[m] : weights.shared,
                                 m < lights ? int(m) : -1});
-        for (size_t m = 0; m < indirect.size(); ++m) c.meshes.push_back({indirectLookups[m].get(), weights.indirect, -1});
+        for (size_t m = 0; m < state.indirect.size(); ++m)
+            c.meshes.push_back({state.indirectLookups[m].get(), weights.indirect, -1});
         c.emission = weights.emission.empty() ? weights.light : weights.emission;
         return c;
     }
@@ -108,26 +119,27 @@ void SpecularPaths::setCache(const std::vector<IrradianceMeshCopy>& direct,
     Impl& d = *impl_;
     const size_t lights = d.scene.lights.size();
     ML_ASSERT(direct.size() == lights || direct.size() == lights + 1, direct.size(), " meshes for ", lights, " lights");
-    d.direct = direct;
-    d.indirect = indirect;
+    auto state = std::make_shared<Impl::CacheState>();
+    state->direct = direct;
+    state->indirect = indirect;
     // Cells and tolerance of RayGather's lookups: the same reading of the
     // same meshes as the indirect gather's.
     const double diagonal = d.scene.bounds.diagonal() > 0 ? d.scene.bounds.diagonal() : 1.0;
-    d.directLookups.clear();
-    d.indirectLookups.clear();
-    for (const IrradianceMeshCopy& m : d.direct)
-        d.directLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
-    for (const IrradianceMeshCopy& m : d.indirect)
-        d.indirectLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
-    d.cached = true;
+    for (const IrradianceMeshCopy& m : state->direct)
+        state->directLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+    for (const IrradianceMeshCopy& m : state->indirect)
+        state->indirectLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+    std::lock_guard<std::mutex> lock(d.cacheMutex);
+    d.cache = std::move(state);
 }
 
-bool SpecularPaths::hasCache() const { return impl_->cached; }
+bool SpecularPaths::hasCache() const { return impl_->currentCache() != nullptr; }
 
 ImageRgb SpecularPaths::trace(const Camera& camera, const CompositorSettings& s, const LightWeights& weights,
-                              int reduction) const {
+                              int reduction, const std::atomic<bool>* cancel) const {
     const Impl& d = *impl_;
-    ML_ASSERT(d.cached, "specular paths traced before setCache");
+    const std::shared_ptr<const Impl::CacheState> state = d.currentCache();
+    ML_ASSERT(state, "specular paths traced before setCache");
     ML_ASSERT(reduction >= 1, "reduction ", reduction);
     ML_ASSERT(weights.light.size() == d.scene.lights.size(), weights.light.size(), " weights for ",
               d.scene.lights.size(), " lights");
@@ -145,7 +157,7 @@ ImageRgb SpecularPaths::trace(const Camera& camera, const CompositorSettings& s,
     const double shiftX = 2 * s.shiftX / s.width, shiftY = 2 * s.shiftY / s.height;
     const std::vector<Rect> rects = d.screenRects(camera, s, forward, right, up, tanHalf, aspect);
     if (rects.empty()) return out;
-    const CachedRadiance cache = d.radiance(weights);
+    const CachedRadiance cache = d.radiance(*state, weights);
 
     auto row = [&](int by) {
         // Block centres in sub-pixels from the top left (a last, partial
@@ -173,7 +185,7 @@ ImageRgb SpecularPaths::trace(const Camera& camera, const CompositorSettings& s,
     std::exception_ptr error;
     auto worker = [&] {
         try {
-            for (int by = next++; by < bh; by = next++) row(by);
+            for (int by = next++; by < bh && !(cancel && cancel->load()); by = next++) row(by);
         } catch (...) {
             std::lock_guard<std::mutex> lock(mutex);
             if (!error) error = std::current_exception();

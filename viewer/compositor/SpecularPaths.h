@@ -18,6 +18,7 @@
 #include "Compositor.h"
 #include "gpu_sampling/indirect/CachedRadiance.h"
 
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -42,8 +43,10 @@ public:
     // centre, ⌈width·S / reduction⌉ × ⌈height·S / reduction⌉, row 0 at the
     // top. `weights` scale each mesh and emitter as they scale the
     // composite, so a light switched off leaves the reflections too.
+    // Thread-safe, also against setCache (a trace reads the cache it
+    // started with); `cancel`, once true, ends it early with rows left black.
     ImageRgb trace(const Camera& camera, const CompositorSettings& settings, const LightWeights& weights,
-                   int reduction = 1) const;
+                   int reduction = 1, const std::atomic<bool>* cancel = nullptr) const;
 
 private:
     struct Impl;

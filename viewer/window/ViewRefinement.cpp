@@ -137,6 +137,7 @@ bool ViewRefinement::pump(double& uploadMs) {
             shown_.cameraSerial = s.cameraSerial;
             shown_.estimatedError = s.estimatedError;
             shown_.converged = s.converged;
+            if (onShown_) onShown_(s);
             uploading_ = nullptr;
         }
     }

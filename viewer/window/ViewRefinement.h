@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -64,6 +65,9 @@ public:
     // (all of the first). True when a newer snapshot became the one shown.
     bool pump(double& uploadMs);
     const Shown& shown() const { return shown_; }
+    // Called with each snapshot as it becomes the one shown (the
+    // compositor's specular pass reads the cache on the CPU).
+    void onShown(std::function<void(const CacheSnapshot&)> f) { onShown_ = std::move(f); }
 
     void setPaused(bool paused);
     bool paused() const { return paused_; }
@@ -114,6 +118,7 @@ private:
     const CacheSnapshot* uploading_ = nullptr;  // pinned by reader_ while it is copied
     uint64_t generation_ = 0;                   // workers started so far
     Shown shown_;
+    std::function<void(const CacheSnapshot&)> onShown_;
     bool paused_ = false;
     std::string error_;
     std::unique_ptr<SaveJob> save_;

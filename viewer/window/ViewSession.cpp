@@ -41,6 +41,13 @@ double secondsBetween(Clock::time_point a, Clock::time_point b) { return std::ch
 // Frames drawn after the last activity, so ImGui settles (hover, fades).
 constexpr int kSettleFrames = 3;
 
+// The specular pass while the view changes: one ray per block of sub-pixels,
+// the block's side doubled (up to 16) when a trace takes over twice this,
+// halved (down to 2) under a third of it, so that frames do not wait for
+// it; the full image follows on a thread of its own once the view is still.
+constexpr double kSpecularFrameMs = 15;
+constexpr int kSpecularMinBlock = 2, kSpecularMaxBlock = 16;
+
 // What the user set LP_NUM_THREADS to, read before anything in this
 // process can set it (OsMesaContext does).
 const std::optional<std::string> kUserLlvmpipeThreads = [] {
@@ -114,6 +121,9 @@ struct ViewSession::Impl : ScriptHost {
     std::optional<std::pair<int, int>> cursorPixel;  // lux mode: the pixel under the mouse
     std::optional<double> cursorLux;                 // and its illuminance, read by the last frame
     size_t drawnTriangles = 0;  // by the last frame
+    std::optional<Camera> lastCamera;  // the last frame's
+    double specularMs = 0;             // this frame's specular trace (0: none)
+    int specularBlock = 4;             // sub-pixels a side per ray of the reduced trace
     DisplayMode shownMode = DisplayMode::Final;  // the last frame's
 
     // Measurements.
@@ -149,6 +159,8 @@ struct ViewSession::Impl : ScriptHost {
         uploader->start(emptyMeshes, {});
         uploader->step(1e9);
         refinement = std::make_unique<ViewRefinement>(std::move(session), settings, *uploader);
+        if (compositor->hasSpecularPass())
+            refinement->onShown([this](const CacheSnapshot& s) { compositor->setSpecularCache(s.direct, s.indirect); });
         ui = std::make_unique<Ui>(w, settings.screenshotPath,
                                   settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
     }
@@ -374,6 +386,27 @@ struct ViewSession::Impl : ScriptHost {
         return buf;
     }
 
+    // Mirrors, glass and highlights (the compositor's specular pass, on the
+    // CPU): traced again only when the view, the lights or the cache
+    // changed, at once at reduced resolution (kSpecularFrameMs), so that the
+    // change shows in this frame; once the camera is still, in full on a
+    // thread of its own, shown by the frame after it lands (iterate).
+    void traceSpecular(const LightWeights& weights, const CompositorSettings& cs) {
+        const Camera& c = walk.camera();
+        const bool moving = lastCamera && (c.position != lastCamera->position || c.target != lastCamera->target ||
+                                           c.up != lastCamera->up || c.fovYDegrees != lastCamera->fovYDegrees);
+        lastCamera = c;
+        if (!settings.specular || !compositor->hasSpecularPass() || cs.quantity != CompositeQuantity::Radiance)
+            return;
+        const auto start = Clock::now();
+        if (compositor->traceSpecular(c, weights, cs, specularBlock)) {
+            specularMs = 1e3 * secondsBetween(start, Clock::now());
+            if (specularMs > 2 * kSpecularFrameMs) specularBlock = std::min(2 * specularBlock, kSpecularMaxBlock);
+            if (specularMs < kSpecularFrameMs / 3) specularBlock = std::max(specularBlock / 2, kSpecularMinBlock);
+        }
+        if (!moving) compositor->requestSpecular(c, weights, cs);
+    }
+
     // The image in the window's back buffer: composited, metered when asked,
     // tone-mapped, the wireframe over it, the lux under the mouse read back.
     // Returns its milliseconds.
@@ -381,6 +414,7 @@ struct ViewSession::Impl : ScriptHost {
         const auto composeStart = Clock::now();
         const LightWeights weights = compositeWeights(state, lightControls, lightPowers);
         const CompositeQuantity quantity = compositeQuantity(state.mode);
+        traceSpecular(weights, compositeSettings(fbWidth, fbHeight, quantity));
         compositor->compose(walk.camera(), uploader->front(), weights,
                             compositeSettings(fbWidth, fbHeight, quantity));
         drawnTriangles = compositor->drawnTriangles();
@@ -411,7 +445,8 @@ struct ViewSession::Impl : ScriptHost {
         finishSave(fbWidth, fbHeight);
         double uploadMs = 0;
         const bool newSnapshot = refinement->pump(uploadMs);
-        if (!wantsFrame(newSnapshot)) return;
+        const bool specularLanded = compositor->collectSpecular();  // a full specular image to show
+        if (!wantsFrame(newSnapshot || specularLanded)) return;
         const auto frameStart = Clock::now();
         const double dt = std::min(secondsBetween(lastFrame, frameStart), 0.25);
         lastFrame = frameStart;
@@ -446,6 +481,7 @@ struct ViewSession::Impl : ScriptHost {
             if (state.luxAuto) meter.requestLuxRange();
         }
 
+        specularMs = 0;
         const double composeMs = drawImage(fbWidth, fbHeight);
         ui->render();
         writeScreenshots(fbWidth, fbHeight);
@@ -458,7 +494,7 @@ struct ViewSession::Impl : ScriptHost {
         const auto frameEnd = Clock::now();
         const double frameSeconds = secondsBetween(frameStart, frameEnd);
         stats.add({secondsBetween(t0, frameStart), frameSeconds, composeMs, uploadMs, refinement->shown().samples,
-                   refinement->shown().triangles, drawnTriangles, refinement->shown().any},
+                   refinement->shown().triangles, drawnTriangles, refinement->shown().any, specularMs},
                   secondsBetween(t0, frameEnd));
         ++frameIndex;
         printStatus();

@@ -51,6 +51,10 @@ struct ViewSettings {
     std::optional<ViewScript> script;    // resolved against the scene
     double scriptStep = 0;  // > 0: script time advances this much per frame instead of with the clock
     double maxFps = 60;     // frames are not drawn faster (0: no limit, for the bench)
+    // The compositor's specular pass (mirrors, glass, Phong highlights) where
+    // the scene has one; false shows their diffuse Kd alone (bench view's
+    // measure of what the pass costs).
+    bool specular = true;
     std::string screenshotPath = "meshlight-view.png";  // the panel's default
     bool printProgress = true;  // a status line on stderr now and then
 };
@@ -65,6 +69,7 @@ struct FrameRecord {
     size_t triangles = 0;   // cache triangles of the snapshot shown
     size_t drawnTriangles = 0;  // of those, drawn (the rest out of view)
     bool snapshot = false;  // a snapshot was shown
+    double specularMs = 0;  // tracing the specular pass (0: none, or the last one still held)
 };
 
 class ViewSession {
