@@ -112,7 +112,6 @@ IrradianceVolume::IrradianceVolume(const Scene& scene, const IrradianceVolumeSet
     : scene_(scene),
       settings_(validated(settings)),
       grid_(scene.bounds, settings.probes),
-      directions_(settings.faceSize),
       rays_(std::make_unique<EmbreeScene>(scene)),
       closed_(closedMeshesOf(scene)) {}
 
@@ -120,7 +119,7 @@ IrradianceVolume::~IrradianceVolume() = default;
 
 std::string IrradianceVolume::name() const { return "volume"; }
 
-void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
+void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance) {
     const auto start = std::chrono::steady_clock::now();
     if (slot >= sources_.size()) sources_.resize(slot + 1);
     auto source = std::make_unique<Source>();
@@ -133,7 +132,11 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
     source->fields.resize(grid_.count());
     source->residual.assign(grid_.count(), {});
     source->inside.assign(grid_.count(), 0);
-    const size_t rayCount = directions_.direction.size();
+    const int faceSize =
+        std::max(std::min(8, settings_.faceSize),
+                 int(std::lround(settings_.faceSize * std::sqrt(std::clamp(importance, 0.0, 1.0)))));
+    const CubeMapDirections& directions = directions_.try_emplace(faceSize, faceSize).first->second;
+    const size_t rayCount = directions.direction.size();
     for (int k = 0; k < grid_.dims[2]; ++k)
         for (int j = 0; j < grid_.dims[1]; ++j)
             for (int i = 0; i < grid_.dims[0]; ++i) {
@@ -142,8 +145,8 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                 std::array<Rgb, 6> axisIrradiance{};  // of these rays, facing ±x, ±y, ±z
                 double backSolidAngle = 0;
                 for (size_t r = 0; r < rayCount; ++r) {
-                    const Vec3& d = directions_.direction[r];
-                    const double w = directions_.solidAngle[r];
+                    const Vec3& d = directions.direction[r];
+                    const double w = directions.solidAngle[r];
                     RayHit hit;
                     if (!rays_->intersect(p, d, 0.0, kInf, hit)) continue;
                     const SurfacePoint y = rays_->surface(hit);
@@ -158,7 +161,7 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                     for (const auto& lookup : lookups) e += lookup->at(y.position, side);
                     const Rgb radiance = y.kd(scene_) / kPi * e;
                     field.add(d, radiance, w);
-                    for (size_t a = 0; a < 6; ++a) axisIrradiance[a] += directions_.axisCosine[r][a] * radiance;
+                    for (size_t a = 0; a < 6; ++a) axisIrradiance[a] += directions.axisCosine[r][a] * radiance;
                 }
                 const size_t index = grid_.index(i, j, k);
                 source->fields[index] = field;

@@ -50,6 +50,7 @@
 #include "core/SphericalHarmonics.h"
 
 #include <array>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -63,6 +64,9 @@ struct IrradianceVolumeSettings {
     // (Cornell box at 8: 512 probes, 70 mm apart).
     int probes = 8;
     // Rays per cube-map face side per probe: 6·faceSize² rays. The paper's 16.
+    // A weaker bounce (importance s) gets faceSize·√s, at least 8 (or
+    // faceSize if smaller): its light is a fraction s of bounce 1's, so its
+    // aliasing is too.
     int faceSize = 16;
     bool visibility = true;      // weight probes by a ray test from the point
     bool skipInside = true;      // drop probes inside solid objects
@@ -109,7 +113,8 @@ public:
 
     std::string name() const override;
     // Captures every probe from these meshes (the update: all probes, one
-    // thread; the cache's SamplerPool gives every thread a volume of its own).
+    // thread; the cache's SamplerPool gives every thread a volume of its own,
+    // and each captures the same probes).
     void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
     void releaseSource(size_t slot) override;
     // Deterministic: the seed is not used (the probes are captured once).
@@ -144,7 +149,8 @@ private:
     const Scene& scene_;
     IrradianceVolumeSettings settings_;
     ProbeGrid grid_;
-    CubeMapDirections directions_;
+    // The cube maps for each face size in use (weaker bounces use smaller ones).
+    std::map<int, CubeMapDirections> directions_;
     std::unique_ptr<EmbreeScene> rays_;
     std::vector<char> closed_;  // per scene mesh: its back is an inside (black)
     std::vector<std::unique_ptr<Source>> sources_;

@@ -212,7 +212,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         std::printf("  indirect light: %s\n", b.reason.c_str());
         std::printf("  indirect gather: %s; %s\n", indirect.describe().c_str(), indirect.methodReason.c_str());
         std::printf("  gathered lights: %s\n", indirect.gatheredReason.c_str());
-        if (indirect.method != "raytrace") {  // the others gather from voxels or a proxy cut to them
+        if (indirect.method != "raytrace" && indirect.method != "volume") {  // the others gather from voxels or a proxy cut to them
             const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
             std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
                         "(empty faces are freed)\n",
