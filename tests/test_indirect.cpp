@@ -6,6 +6,7 @@
 // meshes, so what is measured is the indirect part alone.
 #include "cache/IndirectSolver.h"
 #include "IndirectReference.h"
+#include "RoomLeak.h"
 #include "TestSamplers.h"
 #include "cache/IrradianceCache.h"
 #include "core/raytrace/BounceCount.h"
@@ -415,45 +416,20 @@ TEST(Leaks, DarkRoomStaysDark) {
     const BounceCount plan = countBounces(scene);
     Pipeline p(scene, gs, plan.bounces, plan.meanAlbedo);
     p.solve();
-    // Indirect irradiance over every bounce, at a point.
-    std::vector<IrradianceMeshCopy> views = p.solver->copyMeshes();
-    std::vector<MeshIrradianceLookup> lookups;
-    for (const IrradianceMeshCopy& v : views) lookups.emplace_back(v, 0.1, 1e-4);
-    auto indirect = [&](const Vec3& x, const Vec3& n) {
-        double e = 0;
-        for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));
-        return e;
-    };
-    double lit = 0;
-    int litCount = 0;
-    for (double x = -1.9; x < -0.1; x += 0.3)
-        for (double z = 0.2; z < 2; z += 0.3) lit += indirect(Vec3(x, 0, z), Vec3(0, 1, 0)), ++litCount;
-    lit /= litCount;
-    ASSERT_GT(lit, 0.1);
+    const test::RoomLeak leak = test::roomLeak(p.solver->copyMeshes());
+    ASSERT_GT(leak.lit, 0.1);
     // The dark room: no light path reaches it, so all light there is leak:
     // through floor, ceiling and side-wall texels that straddle the
     // partition (a texel a voxel wide, 6 cm here, averages both rooms'
     // surfaces) and from there on by further bounces. Bounds, measured
     // 3.3%, 0.59% and 0.51% (of the lit room's floor, mean): 4% within
     // 0.4 m of the partition, 1.5% beyond, 1% on average over the dark room.
-    double nearMax = 0, farMax = 0, darkSum = 0;
-    int darkCount = 0;
-    for (double x = 0.05; x < 2; x += 0.15)
-        for (double z = 0.2; z < 2; z += 0.4) {
-            const double e = indirect(Vec3(x, 0, z), Vec3(0, 1, 0)) / lit;
-            (x < 0.4 ? nearMax : farMax) = std::max(x < 0.4 ? nearMax : farMax, e);
-            darkSum += e, ++darkCount;
-        }
-    for (double y = 0.2; y < 2; y += 0.4) {
-        const double e = indirect(Vec3(2, y, 1), Vec3(-1, 0, 0)) / lit;
-        farMax = std::max(farMax, e);
-        darkSum += e, ++darkCount;
-    }
+    const double nearMax = leak.nearMax, farMax = leak.farMax;
     std::printf("leak, relative to the lit floor: %.4f near the partition, %.4f beyond, %.4f mean\n", nearMax, farMax,
-                darkSum / darkCount);
+                leak.mean);
     EXPECT_LT(nearMax, 0.04);
     EXPECT_LT(farMax, 0.015);
-    EXPECT_LT(darkSum / darkCount, 0.01);
+    EXPECT_LT(leak.mean, 0.01);
 }
 
 }  // namespace

@@ -219,17 +219,6 @@ TEST(IndirectFurnace, FisheyeTrianglesNeedTessellationNearTheEye) {
 
 // --- The Cornell box against the path tracer ------------------------------------------------
 
-// The direct cache's base mesh, sampled exactly: the bench's source.
-std::vector<IrradianceMeshCopy> cornellSource(const Scene& scene) {
-    IrradianceCache cache(scene);
-    const ExactDirect exact(scene);
-    test::sampleEveryVertex(
-        cache, [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); }, 1,
-        1);
-    std::vector<IrradianceMeshCopy> views = cache.copyMeshes();
-    return views;
-}
-
 // Away from contacts and corners, where the source cache (30 mm triangles)
 // is within about 1% of the true direct light (bench indirect: the floor).
 struct CornellPoint {
@@ -245,7 +234,7 @@ const CornellPoint kCornellPoints[] = {
 
 TEST(IndirectCornell, EveryMethodAgreesWithThePathTracer) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
     const test::OneBounceReference tracer(scene);
     std::vector<double> reference;
     for (size_t i = 0; i < std::size(kCornellPoints); ++i) {
@@ -320,7 +309,7 @@ const test::HardPoint kHardPoints[] = {
 
 TEST(IndirectRobustness, HardPointsGetTheLightOfARegularPointBeside) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
     const test::OneBounceReference tracer(scene);
     std::vector<double> reference;
     for (size_t i = 0; i < std::size(kHardPoints); ++i) {

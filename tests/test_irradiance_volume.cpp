@@ -8,6 +8,7 @@
 //   - the two rooms of test_indirect: visibility weighting stops the light
 //     that trilinear blending carries through the partition.
 #include "IndirectReference.h"
+#include "RoomLeak.h"
 #include "TestSamplers.h"
 #include "TestScenes.h"
 #include "GlTestContext.h"
@@ -276,16 +277,6 @@ TEST(IrradianceVolume, ProbesInsideSolidObjectsAreLeftOut) {
 
 // --- The Cornell box against the path tracer ----------------------------------------------
 
-// The direct cache's base mesh, sampled exactly (the bench's source).
-std::vector<IrradianceMeshCopy> cornellSource(const Scene& scene) {
-    IrradianceCache cache(scene);
-    const ExactDirect exact(scene);
-    test::sampleEveryVertex(
-        cache, [&](size_t light, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(light, x, n); }, 1,
-        1);
-    return cache.copyMeshes();
-}
-
 // The exact gather of a source from any point (gatherCachedRadiance, as
 // bench indirect's floor): what a probe's irradiance is compared with.
 struct ExactGather {
@@ -332,7 +323,7 @@ struct ExactGather {
 //     allowed 1% and 8%, and at most 0.7 of order 2's RMS.
 TEST(IrradianceVolume, CornellProbesMatchTheExactGather) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
     IrradianceVolumeSettings fine;
     fine.faceSize = 32;
     IrradianceVolumeSettings plain = fine;
@@ -394,7 +385,7 @@ TEST(IrradianceVolume, CornellProbesMatchTheExactGather) {
 // noise (< 1%) is inside it.
 TEST(IrradianceVolume, CornellBoxAgreesWithThePathTracer) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
     const test::OneBounceReference tracer(scene);
     IrradianceVolume volume(scene, IrradianceVolumeSettings{});
     volume.setSource(0, source);
@@ -429,7 +420,7 @@ TEST(IrradianceVolume, CornellBoxAgreesWithThePathTracer) {
 // probes the layer is 30 mm up and the error smaller (measured 0.77).
 TEST(IrradianceVolume, ABlockTopIsOffByTheChangeUpToItsProbes) {
     const Scene scene = makeCornellBox();
-    const std::vector<IrradianceMeshCopy> source = cornellSource(scene);
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
     const ExactGather exact(scene, source);
     const Vec3 top(370, 330, 380), up(0, 1, 0);
     const double onTop = exact.at(top, up, 1);
@@ -484,14 +475,9 @@ Scene twoRooms() {
     return test::sceneOf("two rooms", {white, lamp}, {shell, partition, light});
 }
 
-struct Leak {
-    double nearMax = 0, farMax = 0, mean = 0;  // relative to the lit room's floor
-};
-
 // Direct light exact on its cache, every bounce gathered by the volume to
-// convergence; the dark room's indirect irradiance over every bounce,
-// relative to the lit floor's mean, at test_indirect's points.
-Leak leakOf(const Scene& scene, bool visibility) {
+// convergence; the dark room's light at test_indirect's points.
+test::RoomLeak leakOf(const Scene& scene, bool visibility) {
     const ExactDirect exact(scene);
     CacheSettings cs;
     cs.maxEdgeFraction = 1.0 / 32;
@@ -510,41 +496,14 @@ Leak leakOf(const Scene& scene, bool visibility) {
     for (int r = 0; r < 4000 && !solver.allFinished(); ++r)
         solver.step(volume, [&] { return directMeshes; }, 512, 7, std::nullopt);
     EXPECT_TRUE(solver.allFinished());
-    const std::vector<IrradianceMeshCopy> bounces = solver.copyMeshes();
-    std::vector<MeshIrradianceLookup> lookups;
-    for (const IrradianceMeshCopy& b : bounces) lookups.emplace_back(b, 0.1, 1e-4);
-    auto indirect = [&](const Vec3& x, const Vec3& n) {
-        double e = 0;
-        for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));
-        return e;
-    };
-    double lit = 0;
-    int litCount = 0;
-    for (double x = -1.9; x < -0.1; x += 0.3)
-        for (double z = 0.2; z < 2; z += 0.3) lit += indirect(Vec3(x, 0, z), Vec3(0, 1, 0)), ++litCount;
-    lit /= litCount;
-    EXPECT_GT(lit, 0.1);
-    Leak leak;
-    int count = 0;
-    for (double x = 0.05; x < 2; x += 0.15)
-        for (double z = 0.2; z < 2; z += 0.4) {
-            const double e = indirect(Vec3(x, 0, z), Vec3(0, 1, 0)) / lit;
-            double& worst = x < 0.4 ? leak.nearMax : leak.farMax;
-            worst = std::max(worst, e);
-            leak.mean += e, ++count;
-        }
-    for (double y = 0.2; y < 2; y += 0.4) {
-        const double e = indirect(Vec3(2, y, 1), Vec3(-1, 0, 0)) / lit;
-        leak.farMax = std::max(leak.farMax, e);
-        leak.mean += e, ++count;
-    }
-    leak.mean /= count;
+    const test::RoomLeak leak = test::roomLeak(solver.copyMeshes());
+    EXPECT_GT(leak.lit, 0.1);
     return leak;
 }
 
 TEST(IrradianceVolume, VisibilityWeightingStopsTheLeakThroughAWall) {
     const Scene scene = twoRooms();
-    const Leak blind = leakOf(scene, false), seeing = leakOf(scene, true);
+    const test::RoomLeak blind = leakOf(scene, false), seeing = leakOf(scene, true);
     std::printf("leak, relative to the lit floor (near the partition, beyond, mean): trilinear %.4f %.4f %.4f, "
                 "with visibility %.4f %.4f %.4f\n",
                 blind.nearMax, blind.farMax, blind.mean, seeing.nearMax, seeing.farMax, seeing.mean);

@@ -1,0 +1,56 @@
+// How much light reaches a room no light path reaches (test_indirect's two
+// rooms): the indirect meshes of every bounce read on the dark room's floor
+// and far wall, relative to the lit room's floor. Every indirect method's
+// leak test measures it the same way.
+#pragma once
+
+#include "cache/IrradianceCache.h"
+#include "gpu_sampling/indirect/RadianceProxy.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace ml::test {
+
+// Relative to the lit room's floor (mean indirect irradiance at 36 points).
+struct RoomLeak {
+    double lit = 0;      // the lit floor's mean indirect irradiance (luminance, W·m⁻²)
+    double nearMax = 0;  // worst on the dark floor within 0.4 m of the partition
+    double farMax = 0;   // worst beyond, on the floor and the far wall
+    double mean = 0;     // mean over the dark room's points
+};
+
+// The rooms are [−2, 0] (lit) and [0, 2] (dark) × [0, 2] × [0, 2], the
+// partition at x = 0; `bounces` are the solver's indirect meshes.
+inline RoomLeak roomLeak(const std::vector<IrradianceMeshCopy>& bounces) {
+    std::vector<MeshIrradianceLookup> lookups;
+    for (const IrradianceMeshCopy& b : bounces) lookups.emplace_back(b, 0.1, 1e-4);
+    auto indirect = [&](const Vec3& x, const Vec3& n) {
+        double e = 0;
+        for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));
+        return e;
+    };
+    RoomLeak leak;
+    int litCount = 0;
+    for (double x = -1.9; x < -0.1; x += 0.3)
+        for (double z = 0.2; z < 2; z += 0.3) leak.lit += indirect(Vec3(x, 0, z), Vec3(0, 1, 0)), ++litCount;
+    leak.lit /= litCount;
+    if (!(leak.lit > 0)) return leak;
+    int count = 0;
+    for (double x = 0.05; x < 2; x += 0.15)
+        for (double z = 0.2; z < 2; z += 0.4) {
+            const double e = indirect(Vec3(x, 0, z), Vec3(0, 1, 0)) / leak.lit;
+            double& worst = x < 0.4 ? leak.nearMax : leak.farMax;
+            worst = std::max(worst, e);
+            leak.mean += e, ++count;
+        }
+    for (double y = 0.2; y < 2; y += 0.4) {
+        const double e = indirect(Vec3(2, y, 1), Vec3(-1, 0, 0)) / leak.lit;
+        leak.farMax = std::max(leak.farMax, e);
+        leak.mean += e, ++count;
+    }
+    leak.mean /= count;
+    return leak;
+}
+
+}  // namespace ml::test
