@@ -288,9 +288,10 @@ TEST(SpecularDisplay, PhongHighlightAgreesWithTheLobesIntegralOverASmallLight) {
     RecordProperty("worst_relative_difference", std::to_string(worst));
 }
 
-// (d) No pass unless some material is glossy or specular: the Cornell box
-// has none, and a glossy surface out of view leaves the composite exactly
-// what it is without the pass (the pass adds 0.0 there, bit for bit).
+// (d) No pass unless some face's material is glossy or specular: a floor
+// under a light has none (the compositor then compiles the shaders of
+// before, SPECULAR 0), and a glossy surface out of view leaves the
+// composite exactly what it is without the pass (it adds 0.0, bit for bit).
 TEST(SpecularDisplay, NoPassWithoutGlossyOrSpecularMaterials) {
     const Scene plain = test::sceneOf("plain", {emitter(), diffuse("floor", 0.5)}, {test::unitLight(), test::floorMesh()});
     Compositor none(test::glContext(), plain);
