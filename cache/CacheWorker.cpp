@@ -3,6 +3,7 @@
 #include "SamplerPool.h"
 
 #include "core/Error.h"
+#include "core/Random.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,8 +20,12 @@ void WorkerSettings::validate() const {
 }
 
 CacheWorker::CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
-                         IndirectSolver* indirect)
-    : cache_(cache), factory_(std::move(factory)), indirect_(indirect), settings_(settings) {
+                         IndirectSolver* indirect, CausticCache* caustics)
+    : cache_(cache),
+      factory_(std::move(factory)),
+      indirect_(indirect),
+      caustics_(caustics && caustics->active() ? caustics : nullptr),
+      settings_(settings) {
     settings_.validate();
     ML_ASSERT(factory_, "the cache worker needs a sampler factory");
 }
@@ -104,8 +109,14 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->indirectError = indirect_->estimatedError(view);
         if (samplers.indirect()) snap->indirectStats = samplers.indirect()->stats();
     }
+    if (caustics_) {
+        snap->indirect.push_back(caustics_->copyMesh());
+        snap->causticMeshes = 1;
+        snap->causticPhotons = caustics_->photonsEmitted();
+        snap->causticError = caustics_->estimatedError();
+    }
     snap->directPhases = samplers.direct().phaseTimes();
-    snap->estimatedError = std::max(snap->directError, snap->indirectError);
+    snap->estimatedError = std::max({snap->directError, snap->indirectError, snap->causticError});
     snap->converged = converged;
     snap->cameraSerial = cameraSerial;
     {
@@ -127,7 +138,12 @@ void CacheWorker::run() {
         DirectSampler& sample = pool.direct();
         IndirectEstimator* estimator = pool.indirect();
         ML_ASSERT(!indirect_ || estimator, "indirect light needs an estimator from the sampler factory");
-        const auto directMeshes = [&] { return cache_.copyMeshes(); };
+        // What bounce 1 reflects: direct light and, with it, the caustics.
+        const auto directMeshes = [&] {
+            std::vector<IrradianceMeshCopy> m = cache_.copyMeshes();
+            if (caustics_) m.push_back(caustics_->copyMesh());
+            return m;
+        };
         double lastPublish = -1e30;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double directRate = 0;  // direct samples per second in the last round
@@ -212,12 +228,21 @@ void CacheWorker::run() {
                     if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
             }
-            converged = directConverged && indirectConverged;
+            // A round of photons each worker round once direct light's first
+            // pass is complete (the image needs that first), until the
+            // caustics are under their tolerance.
+            bool causticConverged = true;
+            if (caustics_ && !caustics_->converged()) {
+                causticConverged = false;
+                if (cache_.unsampledCount() == 0) caustics_->round(seedFor(settings_.seed, 0xca057u));
+            }
+            converged = directConverged && indirectConverged && causticConverged;
             // Converged at this level: tighten every cache one level and go on.
             if (converged && cache_.level() < settings_.refinementLevels) {
                 const bool direct = cache_.tighten();
                 const bool indirect = indirect_ && estimator && indirect_->tighten(*estimator);
-                if (direct || indirect) converged = directConverged = false;
+                const bool caustic = caustics_ && caustics_->tighten();
+                if (direct || indirect || caustic) converged = directConverged = false;
             }
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
                 publish(seconds(), converged, view, serial, pool);

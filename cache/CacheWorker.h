@@ -9,6 +9,7 @@
 // GL context lives and dies on the thread that uses it.
 #pragma once
 
+#include "CausticCache.h"
 #include "DirectSampler.h"
 #include "IndirectEstimator.h"
 #include "IndirectSolver.h"
@@ -35,9 +36,14 @@ struct CacheSnapshot {
     // if the cache has one (IrradianceCache::hasSharedMesh).
     std::vector<IrradianceMeshCopy> direct;
     // Indirect irradiance, one mesh per bounce (bounce 1 first); empty with
-    // direct light only or before the indirect pass has started. The
-    // irradiance a surface receives is Σ direct + Σ indirect.
+    // direct light only or before the indirect pass has started. Then, when
+    // the scene has caustics (causticMeshes = 1), their mesh
+    // (CausticCache). The irradiance a surface receives is Σ direct +
+    // Σ indirect.
     std::vector<IrradianceMeshCopy> indirect;
+    size_t causticMeshes = 0;         // the last of `indirect` that are caustics (0 or 1)
+    uint64_t causticPhotons = 0;      // photons emitted so far
+    double causticError = 0;          // CausticCache::estimatedError
     int bounces = 0;                  // indirect bounces planned
     int bouncesFinished = 0;          // of those, converged once
     size_t indirectVertices = 0;      // over the indirect meshes (also in `vertices`)
@@ -50,7 +56,7 @@ struct CacheSnapshot {
     std::vector<size_t> verticesPerMesh;
     uint64_t samples = 0;             // estimates taken, all meshes
     uint64_t rounds = 0;
-    double estimatedError = 0;        // the larger of directError and indirectError
+    double estimatedError = 0;        // the largest of directError, indirectError and causticError
     bool converged = false;           // the last round found nothing to do
     uint64_t cameraSerial = 0;          // the setCamera() call the last round served (0: none)
 };
@@ -97,11 +103,14 @@ using SamplerFactory = std::function<WorkerSamplers()>;
 
 class CacheWorker {
 public:
-    // `cache` (and `indirect`, if given) must outlive the worker and not be
-    // touched while it runs. Without `indirect` only direct light is refined;
-    // with it, the factory must make an indirect estimator too.
+    // `cache` (and `indirect` and `caustics`, if given) must outlive the
+    // worker and not be touched while it runs. Without `indirect` only
+    // direct light is refined; with it, the factory must make an indirect
+    // estimator too. With active `caustics`, photon rounds run once direct
+    // light's first pass is complete, until under their tolerance, and
+    // bounce 1 reflects the caustics with direct light.
     CacheWorker(IrradianceCache& cache, SamplerFactory factory, const WorkerSettings& settings,
-                IndirectSolver* indirect = nullptr);
+                IndirectSolver* indirect = nullptr, CausticCache* caustics = nullptr);
     ~CacheWorker();  // stops and joins
     CacheWorker(const CacheWorker&) = delete;
     CacheWorker& operator=(const CacheWorker&) = delete;
@@ -139,6 +148,7 @@ private:
     IrradianceCache& cache_;
     SamplerFactory factory_;
     IndirectSolver* indirect_;
+    CausticCache* caustics_;  // null or active
     WorkerSettings settings_;
     SnapshotExchange<CacheSnapshot> snapshots_;
     std::thread thread_;

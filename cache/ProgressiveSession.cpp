@@ -43,9 +43,10 @@ std::string StopRule::describe() const {
 std::string describeProgress(const CacheSnapshot& s) {
     const std::string bounces =
         s.bounces ? concat(", bounces ", s.bouncesFinished, "/", s.bounces, " (", s.indirectSamples, " gathers)") : "";
+    const std::string caustics = s.causticMeshes ? concat(", ", s.causticPhotons, " caustic photons") : "";
     char error[32];
     std::snprintf(error, sizeof error, "%.3g%%", 100 * s.estimatedError);
-    return concat(s.vertices, " vertices, ", s.samples, " samples", bounces, ", estimated error ", error);
+    return concat(s.vertices, " vertices, ", s.samples, " samples", bounces, caustics, ", estimated error ", error);
 }
 
 ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings& settings, SamplerFactory factory,
@@ -72,8 +73,13 @@ ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings
         cache_.load(settings_.cachePath);  // refuses a truncated, corrupt or mismatched file
         resumed_ = true;
     }
-    if (settings_.indirect && settings_.indirect->bounces > 0)
+    if (settings_.indirect && settings_.indirect->bounces > 0) {
         solver_ = std::make_unique<IndirectSolver>(scene_, *settings_.indirect);
+        // Caustics are indirect light: only with it, and only where a light
+        // sees a specular object (no BVH is built for a scene without one).
+        auto caustics = std::make_unique<CausticCache>(scene_, settings_.caustics);
+        if (caustics->active()) caustics_ = std::move(caustics);
+    }
 }
 
 ProgressiveSession::~ProgressiveSession() {
@@ -96,7 +102,7 @@ uint64_t ProgressiveSession::start(const std::optional<RefinementCamera>& view, 
         setup();
         return inner();
     };
-    worker_ = std::make_unique<CacheWorker>(cache_, std::move(factory), settings_.worker, solver_.get());
+    worker_ = std::make_unique<CacheWorker>(cache_, std::move(factory), settings_.worker, solver_.get(), caustics_.get());
     const uint64_t serial = worker_->setCamera(view);
     startTime_ = Clock::now();
     nextTick_ = -1;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include "CacheWorker.h"
+#include "CausticCache.h"
 #include "IndirectSolver.h"
 #include "IrradianceCache.h"
 #include "LightCoverage.h"
@@ -43,6 +44,9 @@ struct SessionSettings {
     WorkerSettings worker;  // maxSamples is taken from the stop rule given to the constructor
     // Indirect bounces; none (or 0 bounces): direct light only.
     std::optional<IndirectSettings> indirect;
+    // Caustics, traced with indirect light when some light sees a specular
+    // object (CausticCache); none without indirect light.
+    CausticSettings caustics;
     // Resume from this cache file when it exists (empty: none). A truncated,
     // corrupt or mismatched file is refused with an InputError.
     std::string cachePath;
@@ -61,6 +65,8 @@ public:
     const IrradianceCache& cache() const { return cache_; }
     // Null with direct light only.
     const IndirectSolver* indirect() const { return solver_.get(); }
+    // Null unless indirect light is on and some light sees a specular object.
+    const CausticCache* caustics() const { return caustics_.get(); }
     // Where each light keeps a mesh of its own, the rest shared.
     const LightCoverage& coverage() const { return *coverage_; }
 
@@ -116,6 +122,7 @@ private:
     std::function<void()> threadSetup_;
     IrradianceCache cache_;
     std::unique_ptr<IndirectSolver> solver_;
+    std::unique_ptr<CausticCache> caustics_;
     std::unique_ptr<CacheWorker> worker_;
     bool resumed_ = false;
     std::chrono::steady_clock::time_point startTime_{};

@@ -5,6 +5,7 @@
 #include "core/MeshUtil.h"
 #include "core/Random.h"
 #include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/SpecularChain.h"
 
 #include <algorithm>
 #include <chrono>
@@ -101,6 +102,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         if (rays.intersect(start - eps * d, d, 0.0, 2 * eps, probe, facing)) origin -= eps * d;
     }
     const int s = strata;
+    const SpecularChainSettings chain;
     Rgb sum(0.0);
     uint32_t state = hash32(seed ^ 0x2545f491u);
     const auto next = [&state] {
@@ -113,22 +115,19 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
             const double u1 = (i + next()) / s, u2 = (j + next()) / s;
             const double r = std::sqrt(u1), phi = 2 * kPi * u2;
             const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
-            RayHit hit;
-            if (!rays.intersect(origin, w, 0.0, kInf, hit)) continue;
-            const SurfacePoint y = rays.surface(hit);
-            // The side the ray arrives on; a closed object's inside is black.
-            Vec3 side = y.geometricNormal;
-            if (glm::dot(side, w) > 0) {
-                if (closedMeshes[hit.mesh]) continue;
-                side = -side;
-            }
-            Rgb e(0.0);
-            for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(y.position, side);
-            sum += y.kd(scene) * e;  // the texture's Kd at the hit, as the path tracer takes it
-            // A gathered light's face seen from its emitting side: π Le in
-            // this sum's units (π/N Σ L).
-            if (emitting && (*emitting)[hit.mesh][hit.triangle] && glm::dot(side, y.geometricNormal) > 0)
-                sum += kPi * y.ke(scene);
+            // Through mirrors and glass to the diffuse surface behind, each
+            // surface on the way read on the side the ray arrives on (a
+            // closed object's inside is black); a smooth layer's own Kd too.
+            followSpecularChain(rays, closedMeshes, origin, w, chain, next, [&](const ChainVertex& v) {
+                Rgb e(0.0);
+                for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
+                sum += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
+                // A gathered light's face seen from its emitting side: π Le
+                // in this sum's units (π/N Σ L).
+                if (emitting && (*emitting)[v.hit.mesh][v.hit.triangle] &&
+                    glm::dot(v.side, v.surface.geometricNormal) > 0)
+                    sum += v.weight * (kPi * v.surface.ke(scene));
+            });
         }
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
     return sum / double(s * s);
