@@ -58,6 +58,25 @@ inline std::vector<IrradianceMeshCopy> exactDirectSource(const Scene& scene) {
     return cache.copyMeshes();
 }
 
+// Irradiance E0 everywhere on the inner sides of a one-mesh closed box
+// (test::furnaceBox): a source of Lo = Kd/π · E0 on every wall, one
+// triangle of the mesh copy per scene triangle.
+inline std::vector<IrradianceMeshCopy> uniformSource(const Scene& scene, double e0) {
+    IrradianceMeshCopy v;
+    const Mesh& m = scene.meshes.front();
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const uint32_t base = uint32_t(v.positions.size());
+        for (int k = 0; k < 3; ++k) {
+            v.positions.push_back(m.positions[m.triangles[t][k]]);
+            v.normals.push_back(glm::normalize(m.areaNormal(t)));
+            v.irradiance.push_back(Rgb(e0));
+            v.samples.push_back(1);
+        }
+        v.triangles.push_back({base, base + 1, base + 2});
+    }
+    return {v};
+}
+
 // A point where a gather's eye meets geometry (in a corner, on an edge, a
 // hair off a surface), and the regular point beside it where the path
 // tracer gives the reference: 5 mm along the same surface away from the

@@ -132,24 +132,6 @@ TEST(IndirectWeights, WidePlaneSeesItsKnownShare) {
 // opaque.
 Scene furnaceScene() { return test::furnaceBox(0.5, 0.0); }
 
-// Irradiance E0 everywhere on the walls' inner sides: Lo = Kd/π · E0.
-std::vector<IrradianceMeshCopy> uniformSource(const Scene& scene, double e0) {
-    IrradianceMeshCopy v;
-    const Mesh& m = scene.meshes.front();
-    for (size_t t = 0; t < m.triangles.size(); ++t) {
-        const Vec3 n = glm::normalize(m.areaNormal(t));
-        const uint32_t base = uint32_t(v.positions.size());
-        for (int k = 0; k < 3; ++k) {
-            v.positions.push_back(m.positions[m.triangles[t][k]]);
-            v.normals.push_back(n);
-            v.irradiance.push_back(Rgb(e0));
-            v.samples.push_back(1);
-        }
-        v.triangles.push_back({base, base + 1, base + 2});
-    }
-    return {v};
-}
-
 struct FurnacePoint {
     const char* what;
     Vec3 x, n;
@@ -167,7 +149,7 @@ TEST(IndirectFurnace, EveryMethodSeesPiTimesLo) {
     const double e0 = 2.0, lo = 0.5 * e0 / kPi, expected = kPi * lo;
     for (const Method& m : allMethods(16)) {
         const std::unique_ptr<IndirectEstimator> e = make(m, scene);
-        e->setSource(0, uniformSource(scene, e0));
+        e->setSource(0, test::uniformSource(scene, e0));
         for (const FurnacePoint& p : kFurnacePoints) {
             SCOPED_TRACE(m.name + " at " + p.what);
             const double share = m.name == "perspective" ? squarePlaneShare(160) : 1.0;
@@ -209,10 +191,10 @@ TEST(IndirectFurnace, FisheyeTrianglesNeedTessellationNearTheEye) {
     t.imageSize = 40;
     t.tessellationDegrees = 0;
     TriangleGather straight(test::glContext(), scene, t);
-    straight.setSource(0, uniformSource(scene, e0));
+    straight.setSource(0, test::uniformSource(scene, e0));
     t.tessellationDegrees = 10;
     TriangleGather tessellated(test::glContext(), scene, t);
-    tessellated.setSource(0, uniformSource(scene, e0));
+    tessellated.setSource(0, test::uniformSource(scene, e0));
     EXPECT_LT(meanOf(straight, corner.x, corner.n, 8) / expected, 0.9);
     EXPECT_NEAR(meanOf(tessellated, corner.x, corner.n, 8) / expected, 1.0, 0.006);
 }

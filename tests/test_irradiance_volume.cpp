@@ -201,23 +201,6 @@ TEST(IrradianceVolume, ProbesSitAtCellCentresNearCubes) {
 
 // --- The furnace, bounce after bounce --------------------------------------------------
 
-// Irradiance E0 everywhere on the walls' inner sides.
-std::vector<IrradianceMeshCopy> uniformSource(const Scene& scene, double e0) {
-    IrradianceMeshCopy v;
-    const Mesh& m = scene.meshes.front();
-    for (size_t t = 0; t < m.triangles.size(); ++t) {
-        const uint32_t base = uint32_t(v.positions.size());
-        for (int k = 0; k < 3; ++k) {
-            v.positions.push_back(m.positions[m.triangles[t][k]]);
-            v.normals.push_back(glm::normalize(m.areaNormal(t)));
-            v.irradiance.push_back(Rgb(e0));
-            v.samples.push_back(1);
-        }
-        v.triangles.push_back({base, base + 1, base + 2});
-    }
-    return {v};
-}
-
 // A closed box of albedo a whose walls receive E0 of direct light: bounce k
 // is E0·a^k everywhere (Lo = a/π·E, E = π·Lo over the whole hemisphere).
 // Each bounce the solver gives the volume the previous bounce's mesh; every
@@ -238,7 +221,7 @@ TEST(IrradianceVolume, FurnaceBouncesConvergeToTheClosedForm) {
     is.bounces = 6;
     is.albedo = a;
     IndirectSolver solver(scene, is);
-    const std::vector<IrradianceMeshCopy> direct = uniformSource(scene, e0);
+    const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, e0);
     for (int r = 0; r < 200 && !solver.allFinished(); ++r) solver.step(volume, [&] { return direct; }, 512, 7, std::nullopt);
     ASSERT_TRUE(solver.allFinished());
     const std::vector<IrradianceMeshCopy> bounces = solver.copyMeshes();
