@@ -49,6 +49,10 @@ std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
     reason = concat("auto: the ray gather is consistent (its mean is the exact one-bounce irradiance of what the "
                     "cache holds, so resampling converges to it), where the voxel gathers keep a bias of a voxel; "
                     "rays cost the log of the scene's ", scene.triangleCount(), " triangles");
+    // Only rays follow mirrors and glass to the surfaces behind them.
+    if (std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.specular(); }))
+        reason += "; its rays follow the scene's mirrors and glass to what they show (the proxy gathers see only "
+                  "their Kd)";
     return "raytrace";
 }
 
@@ -61,6 +65,10 @@ IndirectChoice IndirectChoice::resolved(const Scene& scene) const {
 void IndirectChoice::decide(const Scene& scene) {
     if (method == "auto") method = chooseIndirectMethod(scene, methodReason);
     else if (methodReason.empty()) methodReason = "as asked (--indirect-method)";
+    if (method != "raytrace" &&
+        std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.specular(); }))
+        methodReason += concat("; ", method, " sees mirrors and glass as their Kd alone: light reflected through "
+                               "them is left out of indirect light (raytrace follows it)");
     if (method == "raytrace") {
         // The voxel gathers see the scene at their voxels, so finer indirect
         // meshes would only resolve the voxels' steps (1/8 and 1/64 of the

@@ -5,10 +5,13 @@
 #include "cache/LightCoverage.h"
 
 #include "Commands.h"
+#include "cache/CausticCache.h"
 #include "cache/GridCache.h"
+#include "core/raytrace/EmbreeScene.h"
 #include "gpu_sampling/indirect/VoxelGrid.h"
 #include "core/Error.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace ml {
@@ -168,6 +171,33 @@ static void printSpecularMaterials(const Scene& scene) {
                 list.c_str());
 }
 
+// Caustics (cache/CausticCache.h): whether a light sees a specular object,
+// and how the light it sends on is traced.
+static void printCaustics(const Scene& scene, const IndirectChoice& indirect) {
+    if (std::none_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.specular(); })) {
+        std::printf("  caustics: none (no mirror or glass)\n");
+        return;
+    }
+    if (!indirect.active()) {
+        std::printf("  caustics: not traced: they are indirect light, and indirect light is off\n");
+        return;
+    }
+    const EmbreeScene rays(scene);
+    const CausticPhotons photons(scene, rays);
+    if (!photons.active()) {
+        std::printf("  caustics: none: %s\n", photons.describe().c_str());
+        return;
+    }
+    const CausticSettings c;
+    std::printf("  caustics: %s; photons aimed at their bounding spheres and followed through mirrors and glass "
+                "(one Fresnel branch each), %zu a round once direct light's first pass is complete, kept where they "
+                "first meet a diffuse surface; progressive photon mapping (alpha %.2g, first radius 1/%.0f of the "
+                "scene) at the vertices of a mesh of edges 1/%.0f of the scene, until its noise is under %.3g; shown "
+                "as indirect light and reflected by bounce 1\n",
+                photons.describe().c_str(), c.photonsPerRound, c.alpha, 1 / c.radiusFraction, 1 / c.edgeFraction,
+                c.tolerance);
+}
+
 void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettings& cache,
                const IndirectChoice& indirect) {
     std::printf("plan:\n");
@@ -233,6 +263,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
     }
     printSpecularPass(scene);
     printSpecularMaterials(scene);
+    printCaustics(scene, indirect);
 }
 
 int runPlan(const std::vector<std::string>& args) {
