@@ -345,3 +345,17 @@ TEST_F(SpecularLayers, SpecularLayerIsPartOfTheSum) {
     }
     EXPECT_EQ(bad, 0) << "beauty = emission + direct + indirect + specular";
 }
+
+// plan says what runs: the McGuire spheres' mirror and glass, and no pass
+// for the Cornell box.
+TEST(SpecularPlan, SaysWhatRunsAndWhy) {
+    const std::string scene = std::string(MESHLIGHT_SHARED_SCENES) + "/mcguire-cornellbox/CornellBox-Sphere.obj";
+    const test::CommandResult spheres = test::runMeshlight("plan " + scene);
+    ASSERT_EQ(spheres.status, 0) << spheres.output;
+    EXPECT_NE(spheres.output.find("specular: a display-time pass"), std::string::npos) << spheres.output;
+    EXPECT_NE(spheres.output.find("mirrors and glass (2 materials)"), std::string::npos) << spheres.output;
+    EXPECT_EQ(spheres.output.find("Phong highlights"), std::string::npos) << "no glossy material";
+    const test::CommandResult cornell = test::runMeshlight("plan cornell");
+    ASSERT_EQ(cornell.status, 0) << cornell.output;
+    EXPECT_NE(cornell.output.find("specular: no pass"), std::string::npos) << cornell.output;
+}

@@ -127,7 +127,8 @@ public:
 
     // How the layers add up, in the EXR's meshlight:layers.
     static constexpr const char* kLayerSums =
-        "beauty (R,G,B) = emission + direct + indirect; direct = sum of light.* + direct_shared + direct_rest "
+        "beauty (R,G,B) = emission + direct + indirect + specular (if present); direct = sum of light.* + "
+        "direct_shared + direct_rest "
         "(those present); radiance W/(sr m2) except reflectance (Kd) and illuminance.Y (lux)";
 
 private:
@@ -483,6 +484,9 @@ int runRender(const std::vector<std::string>& args) {
                     st.estimates ? 1e3 * st.estimateSeconds / double(st.estimates) : 0.0, st.buildSeconds,
                     st.sourceBytes / 1e6, st.source.c_str());
     }
+    if (compositor.hasSpecularPass())
+        std::printf("specular pass (mirrors, glass, highlights): %.2f s of tracing on the CPU\n",
+                    compositor.specularSeconds());
     std::printf("total %.2f s; wrote %s (%dx%d)\n", secondsSince(t0), lastPath.c_str(), comp.width, comp.height);
     if (interrupted) {
         std::fprintf(stderr, "meshlight: interrupted: wrote %s%s (what was cached after %.1f s)\n", lastPath.c_str(),

@@ -50,7 +50,7 @@ static_assert(sizeof(SceneVertex) == 9 * sizeof(float), "SceneVertex is tightly 
 // the mesh has coordinates for it.
 bool drawsTexture(const Scene& scene, const Mesh& m, size_t triangle) {
     const Material& mat = scene.materials[m.materials[triangle]];
-    return !m.texcoords.empty() && (mat.kdMap || mat.keMap);
+    return !m.texcoords.empty() && (mat.kdMap || mat.keMap || mat.alphaMap);
 }
 
 glm::vec4 transformOf(const TextureMap& map) {
@@ -118,6 +118,10 @@ struct Compositor::Impl {
     // draws, where an atlas or an array would need textures of one size
     // or seams handled for every wrap mode.
     bool textured = false;
+    // Some face has a cut-out (Material::alphaMap): the cache meshes still
+    // cover it whole, so each pass of cache meshes keeps only what lies at
+    // the depth of the surface in view, holes open (irradiance.frag).
+    bool cutOuts = false;
     struct DrawRange {
         GLint first = 0;
         GLsizei count = 0;
@@ -177,6 +181,11 @@ struct Compositor::Impl {
         std::future<ImageRgb> image;
     };
     std::optional<SpecularJob> specularJob;
+    double specularSeconds = 0;  // traceSpecular's, on this thread
+    // composite()'s last traces, one per sub-pixel pass (4 for render: some
+    // 12 MB each at 256² pixels of 4×4 sub-pixels).
+    static constexpr size_t kRecentSpecular = 4;
+    std::vector<std::pair<SpecularTrace, ImageRgb>> recentSpecular;
 
     ~Impl() { cancelSpecularJob(); }
 
@@ -261,8 +270,13 @@ struct Compositor::Impl {
         surfaceProgram = program("scene_gbuffer.vert", glslSource({tex.c_str(), shaders::scene_gbuffer_vert}),
                                  "scene_gbuffer.frag",
                                  glslSource({tex.c_str(), shaders::common_textures_glsl, shaders::scene_gbuffer_frag}));
+        cutOuts = textured && std::any_of(s.meshes.begin(), s.meshes.end(), [&](const Mesh& m) {
+            return !m.texcoords.empty() && std::any_of(m.materials.begin(), m.materials.end(),
+                                                       [&](uint32_t i) { return bool(s.materials[i].alphaMap); });
+        });
+        const std::string cut = concat("#define CUT_OUTS ", cutOuts ? 1 : 0, "\n");
         irradianceProgram = program("irradiance.vert", glslSource({shaders::irradiance_vert}), "irradiance.frag",
-                                    glslSource({shaders::irradiance_frag}));
+                                    glslSource({cut.c_str(), shaders::irradiance_frag}));
         occluderProgram = program("scene_gbuffer.vert", glslSource({tex.c_str(), shaders::scene_gbuffer_vert}), "occluder.frag",
                                   glslSource({shaders::occluder_frag}));
         accumulateProgram = program("composite.vert", glslSource({shaders::composite_vert}), "accumulate.frag",
@@ -351,7 +365,7 @@ struct Compositor::Impl {
         for (const DrawRange& r : ranges) {
             if (r.material < 0) continue;
             const Material& mat = scene.materials[size_t(r.material)];
-            for (const TextureMap* map : {&mat.kdMap, &mat.keMap}) {
+            for (const TextureMap* map : {&mat.kdMap, &mat.keMap, &mat.alphaMap}) {
                 if (!*map || textures.count(map->image.get())) continue;
                 const Texture& image = *map->image;
                 GLuint n = 0;
@@ -404,8 +418,23 @@ struct Compositor::Impl {
                 gl.Uniform3f(p.uniform("uKeScale"), scale.r, scale.g, scale.b);
                 gl.Uniform4f(p.uniform("uKeTransform"), x.x, x.y, x.z, x.w);
             }
+            bindCutOut(p, mat);
             gl.DrawArrays(GL_TRIANGLES, r.first, r.count);
         }
+    }
+
+    // A range's cut-out (Material::alphaMap; common_textures.glsl's cutAway).
+    void bindCutOut(const GlProgram& p, const Material* mat) {
+        const bool cut = mat && mat->alphaMap;
+        gl.Uniform1i(p.uniform("uAlphaMapped"), cut ? 1 : 0);
+        if (!cut) return;
+        const TextureMap& map = mat->alphaMap;
+        gl.BindTextureUnit(8, textures.at(map.image.get()).id());
+        const glm::vec4 x = transformOf(map);
+        gl.Uniform4f(p.uniform("uAlphaTransform"), x.x, x.y, x.z, x.w);
+        gl.Uniform1f(p.uniform("uAlphaFactor"), float(map.factor.r));
+        gl.Uniform1f(p.uniform("uAlphaCutoff"), float(mat->alphaCutoff));
+        gl.Uniform1i(p.uniform("uAlphaFromGrey"), map.image->hasAlpha ? 0 : 1);
     }
 
     void ensureTargets(int width, int height, int supersample) {
@@ -634,6 +663,14 @@ struct Compositor::Impl {
             gl.NamedBufferSubData(lightEmissionBuffer.id(), 0, GLsizeiptr(emission.size() * sizeof(glm::vec4)),
                                   emission.data());
         }
+        if (cutOuts) {
+            // The surfaces in view first, holes open: their depth bounds
+            // what the cache meshes may add (irradiance.frag).
+            composed = true;
+            surfaced = false;
+            ensureSurface();
+            gl.BindTextureUnit(9, t.sceneDepth.id());
+        }
         baseState(s.width * s.supersample, s.height * s.supersample);
         const float zero[4] = {0, 0, 0, 0};
         gl.BindFramebuffer(GL_FRAMEBUFFER, t.irradianceFb.id());
@@ -651,7 +688,8 @@ struct Compositor::Impl {
         for (size_t b = 0; b < meshes.indirectCount(); ++b) drawIrradianceMesh(meshes.indirect(b), weights.indirect, first);
         checkGl(gl, "compositing the irradiance");
         composed = true;
-        surfaced = composited = resolved = forwarded = false;
+        surfaced = cutOuts;  // drawn above for this view when the scene has cut-outs
+        composited = resolved = forwarded = false;
     }
 
     // Pass 1: reflectance, and which light's front is seen, per sub-pixel.
@@ -706,22 +744,45 @@ struct Compositor::Impl {
         checkGl(gl, "uploading the specular image");
     }
 
-    // An image's composite: every sub-pixel traced, where it is shown.
+    // An image's composite: every sub-pixel traced, where it is shown. The
+    // last few traces are kept on the CPU: render's specular layer composites
+    // the beauty image's sub-pixel passes again, with the same weights.
     void traceSpecularFor(const Camera& camera, const LightWeights& weights, const CompositorSettings& s) {
-        if (s.quantity == CompositeQuantity::Radiance && s.specular != SpecularPart::Off)
-            traceSpecular(camera, weights, s, 1);
+        if (s.quantity != CompositeQuantity::Radiance || s.specular == SpecularPart::Off) return;
+        if (!specularPaths || !specularPaths->hasCache()) return;
+        if (specularTrace.sameView(camera, weights, s, specularCacheGeneration) && specularTrace.reduction == 1) return;
+        for (const auto& [key, image] : recentSpecular)
+            if (key.sameView(camera, weights, s, specularCacheGeneration)) {
+                uploadSpecular(image);
+                keep(key);
+                return;
+            }
+        const auto start = std::chrono::steady_clock::now();
+        ImageRgb image = specularPaths->trace(camera, s, weights, 1);
+        specularSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        uploadSpecular(image);
+        keep(keyOf(camera, weights, s, 1));
+        if (recentSpecular.size() == kRecentSpecular) recentSpecular.erase(recentSpecular.begin());
+        recentSpecular.emplace_back(specularTrace, std::move(image));
+    }
+
+    // `key` is the image uploaded (its texel size set by uploadSpecular).
+    void keep(const SpecularTrace& key) {
+        const int width = specularTrace.width, height = specularTrace.height;
+        specularTrace = key;
+        specularTrace.width = width;
+        specularTrace.height = height;
     }
 
     bool traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& s, int reduction) {
         if (!specularPaths || !specularPaths->hasCache()) return false;
-        SpecularTrace& st = specularTrace;
+        const SpecularTrace& st = specularTrace;
         if (st.sameView(camera, weights, s, specularCacheGeneration) && st.reduction <= reduction) return false;
+        const auto start = std::chrono::steady_clock::now();
         const ImageRgb image = specularPaths->trace(camera, s, weights, reduction);
+        specularSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         uploadSpecular(image);
-        const int width = st.width, height = st.height;
-        st = keyOf(camera, weights, s, reduction);
-        st.width = width;
-        st.height = height;
+        keep(keyOf(camera, weights, s, reduction));
         return true;
     }
 
@@ -764,10 +825,7 @@ struct Compositor::Impl {
         // Kept only while the view it was traced for is the one shown.
         if (!specularTrace.sameView(k.camera, k.weights, k.settings, specularCacheGeneration)) return false;
         uploadSpecular(image);
-        const int width = specularTrace.width, height = specularTrace.height;
-        specularTrace = k;
-        specularTrace.width = width;
-        specularTrace.height = height;
+        keep(k);
         return true;
     }
 
@@ -1012,6 +1070,7 @@ void Compositor::setSpecularCache(const std::vector<IrradianceMeshCopy>& direct,
     if (!impl_->specularPaths) return;
     impl_->specularPaths->setCache(direct, indirect);
     ++impl_->specularCacheGeneration;
+    impl_->recentSpecular.clear();
 }
 
 bool Compositor::traceSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings,
@@ -1026,6 +1085,8 @@ void Compositor::requestSpecular(const Camera& camera, const LightWeights& weigh
 bool Compositor::collectSpecular() { return impl_->collectSpecular(); }
 
 bool Compositor::specularPending() const { return impl_->specularJob.has_value(); }
+
+double Compositor::specularSeconds() const { return impl_->specularSeconds; }
 
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings) {

@@ -151,6 +151,8 @@ public:
     void requestSpecular(const Camera& camera, const LightWeights& weights, const CompositorSettings& settings);
     bool collectSpecular();
     bool specularPending() const;
+    // Seconds spent tracing the specular pass on this thread so far (render's summary).
+    double specularSeconds() const;
 
     // --- Interactive frames -------------------------------------------------
     // Composites `settings.quantity` into the compositor's own targets
