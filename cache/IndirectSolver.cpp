@@ -175,6 +175,17 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     }
 }
 
+void IndirectSolver::sceneChanged(const std::function<void(IrradianceCache&)>& update) {
+    for (auto& c : caches_) {
+        update(*c);
+        c->resetSamples();
+    }
+    finished_ = 0;
+    directRefreshed_ = false;
+    regathering_ = !caches_.empty();
+    sourceBuilt_.assign(sourceBuilt_.size(), false);
+}
+
 bool IndirectSolver::tighten(IndirectEstimator& estimator) {
     if (!allFinished() || caches_.empty()) return false;
     bool tightened = false;

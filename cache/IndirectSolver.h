@@ -103,6 +103,13 @@ public:
     // old value.
     void restart(IndirectEstimator& estimator);
 
+    // The scene changed (CacheInvalidation.h): `update` makes each bounce's
+    // cache follow it (moved faces); then every bounce is stale and is
+    // gathered again, bounce after bounce (its first pass again), each from
+    // a source built anew, for the worker's estimator is made anew too.
+    // Until a vertex is gathered again, copies show its old value.
+    void sceneChanged(const std::function<void(IrradianceCache&)>& update);
+
     // Once every bounce has converged: one more refinement level for every
     // bounce's cache (IrradianceCache::tighten), and pass 2 again from
     // bounce 1, each bounce's source rebuilt from its predecessor as now

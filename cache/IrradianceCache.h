@@ -16,6 +16,7 @@
 #include "VertexSampler.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
+#include "core/SceneChange.h"
 
 #include <cstdint>
 #include <functional>
@@ -203,6 +204,22 @@ public:
     // image against a converged one; compare both with `render --log`.
     // With a view, what it sees weighs 10× more than the rest.
     double estimatedError(const std::optional<RefinementCamera>& view = std::nullopt) const;
+
+    // --- A scene that changed (CacheInvalidation.h) ---
+    // Forgets the samples of mesh `mesh`'s vertices (and grid samples) at
+    // which `which(point, normal)` holds: they are unsampled again, so
+    // refine() takes them first, and copies fill them from sampled
+    // neighbours meanwhile (their old means are wrong now, unlike after
+    // resetSamples()). Returns how many were forgotten.
+    size_t forget(size_t mesh, const std::function<bool(const Vec3&, const Vec3&)>& which);
+    // The faces change.triangles of mesh change.mesh of `before` moved
+    // rigidly: in every mesh, each part (connected vertices) lying wholly on
+    // those faces moves with them and is forgotten; a grid-cached object is
+    // laid on its moved mesh again. Returns the vertices moved.
+    size_t moveFaces(const Scene& before, const AppliedChange& change);
+    // Follows the changed scene: its emitters (where border vertices are
+    // sampled) and the fingerprint a saved cache records.
+    void sceneChanged(const Scene& after);
 
     // Bytes held by the meshes and their properties.
     size_t memoryBytes() const;

@@ -172,6 +172,20 @@ const CacheSnapshot* ProgressiveSession::refineUntil(CacheWorker::Reader& reader
     return reader.acquire();
 }
 
+InvalidationReport ProgressiveSession::applyChange(Scene& scene, const SceneChange& change) {
+    ML_ASSERT(&scene == &scene_, "a change applies to the session's own scene");
+    const AppliedChange applied = applySceneChange(scene, change);  // throws before anything changes
+    stop();
+    Scene before = std::move(scene);
+    scene = applied.scene;
+    try {
+        return invalidateCache(cache_, solver_.get(), coverage_.get(), before, applied);
+    } catch (...) {
+        scene = std::move(before);
+        throw;
+    }
+}
+
 void ProgressiveSession::save(const std::string& path) const {
     ML_ASSERT(!worker_ || worker_->finished(), "the cache is saved with its worker stopped");
     cache_.save(path);

@@ -15,6 +15,7 @@
 // same cache and solver, and refines exactly as if it had never stopped.
 #pragma once
 
+#include "CacheInvalidation.h"
 #include "CacheWorker.h"
 #include "CausticCache.h"
 #include "IndirectSolver.h"
@@ -105,6 +106,15 @@ public:
     const CacheSnapshot* refineUntil(CacheWorker::Reader& reader, const StopRule& stop, uint64_t serial,
                                      double every = 1e30,
                                      const std::function<void(const CacheSnapshot&)>& tick = {});
+
+    // A light or an object moves (core/SceneChange.h): stops the worker,
+    // applies `change` to `scene`, which must be the scene this session was
+    // made with (so everything reading it sees the change: the samplers a
+    // new worker makes build their occluders and BVHs from it), and makes
+    // the cache keep what is still valid (CacheInvalidation.h). start()
+    // again to refine. An InputError (an unknown light or object, a change
+    // the cache cannot follow) leaves the scene as it was.
+    InvalidationReport applyChange(Scene& scene, const SceneChange& change);
 
     // Writes the cache (temporary file, then rename); the worker must be stopped.
     void save(const std::string& path) const;

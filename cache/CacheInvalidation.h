@@ -1,0 +1,65 @@
+// What a moved light or object (core/SceneChange.h) invalidates in the
+// cache, and the cache made to follow it (issue 17, "moving things").
+//
+// The cache keeps every sample that is still valid and forgets the rest;
+// forgotten vertices are unsampled again, so refinement takes them before
+// any other work (IrradianceCache::refine samples unsampled vertices
+// first), and copies fill them from their sampled neighbours meanwhile.
+//  - A moved light: its own direct mesh is forgotten whole; with lights
+//    sharing, the shared mesh where that light has weight in it too
+//    (LightCoverage weight < 1). Coverage itself is kept as it was: its
+//    weights split each light between its own mesh and the shared one, and
+//    any split adds up to the light, so the sum stays exact (only less
+//    economical until the cache is made again).
+//  - A moved object: in every light's mesh, the vertices whose view of that
+//    light the object may have blocked or may now block: those for which
+//    the object's old or new bounding box meets the convex hull of the
+//    vertex and the light's bounds (hullMeets: exact for a point and a box,
+//    so the test is conservative only by the object's box). The object's
+//    own cache faces move with it (every mesh, direct and indirect) and are
+//    forgotten.
+//  - Indirect light: every bounce is stale and gathered again, bounce after
+//    bounce, keeping its old values on display meanwhile
+//    (IndirectSolver::sceneChanged).
+//  - Refinement itself (splits, levels) is kept: where a shadow has gone the
+//    mesh stays finer than it needs, and new shadow edges are split as the
+//    forgotten vertices' new samples find them.
+#pragma once
+
+#include "IndirectSolver.h"
+#include "IrradianceCache.h"
+#include "LightCoverage.h"
+#include "core/SceneChange.h"
+
+namespace ml {
+
+// What invalidateCache did: vertices forgotten and kept, over every mesh.
+struct InvalidationReport {
+    size_t lightVertices = 0;     // direct vertices forgotten because their light moved
+    size_t shadowVertices = 0;    // direct vertices forgotten because the object may change what they see
+    size_t movedVertices = 0;     // vertices of the moved faces (every mesh, direct and indirect)
+    size_t keptVertices = 0;      // direct vertices that keep their samples
+    size_t indirectVertices = 0;  // indirect vertices marked stale (every bounce's)
+    std::string describe() const;
+};
+
+// Where light `l` of `scene` can be seen from: its bounds (a point light's
+// position); for a directional light, a point two scene diagonals away
+// against its direction, from `x`.
+Bounds3 lightVolume(const Scene& scene, size_t l, const Vec3& x);
+
+// The convex hull of `x` and box `light` meets box `box` (exact: the hull
+// is the union of `light` shrunk towards x by every factor t in [0, 1], and
+// the boxes meeting `box` form one interval of t).
+bool hullMeets(const Vec3& x, const Bounds3& light, const Bounds3& box);
+
+// Makes `direct` and `indirect` (null: none) follow `change`, applied to
+// `before`, whose result change.scene the caller's scene already holds.
+// `coverage`: where lights keep meshes of their own (null: no sharing).
+// Throws InputError when the moved faces are part of a cache object that
+// does not move whole (faces sharing vertices with faces that stay), which
+// the cache cannot follow without being made again.
+InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indirect, const LightCoverage* coverage,
+                                   const Scene& before, const AppliedChange& change);
+
+}  // namespace ml
