@@ -10,6 +10,7 @@
 #include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
+#include "gpu_sampling/indirect/VirtualPointLights.h"
 #include "gpu_sampling/indirect/VoxelMarchGather.h"
 
 #include <algorithm>
@@ -42,7 +43,7 @@ std::string DirectChoice::describe() const {
 }
 
 std::vector<std::string> indirectMethodNames() {
-    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace", "volume"};
+    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace", "volume", "vpl"};
 }
 
 std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
@@ -113,6 +114,11 @@ std::string IndirectChoice::describe() const {
                       6 * volume.faceSize * volume.faceSize, " cube-map rays (Embree) reading the cache; 8 probes "
                       "blended per point", volume.visibility ? ", weighted by a ray test to each" : "",
                       volume.skipInside ? ", those inside objects left out" : "");
+    if (method == "vpl")
+        return concat("vpl: ", vpl.lights, " virtual point lights placed by a Halton sequence over the source's "
+                      "reflected power", vpl.visibility ? concat(", ", std::lround(vpl.negativeShare * vpl.lights),
+                                                                 " negative lights for their occlusion")
+                                                          : std::string(", no visibility"));
     return concat(method, ": the radiance proxy's triangles (", gather.resolution,
                   " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }
@@ -253,6 +259,7 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
     if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
     if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
     if (choice.method == "volume") return std::make_unique<IrradianceVolume>(scene, choice.volume);
+    if (choice.method == "vpl") return std::make_unique<VirtualPointLights>(scene, choice.vpl);
     for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
         if (choice.method == triangleProjectionName(p)) {
             TriangleGatherSettings t;
@@ -313,6 +320,8 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
                 samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
             else if (resolved.method == "volume")
                 samplers.indirect = std::make_unique<IrradianceVolume>(scene, resolved.volume);
+            else if (resolved.method == "vpl")
+                samplers.indirect = std::make_unique<VirtualPointLights>(scene, resolved.vpl);
             else
                 samplers.indirect = std::make_unique<OwnContextGather>(scene, resolved, direct.backend);
         }

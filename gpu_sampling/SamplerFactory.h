@@ -22,6 +22,7 @@
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/indirect/GatherSettings.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
+#include "gpu_sampling/indirect/VirtualPointLights.h"
 
 #include <memory>
 #include <string>
@@ -52,6 +53,7 @@ struct IndirectChoice {
     std::string methodReason;          // filled by decide(): "as asked (--indirect-method)" or why auto chose
     GatherSettings gather;
     IrradianceVolumeSettings volume;   // method "volume": the probe grid (--probes, --probe-face)
+    VirtualPointLightSettings vpl;     // method "vpl": virtual point lights (--vpls)
     BounceCountSettings bounces;
     // Area lights dimmer than this fraction of the brightest one's radiance
     // are gathered by bounce 1 rather than sampled (GatheredLights.h), with
@@ -73,7 +75,8 @@ struct IndirectChoice {
 };
 
 // "slices" (the paper's), "raytrace" (consistent), "volume" (the irradiance
-// volume of SH probes), and the comparisons of `bench indirect`.
+// volume of SH probes), "vpl" (virtual point lights with negative lights for
+// their occlusion), and the comparisons of `bench indirect`.
 std::vector<std::string> indirectMethodNames();
 
 // The gather "auto" stands for, and why: the ray gather (RayGather.h),
