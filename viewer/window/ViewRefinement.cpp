@@ -59,6 +59,7 @@ ViewRefinement::ViewRefinement(std::unique_ptr<ProgressiveSession> session, cons
 ViewRefinement::~ViewRefinement() {
     // The worker may still be saving (its helper stops it): finish that first.
     if (save_ && save_->thread.joinable()) save_->thread.join();
+    if (change_ && change_->thread.joinable()) change_->thread.join();
     stopWorker();
 }
 
@@ -91,7 +92,7 @@ void ViewRefinement::noteSent(const Camera& camera, int width, int height) {
 void ViewRefinement::follow(const Camera& camera, int width, int height) {
     if (!started_) return;
     if (!sameCamera(camera, sentCamera_) || width != sentWidth_ || height != sentHeight_) viewDirty_ = true;
-    if (viewDirty_ && !save_ && now() - sentAt_ >= kViewInterval) {
+    if (viewDirty_ && !save_ && !change_ && now() - sentAt_ >= kViewInterval) {
         sentSerial_ = session_->setCamera(RefinementCamera{camera, width, height});
         noteSent(camera, width, height);
     }
@@ -151,7 +152,7 @@ void ViewRefinement::setPaused(bool paused) {
 }
 
 bool ViewRefinement::done() const {
-    if (!started_ || save_ || !shown_.any || shown_.generation != generation_ || uploader_.busy()) return false;
+    if (!started_ || save_ || change_ || !shown_.any || shown_.generation != generation_ || uploader_.busy()) return false;
     if (!error_.empty() || paused_) return true;
     // Nothing newer published since the snapshot shown (safe to acquire: no
     // copy is in progress).
@@ -162,7 +163,7 @@ bool ViewRefinement::done() const {
 }
 
 bool ViewRefinement::beginSave(const std::string& path) {
-    if (save_ || !started_) return false;
+    if (save_ || change_ || !started_) return false;
     save_ = std::make_unique<SaveJob>();
     save_->path = path;
     SaveJob* job = save_.get();
@@ -190,9 +191,40 @@ std::optional<ViewRefinement::SaveOutcome> ViewRefinement::finishSave(const Came
     return outcome;
 }
 
+bool ViewRefinement::beginChange(Scene& scene, const SceneChange& change) {
+    if (save_ || change_ || !started_) return false;
+    change_ = std::make_unique<ChangeJob>();
+    change_->outcome.what = change.describe();
+    ChangeJob* job = change_.get();
+    ProgressiveSession* refining = session_.get();
+    job->thread = std::thread([job, refining, &scene, change] {
+        const auto start = Clock::now();
+        try {
+            job->outcome.report = refining->applyChange(scene, change);  // stops the worker first
+        } catch (const std::exception& e) {
+            job->outcome.error = e.what();
+        }
+        job->outcome.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        job->done.store(true);
+    });
+    return true;
+}
+
+std::optional<ViewRefinement::ChangeOutcome> ViewRefinement::finishChange(const Camera& camera, int width, int height) {
+    if (!change_ || !change_->done.load() || uploader_.busy()) return std::nullopt;
+    change_->thread.join();
+    ChangeOutcome outcome = std::move(change_->outcome);
+    change_.reset();
+    stopWorker();
+    if (error_.empty()) start(camera, width, height);
+    return outcome;
+}
+
 void ViewRefinement::stop() {
     if (save_ && save_->thread.joinable()) save_->thread.join();
     save_.reset();
+    if (change_ && change_->thread.joinable()) change_->thread.join();
+    change_.reset();
     reader_ = CacheWorker::Reader();
     uploading_ = nullptr;
     if (started_) session_->stop();

@@ -75,7 +75,7 @@ public:
     // view sent (or the worker has ended, failed or is paused).
     bool done() const;
     // Worker ended (out of samples, failed or stopped) and no save is running.
-    bool finished() const { return started_ && session_->finished() && !save_; }
+    bool finished() const { return started_ && session_->finished() && !save_ && !change_; }
 
     // Stops the worker and writes the cache on a helper thread; false when
     // a save runs already or no worker was started.
@@ -86,6 +86,26 @@ public:
     // one on the same cache (a resumed cache refines exactly as if never
     // saved) at this camera.
     std::optional<SaveOutcome> finishSave(const Camera& camera, int width, int height);
+
+    // --- Lights and objects that move (issue 17) ---
+    // How a change ended, once it has (finishChange).
+    struct ChangeOutcome {
+        std::string what;    // SceneChange::describe()
+        std::string error;   // empty: the cache follows the change
+        InvalidationReport report;
+        double seconds = 0;  // the helper's time: stopping the worker and the cache's invalidation
+    };
+    // Stops the worker and applies `change` to `scene` (the session's own
+    // scene, which nothing else may read until finishChange) with the cache
+    // following it (ProgressiveSession::applyChange), on a helper thread:
+    // frames go on showing the last snapshot meanwhile. False while a save
+    // or another change runs, or before the worker started.
+    bool beginChange(Scene& scene, const SceneChange& change);
+    bool changing() const { return change_ != nullptr; }
+    // Once the change is applied and no snapshot of the old worker is being
+    // copied: starts a new worker at this camera on the changed cache
+    // (also after an InputError, on the cache as it was).
+    std::optional<ChangeOutcome> finishChange(const Camera& camera, int width, int height);
 
     // At the end of the frame loop: joins a save and stops the worker (then
     // look at newFailure()).
@@ -102,6 +122,12 @@ private:
         std::thread thread;
         std::atomic<bool> done{false};
         std::string error;
+    };
+    // A change being applied on this helper thread (beginChange).
+    struct ChangeJob {
+        ChangeOutcome outcome;
+        std::thread thread;
+        std::atomic<bool> done{false};
     };
     double now() const;
     void stopWorker();
@@ -122,6 +148,7 @@ private:
     bool paused_ = false;
     std::string error_;
     std::unique_ptr<SaveJob> save_;
+    std::unique_ptr<ChangeJob> change_;
 
     // The view the worker serves.
     Camera sentCamera_;

@@ -19,7 +19,7 @@ using Kind = ScriptAction::Kind;
 
 const char* const kActions =
     "camera, wait, wait-samples, wait-error, wait-done, mode, wireframe, contours, ui, light, group, exposure, tonemap, "
-    "lux-range, pause, resume, screenshot, save-cache, quit";
+    "lux-range, pause, resume, screenshot, save-cache, quit, object";
 
 double parseNumber(const std::string& token, const std::string& what, const SourceLocation& where) {
     errno = 0;
@@ -172,12 +172,30 @@ ScriptAction parseLine(const std::vector<std::string>& t, const SourceLocation& 
         expectArguments(t, 1, 1, "on or off", where);
         a.kind = name == "wireframe" ? Kind::Wireframe : name == "contours" ? Kind::Contours : Kind::Ui;
         a.flag = parseOnOff(t[1], name, where);
+    } else if (name == "light" && t.size() >= 3 && (t[2] == "move" || t[2] == "aim")) {
+        if (t.size() != 4) throwInputError(where, "'light ", t[1], " ", t[2], "' takes X,Y,Z");
+        a.kind = Kind::Change;
+        a.lightName = t[1];
+        const Vec3 p = parseVec3(t[3], "light " + t[2], where);
+        a.sceneChange = t[2] == "move" ? SceneChange::moveLight(0, p) : SceneChange::aimLight(0, p);
     } else if (name == "light") {
         if (t.size() < 3)
-            throwInputError(where, "'light' takes the light (index or name) and on, off, intensity X or color R,G,B");
+            throwInputError(where, "'light' takes the light (index or name) and on, off, intensity X, color R,G,B, "
+                                   "move X,Y,Z or aim X,Y,Z");
         a.kind = Kind::Light;
         a.lightName = t[1];
         parseLightChange(t, "intensity", true, a, where);
+    } else if (name == "object") {
+        const bool move = t.size() >= 3 && t[2] == "move", rotate = t.size() >= 3 && t[2] == "rotate";
+        if (!move && !rotate) throwInputError(where, "'object' takes the object's name and move DX,DY,DZ or rotate AX,AY,AZ DEG");
+        if (move && t.size() != 4) throwInputError(where, "'object ", t[1], " move' takes DX,DY,DZ");
+        if (rotate && t.size() != 5) throwInputError(where, "'object ", t[1], " rotate' takes AX,AY,AZ and DEG");
+        a.kind = Kind::Change;
+        a.sceneChange = move ? SceneChange::moveObject(t[1], parseVec3(t[3], "object move", where))
+                             : SceneChange::rotateObject(t[1], parseVec3(t[3], "object rotate axis", where),
+                                                         parseNumber(t[4], "object rotate DEG", where));
+        if (rotate && !(glm::length(a.sceneChange.axis) > 0))
+            throwInputError(where, "object rotate: the axis ", t[3], " is zero");
     } else if (name == "group") {
         if (t.size() < 3) throwInputError(where, "'group' takes the group's name and on, off or dim F");
         a.kind = Kind::Group;
@@ -312,7 +330,8 @@ void resolveViewScript(ViewScript& script, const std::vector<std::string>& light
                                 ")");
             a.group = *g;
         }
-        const bool namesLight = a.kind == Kind::Light || (a.kind == Kind::Mode && a.mode == DisplayMode::Light);
+        const bool namesLight = a.kind == Kind::Light || (a.kind == Kind::Mode && a.mode == DisplayMode::Light) ||
+                                (a.kind == Kind::Change && a.sceneChange.movesLight());
         if (namesLight) {
             bool found = false;
             for (size_t l = 0; l < lightNames.size() && !found; ++l)
@@ -456,6 +475,12 @@ bool ScriptPlayer::run(const ScriptAction& a, double now, ScriptHost& host, bool
             host.quit();
             endFrame = true;
             return true;
+        case Kind::Change: {
+            SceneChange c = a.sceneChange;
+            c.where = a.where;
+            if (c.movesLight()) c.light = a.light;
+            return host.changeScene(c);
+        }
     }
     return true;
 }

@@ -19,6 +19,12 @@
 //                      (wireframe: final with the cache meshes' edges on)
 //   wireframe on|off   contours on|off   ui on|off
 //   light N on|off|intensity X|color R,G,B      (N: index from 0 or the light's name)
+//   light N move X,Y,Z | aim X,Y,Z              the light to that point (an area
+//                      light's centroid) or facing it (a directional light: its
+//                      light travels along X,Y,Z); the cache follows (issue 17)
+//   object NAME move DX,DY,DZ                   a Scene mesh by name, by an offset
+//   object NAME rotate AX,AY,AZ DEG             about its bounds' centre (right-handed)
+//                      (a move waits for the one before to be applied)
 //   group NAME on|off|dim F   every light of the group (ViewLights.h) on, off,
 //                      or at intensity F; NAME as the panel lists it
 //   exposure EV|auto   tonemap aces|reinhard|clamp   lux-range MIN MAX|auto
@@ -40,6 +46,7 @@
 #include "ViewLights.h"
 #include "core/Camera.h"
 #include "core/Error.h"
+#include "core/SceneChange.h"
 
 #include <optional>
 #include <string>
@@ -50,7 +57,7 @@ namespace ml {
 struct ScriptAction {
     enum class Kind {
         Camera, Wait, WaitSamples, WaitError, WaitDone, Mode, Wireframe, Contours, Ui, Light, Group, Exposure,
-        ExposureAuto, Tonemap, LuxRange, LuxRangeAuto, Pause, Resume, Screenshot, SaveCache, Quit,
+        ExposureAuto, Tonemap, LuxRange, LuxRangeAuto, Pause, Resume, Screenshot, SaveCache, Quit, Change,
     };
     enum class LightChange { On, Off, Intensity, Colour };
 
@@ -78,6 +85,8 @@ struct ScriptAction {
     Rgb colour{1.0};
     ToneOperator op = ToneOperator::Aces;
     std::string path;      // Screenshot, SaveCache
+    // Change: a light (its index set by resolveViewScript) or an object moves.
+    SceneChange sceneChange;
 };
 
 struct ViewScript {
@@ -123,6 +132,12 @@ public:
     virtual void saveCache(const std::string& path) = 0;
     virtual bool busySaving() const = 0;
     virtual void quit() = 0;
+    // A light or an object moves; false while the last change is still
+    // being applied (the script tries again next frame). A viewer that
+    // cannot move things refuses with an InputError.
+    virtual bool changeScene(const SceneChange& change) {
+        throw InputError(change.where, "this viewer cannot move lights or objects");
+    }
 };
 
 class ScriptPlayer {

@@ -81,7 +81,11 @@ std::unique_ptr<GlfwWindow> openWindow(const WindowOptions& options) {
 
 struct ViewSession::Impl : ScriptHost {
 
-    const Scene& scene;
+    // What is drawn, and the session's own copy, which a light or an object
+    // moving changes on a helper thread (ViewRefinement::beginChange); it
+    // becomes the one drawn once the change is applied.
+    Scene scene;
+    Scene refined;
     ViewSettings settings;
     Clock::time_point t0 = Clock::now();
 
@@ -130,7 +134,7 @@ struct ViewSession::Impl : ScriptHost {
     FrameStatistics stats;
 
     Impl(const Scene& s, const ViewSettings& vs)
-        : scene(s), settings(vs), state(vs.display),
+        : scene(s), refined(s), settings(vs), state(vs.display),
           walk(vs.camera, std::max(s.bounds.diagonal(), 1e-30) / 8.0) {
         for (const Light& l : scene.lights) {
             lightControls.emplace_back();
@@ -140,7 +144,7 @@ struct ViewSession::Impl : ScriptHost {
         groups = lightGroups(scene.lights);
         if (settings.printProgress) printLights();
         // Before the window: a cache that cannot be resumed is refused first.
-        std::unique_ptr<ProgressiveSession> session = ViewRefinement::makeSession(scene, settings);
+        std::unique_ptr<ProgressiveSession> session = ViewRefinement::makeSession(refined, settings);
         if (settings.script) player.emplace(*settings.script);
 
         WindowOptions wo;
@@ -151,7 +155,7 @@ struct ViewSession::Impl : ScriptHost {
         GLFWwindow* w = window->handle();
         glfwSwapInterval(0);  // frames are paced by maxFps, not by the display
         input = std::make_unique<WindowInput>(*window);
-        compositor = std::make_unique<Compositor>(*window, scene);
+        makeCompositor();
         uploader = std::make_unique<CacheMeshUploader>(window->gl(), scene.bounds.center());
         // Until the first snapshot, every light has an empty mesh: the
         // frames show the emitters and the controls, nothing lit yet.
@@ -159,8 +163,9 @@ struct ViewSession::Impl : ScriptHost {
         uploader->start(emptyMeshes, {});
         uploader->step(1e9);
         refinement = std::make_unique<ViewRefinement>(std::move(session), settings, *uploader);
-        if (compositor->hasSpecularPass())
-            refinement->onShown([this](const CacheSnapshot& s) { compositor->setSpecularCache(s.direct, s.indirect); });
+        refinement->onShown([this](const CacheSnapshot& s) {
+            if (compositor->hasSpecularPass()) compositor->setSpecularCache(s.direct, s.indirect);
+        });
         ui = std::make_unique<Ui>(w, settings.screenshotPath,
                                   settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
     }
@@ -184,6 +189,32 @@ struct ViewSession::Impl : ScriptHost {
             exitCode = 1;
             quitRequested = true;
         }
+    }
+
+    void makeCompositor() { compositor = std::make_unique<Compositor>(*window, scene); }
+
+    // Ends a change once the cache follows it (ViewRefinement::finishChange):
+    // the changed scene is drawn from this frame on (the compositor made
+    // again for its geometry), and the new worker refines what was forgotten
+    // first. A change refused (an unknown object...) ends a script with
+    // status 2, as an invalid script does.
+    void finishChange(int width, int height) {
+        const std::optional<ViewRefinement::ChangeOutcome> changed =
+            refinement->finishChange(walk.camera(), width, height);
+        if (!changed) return;
+        if (!changed->error.empty()) {
+            showMessage("could not apply " + changed->what + ": " + changed->error);
+            std::fprintf(stderr, "meshlight: could not apply %s: %s\n", changed->what.c_str(), changed->error.c_str());
+            if (player) exitCode = 2, quitRequested = true;
+            return;
+        }
+        compositor.reset();  // its specular thread reads the scene drawn
+        scene = refined;
+        makeCompositor();
+        showMessage(concat(changed->what, ": ", changed->report.describe()));
+        if (settings.printProgress)
+            std::printf("%s: %s (%.0f ms on a helper thread)\n", changed->what.c_str(), changed->report.describe().c_str(),
+                        1e3 * changed->seconds);
     }
 
     // Ends a save once its file is written (ViewRefinement::finishSave).
@@ -225,6 +256,10 @@ struct ViewSession::Impl : ScriptHost {
     }
     bool busySaving() const override { return refinement->saving(); }
     void quit() override { quitRequested = true; }
+    bool changeScene(const SceneChange& change) override {
+        if (!refinement->started() || refinement->saving() || refinement->changing()) return false;
+        return refinement->beginChange(refined, change);
+    }
 
     void showMessage(const std::string& m) {
         message = m;
@@ -256,7 +291,7 @@ struct ViewSession::Impl : ScriptHost {
         // A snapshot being copied needs no frame until it is whole (newSnapshot).
         const bool active = newSnapshot || input->active() || (player && !player->finished()) ||
                             !screenshots.empty() || meter.pending() || lightChangedAt || refinement->saving() ||
-                            quitRequested || stats.firstFrame() < 0;
+                            refinement->changing() || quitRequested || stats.firstFrame() < 0;
         if (active) settleFrames = kSettleFrames;
         return active || settleFrames > 0;
     }
@@ -399,6 +434,11 @@ struct ViewSession::Impl : ScriptHost {
         if (!settings.specular || !compositor->hasSpecularPass() || cs.quantity != CompositeQuantity::Radiance)
             return;
         const auto start = Clock::now();
+        // A screenshot shows the full image, whatever the camera does.
+        if (!screenshots.empty()) {
+            if (compositor->traceSpecular(c, weights, cs, 1)) specularMs = 1e3 * secondsBetween(start, Clock::now());
+            return;
+        }
         if (compositor->traceSpecular(c, weights, cs, specularBlock)) {
             specularMs = 1e3 * secondsBetween(start, Clock::now());
             if (specularMs > 2 * kSpecularFrameMs) specularBlock = std::min(2 * specularBlock, kSpecularMaxBlock);
@@ -443,6 +483,7 @@ struct ViewSession::Impl : ScriptHost {
         glfwGetFramebufferSize(window->handle(), &fbWidth, &fbHeight);
         if (fbWidth <= 0 || fbHeight <= 0) return;  // minimised
         finishSave(fbWidth, fbHeight);
+        finishChange(fbWidth, fbHeight);
         double uploadMs = 0;
         const bool newSnapshot = refinement->pump(uploadMs);
         const bool specularLanded = compositor->collectSpecular();  // a full specular image to show
@@ -471,7 +512,7 @@ struct ViewSession::Impl : ScriptHost {
         shownMode = state.mode;
         // The worker starts once the first frame's camera is known (a
         // script's first keyframe), so its first view is the one shown.
-        if (!refinement->started() && !refinement->saving())
+        if (!refinement->started() && !refinement->saving() && !refinement->changing())
             refinement->start(walk.camera(), fbWidth, fbHeight);
         else
             refinement->follow(walk.camera(), fbWidth, fbHeight);
