@@ -174,14 +174,20 @@ TEST(IrradianceVolume, TheFactoryMakesItByName) {
     EXPECT_NE(std::find(names.begin(), names.end(), "volume"), names.end());
 }
 
-TEST(IrradianceVolume, ProbesSitAtCellCentresNearCubes) {
+TEST(IrradianceVolume, ProbesSitAtCellCornersNearCubes) {
     Bounds3 b;
     b.extend(Vec3(-2, 0, 0));
     b.extend(Vec3(2, 2, 1));
-    const ProbeGrid g(b, 8);  // spacing 0.5: 8 x 4 x 2
-    EXPECT_EQ(g.dims, (std::array<int, 3>{8, 4, 2}));
-    EXPECT_NEAR(g.position(0, 0, 0).x, -1.75, 1e-12);
-    EXPECT_NEAR(g.position(7, 3, 1).z, 0.75, 1e-12);
+    // 8 along the 4 m: 7 intervals of 4/7; 2 m and 1 m take 3.5 and 1.75 of
+    // them, rounded to 4 and 2. The outer layers stand 5% of 4/7 inside.
+    const ProbeGrid g(b, 8);
+    EXPECT_EQ(g.dims, (std::array<int, 3>{8, 5, 3}));
+    const double inset = 0.05 * 4.0 / 7;
+    EXPECT_NEAR(g.position(0, 0, 0).x, -2 + inset, 1e-12);
+    EXPECT_NEAR(g.position(7, 4, 2).x, 2 - inset, 1e-12);
+    EXPECT_NEAR(g.position(7, 4, 2).y, 2 - inset, 1e-12);
+    EXPECT_NEAR(g.position(7, 4, 2).z, 1 - inset, 1e-12);
+    EXPECT_NEAR(g.cell.y, (2 - 2 * inset) / 4, 1e-12);
     // Trilinear weights add up to 1 and reproduce a point between probes;
     // beyond the outer probes the weights clamp to them.
     std::array<size_t, 8> index;
@@ -240,22 +246,50 @@ TEST(IrradianceVolume, FurnaceBouncesConvergeToTheClosedForm) {
     EXPECT_EQ(volume.insideProbes(0), 0u);
 }
 
-// A probe inside a closed object sees its back faces all round and is left
-// out; one outside it is kept.
+// A probe inside a block sees the back of its top and sides over more than
+// half the sphere (the floor through its open bottom, the rest) and is left
+// out; one outside sees none. Every probe of the Cornell box in the room
+// against the blocks' prisms (CornellBox.cpp: their tops' corners, 165 and
+// 330 mm high). The layer at x = 552 stands in places beyond the slanted
+// left wall (x 552.8 at the floor's front, 549.6 at its back, 556 along the
+// ceiling), outside the room: those seeing mostly the wall's back are left
+// out too, the others (near the floor, half their rays missing) are hidden
+// from every point in the room by the wall; they are not checked.
 TEST(IrradianceVolume, ProbesInsideSolidObjectsAreLeftOut) {
     const Scene scene = makeCornellBox();
     IrradianceVolumeSettings vs;
-    vs.probes = 8;
-    vs.faceSize = 4;
+    vs.faceSize = 8;
     IrradianceVolume volume(scene, vs);
     volume.setSource(0, {});
     const ProbeGrid& g = volume.grid();
-    // The tall block spans y 0..330 around (370, 350) (CornellBox.cpp), the
-    // short block y 0..165 around (185, 170): probes at their centres'
-    // cells at the lowest layer are inside.
-    const size_t inside = volume.insideProbes(0);
-    EXPECT_GT(inside, 0u);
-    EXPECT_LT(inside, g.count() / 8);
+    const std::array<Vec2, 4> shortTop{Vec2(130, 65), Vec2(82, 225), Vec2(240, 272), Vec2(290, 114)};
+    const std::array<Vec2, 4> tallTop{Vec2(423, 247), Vec2(265, 296), Vec2(314, 456), Vec2(472, 406)};
+    // Inside a convex quad: on the same side of all four edges.
+    auto inQuad = [](const std::array<Vec2, 4>& q, const Vec2& p) {
+        int sign = 0;
+        for (size_t k = 0; k < 4; ++k) {
+            const Vec2 e = q[(k + 1) % 4] - q[k], d = p - q[k];
+            const int s = e.x * d.y - e.y * d.x > 0 ? 1 : -1;
+            if (sign != 0 && s != sign) return false;
+            sign = s;
+        }
+        return true;
+    };
+    const Vec3 a(552.8, 0, 0), b(549.6, 0, 559.2), c(556, 548.8, 559.2);
+    const Vec3 inward = glm::cross(b - a, c - a);  // towards −x, into the room
+    ASSERT_LT(inward.x, 0);
+    size_t expected = 0;
+    for (int k = 0; k < g.dims[2]; ++k)
+        for (int j = 0; j < g.dims[1]; ++j)
+            for (int i = 0; i < g.dims[0]; ++i) {
+                const Vec3 p = g.position(i, j, k);
+                const Vec2 xz(p.x, p.z);
+                if (glm::dot(p - a, inward) < 0) continue;  // outside the room
+                const bool inside = (inQuad(shortTop, xz) && p.y < 165) || (inQuad(tallTop, xz) && p.y < 330);
+                EXPECT_EQ(volume.insideProbe(0, g.index(i, j, k)), inside) << "probe at " << p.x << ", " << p.y << ", " << p.z;
+                expected += inside;
+            }
+    EXPECT_GT(expected, 10u);
 }
 
 // --- The Cornell box against the path tracer ----------------------------------------------
@@ -297,13 +331,14 @@ struct ExactGather {
 // lit block top seen edge-on a few mm below a probe fills a texel row whose
 // centre it covers (14% too much at the worst probe; 0.3% at 64). What the
 // capture and the SH leave, without the blending between probes:
-//   - order 2 alone: measured RMS 1.4% and worst 4.8% in open air (100 mm
+//   - order 2 alone: measured RMS 1.6% and worst 4.1% in open air (100 mm
 //     from every surface); allowed 3% and 8%;
 //   - with the axis correction, axis normals get the probe's own rays'
-//     irradiance: measured RMS 0.77%, worst 6.3% (texels along a block's
-//     edge), where order 2 alone errs by RMS 1.4%, worst 9.5% of the
-//     brightest axis (12-50% of a normal facing away from a lit floor);
-//     allowed 1% and 8%, and at most 0.7 of order 2's RMS.
+//     irradiance: measured RMS 0.88%, worst 11.8% (the outer layers stand
+//     4 mm off the walls, where a block's edge seen edge-on aliases), where
+//     order 2 alone errs by RMS 1.4%, worst 12% of the brightest axis
+//     (12-50% of a normal facing away from a lit floor); allowed 1% and 15%,
+//     and at most 0.7 of order 2's RMS.
 TEST(IrradianceVolume, CornellProbesMatchTheExactGather) {
     const Scene scene = makeCornellBox();
     const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
@@ -335,7 +370,9 @@ TEST(IrradianceVolume, CornellProbesMatchTheExactGather) {
                 const size_t index = g.index(i, j, k);
                 double axisReference[6], brightest = 0;
                 for (size_t a = 0; a < 6; ++a) brightest = std::max(brightest, axisReference[a] = exact.at(p, axes[a], ++seed));
-                if (corrected.insideProbe(0, index)) continue;
+                // Inside a block, or outside the box behind its slanted left
+                // wall (x 549.6..556): black all round.
+                if (corrected.insideProbe(0, index) || brightest < 1e-3) continue;
                 for (size_t a = 0; a < 6; ++a) {
                     axisCorrected.add((luminance(corrected.probeIrradiance(0, index, axes[a])) - axisReference[a]) / brightest);
                     axisPlain.add((luminance(uncorrected.probeIrradiance(0, index, axes[a])) - axisReference[a]) / brightest);
@@ -354,18 +391,18 @@ TEST(IrradianceVolume, CornellProbesMatchTheExactGather) {
     EXPECT_LT(openPlain.rms(), 0.03);
     EXPECT_LT(openPlain.worst, 0.08);
     EXPECT_LT(axisCorrected.rms(), 0.01);
-    EXPECT_LT(axisCorrected.worst, 0.08);
+    EXPECT_LT(axisCorrected.worst, 0.15);
     EXPECT_LT(axisCorrected.rms(), 0.7 * axisPlain.rms());
 }
 
-// On the walls, against the path tracer's first bounce. A surface point
-// beyond the outer probe layer (35 mm in, half a cell at 8 probes) takes
-// the blend of probes that see the box from there: its error is how much
-// the irradiance changes over that distance and across a cell (70 mm),
-// plus the 16-texel cube maps' aliasing (up to 14% at a probe a few mm
-// above a lit block top seen edge-on, CornellProbesMatchTheExactGather).
-// Measured 0.91-1.09 at these points; tolerance 12%. The path tracer's
-// noise (< 1%) is inside it.
+// On the walls, against the path tracer's first bounce. A point on the
+// box's walls, floor or ceiling lies between the probes of the outer layer,
+// 4 mm in front of it (5% of the 78 mm spacing at 8 probes): its error is
+// how much the irradiance bends across a cell along the wall (linear
+// change interpolates exactly), what changes over those 4 mm, and the
+// 16-texel cube maps' aliasing (CornellProbesMatchTheExactGather). Measured
+// 0.976-1.034 at these points; tolerance 6%. The path tracer's noise
+// (< 1%) is inside it.
 TEST(IrradianceVolume, CornellBoxAgreesWithThePathTracer) {
     const Scene scene = makeCornellBox();
     const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
@@ -388,19 +425,20 @@ TEST(IrradianceVolume, CornellBoxAgreesWithThePathTracer) {
         ASSERT_LT(luminance(r.error), 0.01 * reference) << points[i].what;
         const double ratio = luminance(volume.estimate(0, points[i].x, points[i].n, 0)) / reference;
         std::printf("%s: volume / path tracer %.4f\n", points[i].what, ratio);
-        EXPECT_NEAR(ratio, 1.0, 0.12) << points[i].what;
+        EXPECT_NEAR(ratio, 1.0, 0.06) << points[i].what;
     }
     EXPECT_EQ(volume.insideFallbacks(), 0u);
 }
 
 // The tall block's top, facing up: the probes below it are inside the
-// block, so it takes the layer above, 47 mm up at 8 probes (y = 377), where
+// block, so it takes the layer above, 60 mm up at 8 probes (y = 390), where
 // the dark ceiling fills more of the sky: the exact gather of the source
-// falls from 0.062 on the top to 0.040 there (the path tracer agrees within
-// 1%). The volume's error there is that spacing's: its estimate is the
-// exact gather at the probes' height (within the 5% the blend across the
-// layer and the cube maps leave; measured 1.6%), 0.64 of the top's; at 16
-// probes the layer is 30 mm up and the error smaller (measured 0.77).
+// falls to 0.54 of the top's there (the path tracer agrees within 1%). The
+// volume's error there is that spacing's: its estimate is the exact gather
+// at the probes' height (within the 8% the blend across the layer's 78 mm
+// cells and the cube maps leave; measured 6.6%), 0.58 of the top's; at 16
+// probes the layer is 35 mm up and the error smaller (0.73 of the top's,
+// the layer's own 0.73 within 0.5%).
 TEST(IrradianceVolume, ABlockTopIsOffByTheChangeUpToItsProbes) {
     const Scene scene = makeCornellBox();
     const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
@@ -415,14 +453,14 @@ TEST(IrradianceVolume, ABlockTopIsOffByTheChangeUpToItsProbes) {
         volume.setSource(0, source);
         const ProbeGrid& g = volume.grid();
         // The first probe layer above the top.
-        const int layer = int(std::ceil((top.y - g.lo.y) / g.cell.y - 0.5));
+        const int layer = int(std::floor((top.y - g.lo.y) / g.cell.y)) + 1;
         const double layerY = g.position(0, layer, 0).y;
         const double atLayer = exact.at(Vec3(top.x, layerY, top.z), up, 2);
         const double estimate = luminance(volume.estimate(0, top, up, 0));
         std::printf("%d probes: layer %.1f mm above the top; volume / exact on the top %.4f, exact at the layer / "
                     "on the top %.4f\n",
                     probes, layerY - top.y, estimate / onTop, atLayer / onTop);
-        EXPECT_NEAR(estimate / atLayer, 1.0, 0.05) << probes << " probes";
+        EXPECT_NEAR(estimate / atLayer, 1.0, 0.08) << probes << " probes";
         EXPECT_GT(estimate / onTop, previous) << "finer probes must come nearer";
         previous = estimate / onTop;
     }
@@ -490,12 +528,12 @@ TEST(IrradianceVolume, VisibilityWeightingStopsTheLeakThroughAWall) {
     std::printf("leak, relative to the lit floor (near the partition, beyond, mean): trilinear %.4f %.4f %.4f, "
                 "with visibility %.4f %.4f %.4f\n",
                 blind.nearMax, blind.farMax, blind.mean, seeing.nearMax, seeing.farMax, seeing.mean);
-    // Measured (8 probes along the 4 m, 0.5 m apart, probes at x = ±0.25
-    // either side of the partition): plain trilinear blending leaks 46.6%
+    // Measured (8 probes along the 4 m, 0.57 m apart, probes at x = ±0.29
+    // either side of the partition): plain trilinear blending leaks 43.9%
     // of the lit floor's light within 0.4 m of the partition (a point there
-    // takes up to half its light from probes in the lit room), 6.6% beyond,
-    // 8.3% on average; with the ray test 0.65%, 0.75%, 0.42%: 72×, 9× and
-    // 20× less. What is left comes from cache vertices on the partition's
+    // takes up to half its light from probes in the lit room), 4.5% beyond,
+    // 6.8% on average; with the ray test 0.43%, 0.38%, 0.25%: 100×, 12× and
+    // 27× less. What is left comes from cache vertices on the partition's
     // foot (x = 0, where a ray to the lit room starts on the partition's
     // plane) interpolated over the dark floor's first triangles.
     EXPECT_GT(blind.nearMax, 0.2) << "the scene must leak without visibility, or it tests nothing";

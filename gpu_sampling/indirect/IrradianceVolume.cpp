@@ -24,13 +24,26 @@ void IrradianceVolumeSettings::validate() const {
 ProbeGrid::ProbeGrid(const Bounds3& bounds, int probesAlongLongest) {
     const Vec3 extent = bounds.extent();
     const double longest = std::max({extent.x, extent.y, extent.z});
-    lo = bounds.empty() ? Vec3(0.0) : bounds.lo;
+    const Vec3 base = bounds.empty() ? Vec3(0.0) : bounds.lo;
+    // The outer layers stand a little inside the bounds: near a wall there a
+    // probe sees what the wall's points see, but not from on it, nor from a
+    // gap between the wall and something mounted on it (the Cornell box's
+    // light hangs 0.5 mm below its ceiling).
+    const double inset = probesAlongLongest > 1 ? kInset * longest / (probesAlongLongest - 1) : 0.0;
     for (int a = 0; a < 3; ++a) {
-        // Cells as near cubes as whole numbers allow; a flat axis gets one
-        // probe, on the bounds' plane.
-        const double spacing = longest / probesAlongLongest;
-        dims[size_t(a)] = spacing > 0 ? std::max(1, int(std::lround(extent[a] / spacing))) : 1;
-        cell[a] = extent[a] / dims[size_t(a)];
+        if (probesAlongLongest < 2 || !(extent[a] > 2 * inset)) {
+            // One probe on this axis, in the middle (a flat scene's plane).
+            dims[size_t(a)] = 1;
+            lo[a] = base[a] + 0.5 * extent[a];
+            cell[a] = 0;
+            continue;
+        }
+        // Cells as near cubes as whole numbers allow.
+        const double spacing = longest / (probesAlongLongest - 1);
+        const int intervals = std::max(1, int(std::lround(extent[a] / spacing)));
+        dims[size_t(a)] = intervals + 1;
+        lo[a] = base[a] + inset;
+        cell[a] = (extent[a] - 2 * inset) / intervals;
     }
 }
 
@@ -41,7 +54,7 @@ void ProbeGrid::corners(const Vec3& x, std::array<size_t, 8>& index, std::array<
     for (int a = 0; a < 3; ++a) {
         const int n = dims[size_t(a)];
         if (n == 1 || !(cell[a] > 0)) continue;  // one probe on this axis: it takes all the weight
-        const double g = (x[a] - lo[a]) / cell[a] - 0.5;
+        const double g = (x[a] - lo[a]) / cell[a];
         const int base = std::clamp(int(std::floor(g)), 0, n - 2);
         i0[size_t(a)] = base;
         i1[size_t(a)] = base + 1;
@@ -143,7 +156,7 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                 const Vec3 p = grid_.position(i, j, k);
                 ShRgb field;
                 std::array<Rgb, 6> axisIrradiance{};  // of these rays, facing ±x, ±y, ±z
-                double backSolidAngle = 0;
+                double backSolidAngle = 0, closedBackSolidAngle = 0;
                 for (size_t r = 0; r < rayCount; ++r) {
                     const Vec3& d = directions.direction[r];
                     const double w = directions.solidAngle[r];
@@ -154,7 +167,10 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                     Vec3 side = y.geometricNormal;
                     if (glm::dot(side, d) > 0) {
                         backSolidAngle += w;
-                        if (closed_[hit.mesh]) continue;
+                        if (closed_[hit.mesh]) {
+                            closedBackSolidAngle += w;
+                            continue;
+                        }
                         side = -side;
                     }
                     Rgb e(0.0);
@@ -171,7 +187,11 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                         axis[a / 2] = a % 2 ? -1.0 : 1.0;
                         source->residual[index][size_t(a)] = axisIrradiance[size_t(a)] - field.irradiance(axis);
                     }
-                if (settings_.skipInside && backSolidAngle > 2 * kPi) {
+                // Mostly back faces, or a quarter of the sphere of a closed
+                // object's inside (which no probe outside it sees at all: a
+                // probe inside a block standing on the floor sees the floor
+                // below it from the front).
+                if (settings_.skipInside && (backSolidAngle > 2 * kPi || closedBackSolidAngle > kPi)) {
                     source->inside[index] = 1;
                     ++source->insideCount;
                 }
