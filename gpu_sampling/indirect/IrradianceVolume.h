@@ -13,9 +13,10 @@
 // ray gather does (Kd/π × the source's irradiance on the side the ray
 // arrives from, black inside a closed mesh). On this machine's llvmpipe the
 // two cost about the same (bench indirect prints both: a 16-pixel hemicube
-// of the radiance proxy, five of a cube map's six draws, 0.64-0.70 ms; a
-// probe's 1,536 rays 0.63-0.82 ms), and the rays read the cache itself
-// rather than a proxy resampled at voxels. The grid's fields are arrays of
+// of the radiance proxy, five of a cube map's six draws with half its
+// pixels, 0.64-0.72 ms; a probe's 1,536 rays 0.6-1.1 ms, over three runs on
+// a shared machine), and the rays read the cache itself rather than a proxy
+// resampled at voxels. The grid's fields are arrays of
 // ShRgb, one per probe (the paper's 3D textures, on the CPU).
 //
 // Beyond the paper (its §6 weights probes 0/1 by a shadow cube map, on the
