@@ -148,7 +148,7 @@ void CacheWorker::run() {
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double directRate = 0;  // direct samples per second in the last round
         double lastDirectError = 1, lastIndirectError = 1;
-        uint64_t rounds = 0;
+        uint64_t rounds = 0, causticWaits = 0;
         std::optional<RefinementCamera> lastView;
         uint64_t serial = 0;
         for (;;) {
@@ -228,13 +228,18 @@ void CacheWorker::run() {
                     if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
             }
-            // A round of photons each worker round once direct light's first
-            // pass is complete (the image needs that first), until the
-            // caustics are under their tolerance.
+            // A round of photons once direct light's first pass is complete
+            // (the image needs that first), until the caustics are under
+            // their tolerance; it shares the worker by errors as direct and
+            // indirect light do: while the caustics' relative noise is at
+            // least half the larger of the other two errors, and every
+            // fourth round regardless.
             bool causticConverged = true;
             if (caustics_ && !caustics_->converged()) {
                 causticConverged = false;
-                if (cache_.unsampledCount() == 0) caustics_->round(seedFor(settings_.seed, 0xca057u));
+                const bool turn = caustics_->estimatedError() >= 0.5 * std::max(lastDirectError, lastIndirectError) ||
+                                  ++causticWaits % 4 == 0;
+                if (cache_.unsampledCount() == 0 && turn) caustics_->round(seedFor(settings_.seed, 0xca057u));
             }
             converged = directConverged && indirectConverged && causticConverged;
             // Converged at this level: tighten every cache one level and go on.

@@ -21,6 +21,54 @@ void CausticSettings::validate() const {
         throw InputError(concat("caustic tolerance ", tolerance, " is not in (0, 1)"));
 }
 
+namespace detail {
+
+// Points binned in a uniform grid of cells `size` wide, sorted by cell.
+class PointGrid {
+public:
+    PointGrid(const std::vector<Vec3>& points, double size) : points_(points), size_(size) {
+        keys_.reserve(points.size());
+        for (uint32_t i = 0; i < points.size(); ++i) keys_.push_back({key(cell(points[i])), i});
+        std::sort(keys_.begin(), keys_.end());
+    }
+    // Calls f(index) for every point within `radius` (≤ the cell size) of x,
+    // in the order of the cells' keys, then of the points.
+    template <class F>
+    void near(const Vec3& x, double radius, F&& f) const {
+        const glm::i64vec3 c = cell(x);
+        const double r2 = radius * radius;
+        // Each key once: cells that share a key share its list.
+        std::array<uint64_t, 27> keys;
+        size_t n = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) keys[n++] = key(c + glm::i64vec3(dx, dy, dz));
+        std::sort(keys.begin(), keys.end());
+        for (size_t i = 0; i < keys.size(); ++i) {
+            if (i > 0 && keys[i] == keys[i - 1]) continue;
+            auto it = std::lower_bound(keys_.begin(), keys_.end(), std::make_pair(keys[i], uint32_t(0)));
+            for (; it != keys_.end() && it->first == keys[i]; ++it) {
+                const Vec3 d = points_[it->second] - x;
+                if (glm::dot(d, d) < r2) f(it->second);
+            }
+        }
+    }
+
+private:
+    glm::i64vec3 cell(const Vec3& p) const { return glm::i64vec3(glm::floor(p / size_)); }
+    static uint64_t key(const glm::i64vec3& c) {
+        // Cells hashed to 64 bits; a collision makes a list longer (near()
+        // visits each key once and tests every point's distance).
+        return uint64_t(c.x) * 0x9e3779b97f4a7c15ull + uint64_t(c.y) * 0xc2b2ae3d27d4eb4full +
+               uint64_t(c.z) * 0x165667b19e3779f9ull;
+    }
+    const std::vector<Vec3>& points_;
+    double size_;
+    std::vector<std::pair<uint64_t, uint32_t>> keys_;
+};
+
+}  // namespace detail
+
 CausticCache::CausticCache(const Scene& scene, const CausticSettings& settings)
     : scene_(scene), settings_(settings) {
     settings_.validate();
@@ -43,8 +91,9 @@ CausticCache::CausticCache(const Scene& scene, const CausticSettings& settings)
     mesh_.irradiance.clear();
     mesh_.samples.clear();
     mesh_.standardError.clear();
-    const double r0 = settings_.radiusFraction * std::max(scene.bounds.diagonal(), 1e-30);
-    radius2_.assign(mesh_.positions.size(), r0 * r0);
+    firstRadius_ = settings_.radiusFraction * std::max(scene.bounds.diagonal(), 1e-30);
+    vertices_ = std::make_unique<detail::PointGrid>(mesh_.positions, firstRadius_);
+    radius2_.assign(mesh_.positions.size(), firstRadius_ * firstRadius_);
     count_.assign(mesh_.positions.size(), 0.0);
     flux_.assign(mesh_.positions.size(), Rgb(0.0));
 }
@@ -60,79 +109,32 @@ std::string CausticCache::describe() const {
 
 size_t CausticCache::vertexCount() const { return mesh_.positions.size(); }
 
-namespace {
-
-// Photons binned in a uniform grid of cells `size` wide, sorted by cell.
-class PhotonGrid {
-public:
-    PhotonGrid(const std::vector<CausticPhoton>& photons, double size) : photons_(photons), size_(size) {
-        keys_.reserve(photons.size());
-        for (uint32_t i = 0; i < photons.size(); ++i) keys_.push_back({key(cell(photons[i].position)), i});
-        std::sort(keys_.begin(), keys_.end());
-    }
-    // Calls f(photon) for every photon within `radius` (≤ the cell size) of x.
-    template <class F>
-    void near(const Vec3& x, double radius, F&& f) const {
-        const glm::i64vec3 c = cell(x);
-        const double r2 = radius * radius;
-        // Each key once: cells that share a key share its list.
-        std::array<uint64_t, 27> keys;
-        size_t n = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) keys[n++] = key(c + glm::i64vec3(dx, dy, dz));
-        std::sort(keys.begin(), keys.end());
-        for (size_t i = 0; i < keys.size(); ++i) {
-            if (i > 0 && keys[i] == keys[i - 1]) continue;
-            auto it = std::lower_bound(keys_.begin(), keys_.end(), std::make_pair(keys[i], uint32_t(0)));
-            for (; it != keys_.end() && it->first == keys[i]; ++it) {
-                const CausticPhoton& p = photons_[it->second];
-                const Vec3 d = p.position - x;
-                if (glm::dot(d, d) < r2) f(p);
-            }
-        }
-    }
-
-private:
-    glm::i64vec3 cell(const Vec3& p) const { return glm::i64vec3(glm::floor(p / size_)); }
-    static uint64_t key(const glm::i64vec3& c) {
-        // Cells hashed to 64 bits; a collision makes a list longer (near()
-        // visits each key once and tests every photon's distance).
-        return uint64_t(c.x) * 0x9e3779b97f4a7c15ull + uint64_t(c.y) * 0xc2b2ae3d27d4eb4full +
-               uint64_t(c.z) * 0x165667b19e3779f9ull;
-    }
-    const std::vector<CausticPhoton>& photons_;
-    double size_;
-    std::vector<std::pair<uint64_t, uint32_t>> keys_;
-};
-
-}  // namespace
-
 void CausticCache::round(uint32_t seed) {
     if (!active()) return;
     std::vector<CausticPhoton> landed;
     photons_->trace(emitted_, settings_.photonsPerRound, seed, landed);
     emitted_ += settings_.photonsPerRound;
     ++rounds_;
-    if (landed.empty()) return;
-    const double largest = std::sqrt(*std::max_element(radius2_.begin(), radius2_.end()));
-    const PhotonGrid grid(landed, largest);
-    const double a = settings_.alpha;
-    for (size_t v = 0; v < mesh_.positions.size(); ++v) {
-        const Vec3& x = mesh_.positions[v];
-        const Vec3& n = mesh_.normals[v];
-        double found = 0;
-        Rgb power(0.0);
-        grid.near(x, std::sqrt(radius2_[v]), [&](const CausticPhoton& p) {
-            if (glm::dot(p.normal, n) < 0.7071) return;  // another side, or another surface at a crease
-            found += 1;
-            power += p.power;
+    // Each photon to the vertices whose kernel holds it (radii only shrink,
+    // so the grid of the first radius finds them all), in photon order.
+    std::vector<double> found(radius2_.size(), 0.0);
+    std::vector<Rgb> power(radius2_.size(), Rgb(0.0));
+    std::vector<uint32_t> touched;
+    for (const CausticPhoton& p : landed)
+        vertices_->near(p.position, firstRadius_, [&](uint32_t v) {
+            const Vec3 d = p.position - mesh_.positions[v];
+            if (glm::dot(d, d) >= radius2_[v]) return;
+            if (glm::dot(p.normal, mesh_.normals[v]) < 0.7071) return;  // another side, or another surface at a crease
+            if (found[v] == 0) touched.push_back(v);
+            found[v] += 1;
+            power[v] += p.power;
         });
-        if (found == 0) continue;
-        const double shrink = (count_[v] + a * found) / (count_[v] + found);
-        count_[v] += a * found;
+    const double a = settings_.alpha;
+    for (uint32_t v : touched) {
+        const double shrink = (count_[v] + a * found[v]) / (count_[v] + found[v]);
+        count_[v] += a * found[v];
         radius2_[v] *= shrink;
-        flux_[v] = (flux_[v] + power) * shrink;
+        flux_[v] = (flux_[v] + power[v]) * shrink;
     }
 }
 

@@ -29,17 +29,23 @@
 namespace ml {
 
 class EmbreeScene;
+namespace detail {
+class PointGrid;
+}
 
 struct CausticSettings {
     // The caustic mesh's edges, at most this fraction of the scene's
     // diagonal; typical 1/128 (the Cornell box: about 60,000 vertices).
     double edgeFraction = 1.0 / 128;
-    // Photons emitted per round; typical 2^16 (some 0.1 s on two cores).
-    size_t photonsPerRound = size_t(1) << 16;
+    // Photons emitted per round; typical 2^15 (about 0.15 s on two cores in
+    // CornellBox-Sphere, as long as a few rounds of direct light).
+    size_t photonsPerRound = size_t(1) << 15;
     // Each vertex's first kernel radius, a fraction of the scene's
-    // diagonal: the mesh's edge, so that a caustic spot between vertices
-    // still reaches the nearest ones.
-    double radiusFraction = 1.0 / 128;
+    // diagonal: two of the mesh's edges, so that a caustic spot between
+    // vertices reaches the nearest ones, and a broad caustic (a mirror
+    // sphere's light over a ceiling) gathers enough photons early; it
+    // shrinks as they come.
+    double radiusFraction = 1.0 / 64;
     // Progressive photon mapping's α in (0, 1): the share of new photons a
     // round keeps (Hachisuka et al. use 0.7).
     double alpha = 0.7;
@@ -93,6 +99,8 @@ private:
     std::unique_ptr<EmbreeScene> rays_;
     std::unique_ptr<CausticPhotons> photons_;
     IrradianceMeshCopy mesh_;        // geometry only; irradiance filled by copyMesh
+    double firstRadius_ = 0;         // every vertex's kernel radius before its first photon, scene units
+    std::unique_ptr<detail::PointGrid> vertices_;  // the mesh's vertices, binned by firstRadius_
     std::vector<double> radius2_;    // R² per vertex, scene units²
     std::vector<double> count_;      // N per vertex
     std::vector<Rgb> flux_;          // τ per vertex

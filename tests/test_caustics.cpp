@@ -74,8 +74,8 @@ std::vector<FloorPoint> floorPoints(const IrradianceMeshCopy& m, Keep keep) {
 CausticSettings testSettings() {
     CausticSettings s;
     s.edgeFraction = 1.0 / 64;
-    // A wide first kernel (1/32 of the diagonal, 0.14 here) gathers ~16×
-    // the photons of the default: 1% noise per vertex in a second of
+    // A wide first kernel (1/32 of the diagonal, 0.14 here) gathers 4× the
+    // photons of the default: 1-2% noise per vertex in a second of
     // photons. Its blur is second order: (R²/8)·|∇²E|/E ≤ 0.3% for the
     // smooth irradiance of a small light 1 to 1.5 units away.
     s.radiusFraction = 1.0 / 32;
