@@ -7,6 +7,7 @@
 #include "cache/GatheredLights.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
+#include "gpu_sampling/indirect/PropagationVolume.h"
 #include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
@@ -43,7 +44,7 @@ std::string DirectChoice::describe() const {
 }
 
 std::vector<std::string> indirectMethodNames() {
-    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace", "volume", "vpl"};
+    return {"slices", "slice-quads", "raymarch", "fisheye-triangles", "perspective", "hemicube", "raytrace", "volume", "lpv", "vpl"};
 }
 
 std::string chooseIndirectMethod(const Scene& scene, std::string& reason) {
@@ -114,6 +115,11 @@ std::string IndirectChoice::describe() const {
                       6 * volume.faceSize * volume.faceSize, " cube-map rays (Embree) reading the cache; 8 probes "
                       "blended per point", volume.visibility ? ", weighted by a ray test to each" : "",
                       volume.skipInside ? ", those inside objects left out" : "");
+    if (method == "lpv")
+        return concat("lpv: the source injected as virtual point lights into ", lpv.cells,
+                      " cells along the scene's longest side (order-2 SH), propagated to neighbours",
+                      lpv.occlusion ? " through a geometry volume of occlusion" : " without occlusion", ", ",
+                      lpv.iterations > 0 ? concat(lpv.iterations, " steps") : std::string("steps across the grid"));
     if (method == "vpl")
         return concat("vpl: ", vpl.lights, " virtual point lights placed by a Halton sequence over the source's "
                       "reflected power", vpl.visibility ? concat(", ", std::lround(vpl.negativeShare * vpl.lights),
@@ -259,6 +265,7 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
     if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
     if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
     if (choice.method == "volume") return std::make_unique<IrradianceVolume>(scene, choice.volume);
+    if (choice.method == "lpv") return std::make_unique<PropagationVolume>(scene, choice.lpv);
     if (choice.method == "vpl") return std::make_unique<VirtualPointLights>(scene, choice.vpl);
     for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
         if (choice.method == triangleProjectionName(p)) {
@@ -314,12 +321,14 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
         WorkerSamplers samplers;
         samplers.direct = std::make_unique<ConfiguredDirectSampler>(scene, direct);
         if (indirect.active()) {
-            // The ray gather and the volume draw nothing: no GL context of their own.
+            // The ray gather and the volumes draw nothing: no GL context of their own.
             const IndirectChoice resolved = indirect.resolved(scene);
             if (resolved.method == "raytrace")
                 samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
             else if (resolved.method == "volume")
                 samplers.indirect = std::make_unique<IrradianceVolume>(scene, resolved.volume);
+            else if (resolved.method == "lpv")
+                samplers.indirect = std::make_unique<PropagationVolume>(scene, resolved.lpv);
             else if (resolved.method == "vpl")
                 samplers.indirect = std::make_unique<VirtualPointLights>(scene, resolved.vpl);
             else

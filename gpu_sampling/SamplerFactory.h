@@ -22,6 +22,7 @@
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/indirect/GatherSettings.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
+#include "gpu_sampling/indirect/PropagationVolume.h"
 #include "gpu_sampling/indirect/VirtualPointLights.h"
 
 #include <memory>
@@ -53,6 +54,7 @@ struct IndirectChoice {
     std::string methodReason;          // filled by decide(): "as asked (--indirect-method)" or why auto chose
     GatherSettings gather;
     IrradianceVolumeSettings volume;   // method "volume": the probe grid (--probes, --probe-face)
+    PropagationVolumeSettings lpv;     // method "lpv": the propagation grid (--lpv-cells)
     VirtualPointLightSettings vpl;     // method "vpl": virtual point lights (--vpls)
     BounceCountSettings bounces;
     // Area lights dimmer than this fraction of the brightest one's radiance
@@ -75,8 +77,9 @@ struct IndirectChoice {
 };
 
 // "slices" (the paper's), "raytrace" (consistent), "volume" (the irradiance
-// volume of SH probes), "vpl" (virtual point lights with negative lights for
-// their occlusion), and the comparisons of `bench indirect`.
+// volume of SH probes), "lpv" (voxel light propagation with occlusion),
+// "vpl" (virtual point lights with negative lights for their occlusion), and
+// the comparisons of `bench indirect`.
 std::vector<std::string> indirectMethodNames();
 
 // The gather "auto" stands for, and why: the ray gather (RayGather.h),

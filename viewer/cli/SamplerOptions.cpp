@@ -45,7 +45,8 @@ void declareIndirectOptions(Options& o) {
             "(--gather-size^2/4 Embree rays reading the cache where they land: consistent), slices (the paper's "
             "voxel slices), slice-quads (one quad per slice face), raymarch (the voxels as a 3D texture), "
             "fisheye-triangles, perspective (one 160-degree image), hemicube (the proxy's triangles at --voxels, "
-            "image --gather-size) or volume (an irradiance volume of SH probes, --probes, --probe-face)"
+            "image --gather-size), volume (an irradiance volume of SH probes, --probes, --probe-face), lpv (light "
+            "propagated through a voxel grid with occlusion, --lpv-cells)"
             "; vpl: virtual point lights with negative lights for their occlusion (--vpls)",
             std::string("auto"));
     o.value("voxels", "N", "voxel slices: N voxels along the scene's longest side (32..128 typical)",
@@ -60,6 +61,8 @@ void declareIndirectOptions(Options& o) {
     const IrradianceVolumeSettings v;
     o.value("probes", "N", "volume: N probes along the scene's longest side (4..16 typical)", concat(v.probes));
     o.value("probe-face", "N", "volume: each probe's cube map N x N rays per face", concat(v.faceSize));
+    o.value("lpv-cells", "N", "lpv: N cells along the scene's longest side (8..24 typical; finer is slower, not more accurate)",
+            concat(PropagationVolumeSettings().cells));
     o.value("vpls", "N", "vpl: N virtual point lights per bounce, and N/2 negative ones (100..1000 typical)",
             concat(VirtualPointLightSettings().lights));
 }
@@ -83,6 +86,8 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.volume.probes = o.integer("probes", 1, 64);
     c.volume.faceSize = o.integer("probe-face", 2, 128);
     c.volume.validate();
+    c.lpv.cells = o.integer("lpv-cells", 2, 128);
+    c.lpv.validate();
     c.vpl.lights = o.integer("vpls", 1, 65536);
     c.vpl.validate();
     c.glowRatio = o.number("glow-ratio", 0, 0.999);
