@@ -153,45 +153,20 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
     for (int k = 0; k < grid_.dims[2]; ++k)
         for (int j = 0; j < grid_.dims[1]; ++j)
             for (int i = 0; i < grid_.dims[0]; ++i) {
-                const Vec3 p = grid_.position(i, j, k);
-                ShRgb field;
-                std::array<Rgb, 6> axisIrradiance{};  // of these rays, facing ±x, ±y, ±z
-                double backSolidAngle = 0, closedBackSolidAngle = 0;
-                for (size_t r = 0; r < rayCount; ++r) {
-                    const Vec3& d = directions.direction[r];
-                    const double w = directions.solidAngle[r];
-                    RayHit hit;
-                    if (!rays_->intersect(p, d, 0.0, kInf, hit)) continue;
-                    const SurfacePoint y = rays_->surface(hit);
-                    // The side the ray arrives on; a closed object's inside is black.
-                    Vec3 side = y.geometricNormal;
-                    if (glm::dot(side, d) > 0) {
-                        backSolidAngle += w;
-                        if (closed_[hit.mesh]) {
-                            closedBackSolidAngle += w;
-                            continue;
-                        }
-                        side = -side;
-                    }
-                    Rgb e(0.0);
-                    for (const auto& lookup : lookups) e += lookup->at(y.position, side);
-                    const Rgb radiance = y.kd(scene_) / kPi * e;
-                    field.add(d, radiance, w);
-                    for (size_t a = 0; a < 6; ++a) axisIrradiance[a] += directions.axisCosine[r][a] * radiance;
-                }
+                const Capture c = capture(grid_.position(i, j, k), directions, lookups);
                 const size_t index = grid_.index(i, j, k);
-                source->fields[index] = field;
+                source->fields[index] = c.field;
                 if (settings_.axisCorrection)
                     for (int a = 0; a < 6; ++a) {
                         Vec3 axis(0.0);
                         axis[a / 2] = a % 2 ? -1.0 : 1.0;
-                        source->residual[index][size_t(a)] = axisIrradiance[size_t(a)] - field.irradiance(axis);
+                        source->residual[index][size_t(a)] = c.axisIrradiance[size_t(a)] - c.field.irradiance(axis);
                     }
                 // Mostly back faces, or a quarter of the sphere of a closed
                 // object's inside (which no probe outside it sees at all: a
                 // probe inside a block standing on the floor sees the floor
                 // below it from the front).
-                if (settings_.skipInside && (backSolidAngle > 2 * kPi || closedBackSolidAngle > kPi)) {
+                if (settings_.skipInside && (c.backSolidAngle > 2 * kPi || c.closedBackSolidAngle > kPi)) {
                     source->inside[index] = 1;
                     ++source->insideCount;
                 }
@@ -204,6 +179,34 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
         if (s) held += s->fields.size() * (sizeof(ShRgb) + sizeof(s->residual[0])) + s->inside.size();
     stats_.sourceBytes = held;
     stats_.buildSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+IrradianceVolume::Capture IrradianceVolume::capture(const Vec3& p, const CubeMapDirections& directions,
+                                                    const std::vector<std::unique_ptr<MeshIrradianceLookup>>& lookups) const {
+    Capture c;
+    for (size_t r = 0; r < directions.direction.size(); ++r) {
+        const Vec3& d = directions.direction[r];
+        const double w = directions.solidAngle[r];
+        RayHit hit;
+        if (!rays_->intersect(p, d, 0.0, kInf, hit)) continue;
+        const SurfacePoint y = rays_->surface(hit);
+        // The side the ray arrives on; a closed object's inside is black.
+        Vec3 side = y.geometricNormal;
+        if (glm::dot(side, d) > 0) {
+            c.backSolidAngle += w;
+            if (closed_[hit.mesh]) {
+                c.closedBackSolidAngle += w;
+                continue;
+            }
+            side = -side;
+        }
+        Rgb e(0.0);
+        for (const auto& lookup : lookups) e += lookup->at(y.position, side);
+        const Rgb radiance = y.kd(scene_) / kPi * e;
+        c.field.add(d, radiance, w);
+        for (size_t a = 0; a < 6; ++a) c.axisIrradiance[a] += directions.axisCosine[r][a] * radiance;
+    }
+    return c;
 }
 
 void IrradianceVolume::releaseSource(size_t slot) {

@@ -64,6 +64,7 @@
 namespace ml {
 
 class EmbreeScene;
+class MeshIrradianceLookup;
 
 struct IrradianceVolumeSettings {
     // Probes along the scene's longest side, its ends included; the other
@@ -153,6 +154,16 @@ public:
     Rgb probeIrradiance(size_t slot, size_t index, const Vec3& n) const;
 
 private:
+    // What one probe's rays saw.
+    struct Capture {
+        ShRgb field;
+        std::array<Rgb, 6> axisIrradiance{};  // of these rays, for normals +x, −x, +y, −y, +z, −z
+        double backSolidAngle = 0;            // sr of back faces seen
+        double closedBackSolidAngle = 0;      // of those, the insides of closed meshes
+    };
+    Capture capture(const Vec3& p, const CubeMapDirections& directions,
+                    const std::vector<std::unique_ptr<MeshIrradianceLookup>>& lookups) const;
+
     struct Source {
         std::vector<ShRgb> fields;  // one per probe, ProbeGrid::index order
         // Per probe, exact minus SH irradiance for normals +x, −x, +y, −y,
