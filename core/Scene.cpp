@@ -233,7 +233,7 @@ bool Scene::hasTextures() const {
     for (const Mesh& m : meshes)
         if (!m.texcoords.empty())
             for (uint32_t mat : m.materials)
-                if (materials[mat].kdMap || materials[mat].keMap) return true;
+                if (materials[mat].kdMap || materials[mat].keMap || materials[mat].alphaMap) return true;
     return false;
 }
 

@@ -31,10 +31,22 @@ struct Material {
     // [0, 1]) and keMap.value(uv) on the faces of meshes with texcoords.
     TextureMap kdMap;
     TextureMap keMap;
+    // A cut-out (glTF alphaMode MASK with an alpha in its base colour
+    // texture, MTL map_d): the surface is absent where its coverage,
+    // alphaMap.factor.r × the image's Texture::coverage at uv, is below
+    // alphaCutoff: for shading (the compositor discards the pixel) and for
+    // shadows (Embree and the GPU direct sampler's occluders skip the point).
+    // The cache's meshes still cover the whole face. Empty: opaque.
+    TextureMap alphaMap;
+    double alphaCutoff = 0.5;  // in (0, 1]; glTF's default 0.5
     // A mirror or glass layer over Kd (SmoothSpecular.h); none by default.
     SmoothSpecular smooth;
 
     bool emissive() const { return ke.r > 0 || ke.g > 0 || ke.b > 0; }
+    // Whether the cut-out removes the surface at mesh coordinate `uv`.
+    bool cutAway(Vec2 uv) const {
+        return alphaMap && alphaMap.factor.r * alphaMap.image->coverage(alphaMap.lookup(uv)) < alphaCutoff;
+    }
     // A Lambertian material (no Ks) emitting `ke` from its front face.
     static Material diffuse(std::string name, const Rgb& kd, const Rgb& ke = Rgb(0.0)) {
         Material m;

@@ -442,6 +442,35 @@ TEST_F(Gltf, SrgbTextureMeanBecomesKd) {
         << joined(scene.warnings);
 }
 
+TEST_F(Gltf, MaskedAlphaTextureIsACutOutPerPixel) {
+    // 2 x 1 texels, opaque | transparent, magnified to the nearest: the
+    // material keeps the texture as its cut-out (factor alpha 0.9 × the
+    // texel's alpha against the cut-off 0.6), its triangles all kept.
+    const unsigned char texels[8] = {200, 100, 50, 255, 200, 100, 50, 0};
+    std::vector<unsigned char> png;
+    stbi_write_png_to_func(
+        [](void* out, void* data, int size) {
+            auto* v = static_cast<std::vector<unsigned char>*>(out);
+            v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
+        },
+        &png, 2, 1, 4, texels, 8);
+    GltfFile f = quadScene({}, {{"name", "leaf"}, {"alphaMode", "MASK"}, {"alphaCutoff", 0.6},
+                                {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}},
+                                                          {"baseColorFactor", {1, 1, 1, 0.9}}, {"metallicFactor", 0}}}});
+    f.add("images", {{"uri", "data:image/png;base64," + base64(png)}});
+    f.add("samplers", {{"magFilter", 9728}});
+    f.add("textures", {{"source", 0}, {"sampler", 0}});
+    const Scene scene = loadGltf(f.writeGltf(path("leaf.gltf")));
+    ASSERT_EQ(scene.materials.size(), 1u);
+    const Material& m = scene.materials[0];
+    ASSERT_TRUE(bool(m.alphaMap));
+    EXPECT_EQ(m.alphaCutoff, 0.6);
+    EXPECT_FALSE(m.cutAway(Vec2(0.25, 0.5)));  // 0.9 × 1 >= 0.6
+    EXPECT_TRUE(m.cutAway(Vec2(0.75, 0.5)));   // 0.9 × 0 < 0.6
+    EXPECT_EQ(scene.triangleCount(), 2u);
+    EXPECT_FALSE(hasWarning(scene, "materials[0] 'leaf': alpha texture ignored, rendered opaque"));
+}
+
 // --- Cameras and lights -------------------------------------------------------------
 
 TEST_F(Gltf, FirstPerspectiveCameraBecomesTheScenesCamera) {

@@ -453,34 +453,45 @@ TEST_F(ObjLoaderTextures, MapKeWithKeZeroOrNoneMakesALight) {
     EXPECT_TRUE(hasWarning(scene, mtl + ":8: texture map_Ke 'grey.png' averaged to Ke (0.432, 0.863, 1.73)"));
 }
 
-TEST_F(ObjLoaderTextures, MapDCutsOutTrianglesMostlyTransparent) {
+TEST_F(ObjLoaderTextures, MapDCutsOutPerPixelWhereFacesHaveVt) {
     png("alpha.png", 2, 1, 4, {255, 255, 255, 255, 255, 255, 255, 0});  // opaque | transparent
     png("mask.png", 2, 1, 1, {255, 0});                                  // a grey mask, no alpha
+    png("clear.png", 2, 1, 4, {255, 255, 255, 0, 255, 255, 255, 60});     // mean coverage 0.12
     const std::string mtl = write("t.mtl",
                                   "newmtl leaf\nmap_d alpha.png\n"
-                                  "newmtl masked\nmap_d -o 0.5 0 mask.png\n");
+                                  "newmtl masked\nmap_d -o 0.5 0 mask.png\n"
+                                  "newmtl clear\nmap_d clear.png\n");
     const std::string obj = write("t.obj", std::string("mtllib t.mtl\n") + kSquare +
                                                "usemtl leaf\n"
-                                               "f 1/1 2/2 4/4\n"   // line 16: opaque
-                                               "f 1/2 2/5 3/6\n"   // 17: transparent
-                                               "f 1/1 2/2 3/3\n"   // 18: opaque
+                                               "f 1/1 2/2 4/4\n"   // line 16: on the opaque texel
+                                               "f 1/2 2/5 3/6\n"   // 17: on the transparent one
                                                "usemtl masked\n"
-                                               "f 1/1 2/2 4/4\n"   // 20: moved onto the black texel
-                                               "f 1/2 2/5 3/6\n"); // 21: moved onto the white one
+                                               "f 1/1 2/2 4/4\n"   // 19
+                                               "usemtl clear\n"
+                                               "f 1/1 2/2 4/4\n"   // 21: with vt, per pixel
+                                               "f 1 2 3\n");       // 22: no vt, mean coverage: removed
     const Scene scene = loadObj(obj);
     ASSERT_EQ(scene.meshes.size(), 1u);
-    EXPECT_EQ(scene.meshes[0].sourceLines, (std::vector<int>{16, 18, 21}));
-    EXPECT_TRUE(hasWarning(scene, mtl + ":2: texture map_d 'alpha.png' cuts out 1 of 3 triangles (mean coverage "
-                                        "below 0.5); the others render opaque (cut-outs are per triangle until "
-                                        "per-pixel texturing exists)"))
+    const Mesh& mesh = scene.meshes[0];
+    EXPECT_EQ(mesh.sourceLines, (std::vector<int>{16, 17, 19, 21}));
+    ASSERT_EQ(mesh.texcoords.size(), mesh.positions.size());
+    const auto material = [&](const std::string& name) -> const Material& {
+        return *std::find_if(scene.materials.begin(), scene.materials.end(),
+                             [&](const Material& m) { return m.name == name; });
+    };
+    // Mesh coordinates hold (u, 1 − v); the texels split at u = 0.5.
+    EXPECT_FALSE(material("leaf").cutAway(Vec2(0.25, 0.5)));
+    EXPECT_TRUE(material("leaf").cutAway(Vec2(0.75, 0.5)));
+    EXPECT_TRUE(material("masked").cutAway(Vec2(0.25, 0.5)));  // -o 0.5: onto the black texel
+    EXPECT_FALSE(material("masked").cutAway(Vec2(0.75, 0.5)));
+    EXPECT_EQ(material("leaf").alphaCutoff, 0.5);
+    EXPECT_TRUE(hasWarning(scene, mtl + ":6: texture map_d 'clear.png' cuts out 1 of the 1 triangle without vt (the "
+                                        "image's mean coverage is below 0.5); faces with vt are cut out per pixel"))
         << joined(scene.warnings);
-    EXPECT_TRUE(hasWarning(scene, mtl + ":4: texture map_d 'mask.png' cuts out 1 of 2 triangles (mean coverage "
-                                        "below 0.5); the others render opaque (cut-outs are per triangle until "
-                                        "per-pixel texturing exists)"));
 
     // Nothing left is an error, not an empty scene.
     const std::string all = write("all.obj", std::string("mtllib t.mtl\n") + kSquare +
-                                                 "usemtl leaf\nf 1/2 2/5 3/6\n");
+                                                 "usemtl clear\nf 1 2 3\n");
     EXPECT_EQ(std::string(loadError(all).what()), all + ": map_d cuts out every triangle (1)");
 }
 

@@ -879,8 +879,9 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
     for (double v : m.emissiveFactor)
         if (!(v >= 0)) fail(at, ".emissiveFactor has a negative value");
 
-    // Alpha: what glTF would cut away or blend, Meshlight renders opaque
-    // except a whole material below its cut-off.
+    // Alpha: MASK cuts away a whole material whose factor is below its
+    // cut-off, and per pixel where the base colour texture's alpha takes it
+    // below (Material::alphaMap, for shading and shadows); BLEND is opaque.
     const double alpha = pbr.baseColorFactor[3];
     const std::shared_ptr<const Texture> base = texture(pbr.baseColorTexture, baseAt + ".baseColorTexture");
     const double textureAlpha = base ? alpha * base->minAlpha : alpha;
@@ -894,7 +895,11 @@ MaterialChoice GltfReader::chooseMaterial(int index) {
                  " (alphaMode MASK): its ", count(triangles, "triangle is", "triangles are"), " removed");
             return choice;
         }
-        if (textureAlpha < m.alphaCutoff) warn(named, ": alpha texture ignored, rendered opaque");
+        if (textureAlpha < m.alphaCutoff) {  // only with a texture: alpha >= the cut-off here
+            choice.material.alphaMap.image = base;
+            choice.material.alphaMap.factor = Rgb(alpha);
+            choice.material.alphaCutoff = m.alphaCutoff;
+        }
     } else if (m.alphaMode == "BLEND") {
         if (alpha < 1) warn(named, ": alpha blending (alpha ", alpha, ") ignored, rendered opaque");
         else if (textureAlpha < 1) warn(named, ": alpha texture ignored, rendered opaque");

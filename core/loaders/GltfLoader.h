@@ -67,8 +67,10 @@ struct GltfOptions {
 //   is left out: metallicFactor >= 0.5 (rough metals), roughness of glass,
 //   normalTexture, and material extensions other than those above
 //   (KHR_materials_specular, _clearcoat, ...). alphaMode MASK with a baseColorFactor alpha below
-//   alphaCutoff removes the material's triangles (warning); alpha that would
-//   cut out or blend otherwise is ignored and rendered opaque (warning).
+//   alphaCutoff removes the material's triangles (warning); MASK with a
+//   baseColorTexture whose alpha takes it below the cut-off somewhere is a
+//   cut-out per pixel (Material::alphaMap: the factor's alpha × the
+//   texture's), for shading and for shadows; BLEND is rendered opaque (warning).
 // Camera: the first node in traversal order with a perspective camera gives
 //   Scene::camera (its world position, its -Z as the view direction, its +Y as
 //   up, yfov); orthographic cameras are ignored with a warning.

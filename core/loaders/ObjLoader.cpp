@@ -166,8 +166,8 @@ constexpr TextureOption kTextureOptions[] = {
     {"-type", 1, false},
 };
 
-// map_d: a triangle whose mean coverage over its footprint is below this is
-// cut out, the others are opaque.
+// map_d: the surface is cut out where its coverage is below this (per pixel
+// on faces with vt; a face without vt by the image's mean coverage).
 constexpr double kCutOutCoverage = 0.5;
 
 // Returns false unless the whole token is a finite number.
@@ -824,7 +824,7 @@ void ObjParser::applyTextures() {
     if (!any) return;
     drawsTexture_.assign(scene_.materials.size(), false);
     for (size_t mi = 0; mi < textured.size(); ++mi)
-        drawsTexture_[mi] = textured[mi] && (textured[mi]->mapKd || textured[mi]->mapKe);
+        drawsTexture_[mi] = textured[mi] && (textured[mi]->mapKd || textured[mi]->mapKe || textured[mi]->mapD);
     std::vector<std::vector<RawTriangle*>> trianglesOf(scene_.materials.size());
     for (Group& g : groups_)
         for (RawTriangle& t : g.triangles)
@@ -836,6 +836,10 @@ void ObjParser::applyTextures() {
         std::vector<RawTriangle*>& triangles = trianglesOf[mi];
         Material& m = scene_.materials[mi];
         if (lm->mapD) {
+            // Per pixel where faces have vt (Material::alphaMap, for shading
+            // and shadows); a face without vt is kept or cut out whole.
+            m.alphaMap = lm->mapD->map(loadTexture(*lm->mapD), Rgb(1.0));
+            m.alphaCutoff = kCutOutCoverage;
             cutOut(*lm->mapD, triangles);
             triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
                                            [](const RawTriangle* t) { return t->cutOut; }),
@@ -891,23 +895,20 @@ void ObjParser::cutOut(const TextureStatement& statement, const std::vector<RawT
     std::optional<double> imageCoverage;  // computed once, when a triangle has no vt
     size_t removed = 0, withoutUv = 0;
     for (RawTriangle* t : triangles) {
-        double coverage;
-        if (t->hasTexcoords()) {
-            coverage = footprintCoverage(texture, lookups(statement, *t));
-        } else {
-            if (!imageCoverage) imageCoverage = texture.imageCoverage();
-            coverage = *imageCoverage;
-            ++withoutUv;
-        }
-        t->cutOut = coverage < kCutOutCoverage;
+        if (t->hasTexcoords()) continue;  // cut out per pixel (Material::alphaMap)
+        if (!imageCoverage) imageCoverage = texture.imageCoverage();
+        ++withoutUv;
+        t->cutOut = *imageCoverage < kCutOutCoverage;
         removed += t->cutOut;
     }
     cutOutTriangles_ += removed;
-    scene_.warnings.push_back(concat(
-        statement.at.str(), ": texture ", statement.named(), " cuts out ", removed, " of ",
-        count(triangles.size(), "triangle", "triangles"), " (mean coverage below ", kCutOutCoverage,
-        "); the others render opaque (cut-outs are per triangle until per-pixel texturing exists)"));
-    if (withoutUv > 0) warnWithoutUv(statement, withoutUv);
+    if (withoutUv > 0) {
+        scene_.warnings.push_back(concat(statement.at.str(), ": texture ", statement.named(), " cuts out ", removed,
+                                         " of the ", count(withoutUv, "triangle", "triangles"),
+                                         " without vt (the image's mean coverage is below ", kCutOutCoverage,
+                                         "); faces with vt are cut out per pixel"));
+        warnWithoutUv(statement, withoutUv);
+    }
 }
 
 // With `albedoFactor`, each triangle with vt keeps factor × its own mean

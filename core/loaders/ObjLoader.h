@@ -46,10 +46,11 @@ struct ObjOptions {
 //     statement gives the value ("texture map_Kd 'wood.png' averaged to Kd
 //     (r, g, b)"). With map_Ke, no Ke or Ke 0 0 0 (what exporters write) is
 //     taken as Ke 1 1 1: the map is the emission.
-//   map_d cuts out, per triangle until per-pixel texturing exists: a
-//     triangle whose mean coverage over its footprint (the alpha channel, or
-//     the grey level of an image without one) is below 0.5 is removed, the
-//     others are opaque; one warning counts them.
+//   map_d cuts out per pixel (Material::alphaMap, for shading and shadows)
+//     where its coverage (the alpha channel, or the grey level of an image
+//     without one) is below 0.5, on faces with vt; a face without vt is
+//     removed when the image's mean coverage is below 0.5, else opaque (one
+//     warning counts them).
 // Texture options: -o u [v [w]] offsets and -s u [v [w]] scales the texture
 // coordinates (vt × s + o; w unused), -clamp on clamps them to the image's
 // edge (else the image repeats); the other options of the MTL specification

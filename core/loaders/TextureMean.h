@@ -27,7 +27,6 @@ std::string decodeTexture(const unsigned char* bytes, size_t size, Texture& out)
 // the centroids of its k² congruent sub-triangles, k about the square root
 // of the texels it covers, between 8 and 64.
 Rgb footprintMean(const Texture& texture, const std::array<Vec2, 3>& uv);
-double footprintCoverage(const Texture& texture, const std::array<Vec2, 3>& uv);
 
 // The area-weighted mean of a texture over the triangles of a material, as
 // they show it: add each triangle with its world area.

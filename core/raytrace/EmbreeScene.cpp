@@ -42,6 +42,10 @@ struct EmbreeScene::Impl {
     RTCScene rtc = nullptr;
     // Per mesh, per triangle: 1 + index of its light, or 0.
     std::vector<std::vector<int32_t>> lightIds;
+    // Per mesh: some face's material is a cut-out (Material::alphaMap) and
+    // the mesh has texture coordinates; then every query runs the filter.
+    std::vector<char> cutOutMeshes;
+    bool anyCutOut = false;
 
     // An intersect context extended with what the filter needs (Embree
     // passes the context pointer back to the filter).
@@ -67,6 +71,17 @@ struct EmbreeScene::Impl {
             lightIds[m].assign(scene.meshes[m].triangles.size(), 0);
         for (size_t l = 0; l < scene.lights.size(); ++l)
             for (uint32_t t : scene.lights[l].triangles) lightIds[scene.lights[l].mesh][t] = int32_t(l + 1);
+        cutOutMeshes.assign(scene.meshes.size(), 0);
+        for (size_t m = 0; m < scene.meshes.size(); ++m) {
+            const Mesh& mesh = scene.meshes[m];
+            if (mesh.texcoords.empty()) continue;
+            for (uint32_t mi : mesh.materials)
+                if (scene.materials[mi].alphaMap) {
+                    cutOutMeshes[m] = 1;
+                    anyCutOut = true;
+                    break;
+                }
+        }
 
         for (size_t m = 0; m < scene.meshes.size(); ++m) {
             const Mesh& mesh = scene.meshes[m];
@@ -113,13 +128,30 @@ struct EmbreeScene::Impl {
         device = nullptr;
     }
 
-    // Rejects hits the RayFilter excludes (called by Embree per candidate hit).
+    // Whether the hit at Embree's barycentrics (u, v) of triangle `prim` of
+    // mesh `geom` falls where its material's cut-out removes the surface.
+    bool cutAway(unsigned geom, unsigned prim, float u, float v) const {
+        if (!cutOutMeshes[geom]) return false;
+        const Mesh& mesh = scene.meshes[geom];
+        const Material& m = scene.materials[mesh.materials[prim]];
+        if (!m.alphaMap) return false;
+        const glm::uvec3 idx = mesh.triangles[prim];
+        const Vec2 t0 = mesh.texcoords[idx.x];
+        return m.cutAway(t0 + double(u) * (mesh.texcoords[idx.y] - t0) + double(v) * (mesh.texcoords[idx.z] - t0));
+    }
+
+    // Rejects hits the RayFilter excludes, and those a cut-out removes
+    // (called by Embree per candidate hit, for closest hits and occlusion alike).
     static void filterHits(const RTCFilterFunctionNArguments* args) {
         const auto* fc = reinterpret_cast<const FilterContext*>(args->context);
         for (unsigned i = 0; i < args->N; ++i) {
             if (args->valid[i] != -1) continue;
             const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
             const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+            if (fc->impl->cutAway(geom, prim, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i))) {
+                args->valid[i] = 0;
+                continue;
+            }
             const int32_t id = fc->impl->lightIds[geom][prim];
             const RayFilter& f = fc->filter;
             bool keep = true;
@@ -136,7 +168,7 @@ struct EmbreeScene::Impl {
 
     void initContext(FilterContext& fc, const RayFilter& filter, const Vec3& rayOrigin) const {
         rtcInitIntersectContext(&fc.context);
-        fc.context.filter = filter.any() ? &Impl::filterHits : nullptr;
+        fc.context.filter = filter.any() || anyCutOut ? &Impl::filterHits : nullptr;
         fc.impl = this;
         fc.filter = filter;
         fc.origin = rayOrigin;

@@ -12,6 +12,13 @@
 // coordinates (at most ~1e-7 of the scene's size after centring). A ray that
 // leaves a surface therefore starts from a point lifted off it by
 // rayOffset(p) along the geometric normal (spawnPoint), see below.
+//
+// Cut-outs. Where a material's cut-out removes the surface (glTF alphaMode
+// MASK, MTL map_d: Material::cutAway at the hit's texture coordinate), every
+// query passes through: closest hits and occlusion alike, so the path
+// tracer, the ray-traced samplers, punctual shadows and the ray gather all
+// see the holes. The test runs in Embree's filter, per candidate hit, on
+// meshes with such a material only.
 #pragma once
 
 #include "core/Scene.h"

@@ -12,8 +12,11 @@
 #include "meshlight_gpu_shaders.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstring>
+#include <map>
 
 namespace ml {
 
@@ -71,10 +74,70 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 // GPU triangle corner (std430 vec4): position relative to the buffer's
 // origin; w of a triangle's first corner holds the bits of 1 + the index of
-// the light the face belongs to (0 for non-emitters).
+// the light the face belongs to (0 for non-emitters), of its second 1 + the
+// index of its cut-out record (CutOuts; 0 for opaque faces).
 struct Corner {
     float x, y, z;
-    uint32_t lightId;
+    uint32_t id;
+};
+
+// Occluders with a cut-out (Material::alphaMap), for the coverage pass's
+// MASKS variant (direct_coverage.frag): per face two vec4, its corners'
+// texture coordinates and its material's slot; per slot a header of 12
+// words (texel offset, width, height, wrap and filter flags, then as float
+// bits the coverage factor, cut-off, scale and offset of the map) and the
+// image's coverage (Texture::coverage of each texel, 0..255), four texels a
+// word. The shader reads it as Texture::coverage does: wrapped, nearest or
+// bilinear.
+struct CutOuts {
+    std::vector<glm::vec4> faces;
+    std::vector<uint32_t> images;
+    std::map<const Material*, uint32_t> slots;
+
+    // 1 + the record of face t of `mesh` (0 when it is opaque).
+    uint32_t add(const Scene& scene, const Mesh& mesh, size_t t) {
+        const Material& m = scene.materials[mesh.materials[t]];
+        if (!m.alphaMap || mesh.texcoords.empty()) return 0;
+        const glm::uvec3 v = mesh.triangles[t];
+        const glm::vec2 a(mesh.texcoords[v.x]), b(mesh.texcoords[v.y]), c(mesh.texcoords[v.z]);
+        faces.push_back(glm::vec4(a, b));
+        faces.push_back(glm::vec4(c, glm::uintBitsToFloat(slot(m)), 0.0f));
+        return uint32_t(faces.size() / 2);
+    }
+    uint32_t slot(const Material& m) {
+        const auto found = slots.find(&m);
+        if (found != slots.end()) return found->second;
+        const uint32_t s = uint32_t(slots.size());
+        slots.emplace(&m, s);
+        // Headers first: images start after room for every slot's header is
+        // known, so they are appended to a list of their own and joined later.
+        const Texture& t = *m.alphaMap.image;
+        const TextureMap& map = m.alphaMap;
+        headers.push_back({uint32_t(texels.size()), uint32_t(t.width), uint32_t(t.height),
+                           uint32_t(t.wrapS) | uint32_t(t.wrapT) << 2 | (t.nearest ? 16u : 0u),
+                           glm::floatBitsToUint(float(map.factor.r)), glm::floatBitsToUint(float(m.alphaCutoff)),
+                           glm::floatBitsToUint(float(map.scale.x)), glm::floatBitsToUint(float(map.scale.y)),
+                           glm::floatBitsToUint(float(map.offset.x)), glm::floatBitsToUint(float(map.offset.y)), 0u,
+                           0u});
+        for (int y = 0; y < t.height; ++y)
+            for (int x = 0; x < t.width; ++x)
+                texels.push_back(uint8_t(std::lround(
+                    255 * t.coverage(Vec2((x + 0.5) / t.width, (y + 0.5) / t.height)))));
+        return s;
+    }
+    // The image buffer: every header (12 words each), then the texels.
+    void finish() {
+        const uint32_t base = uint32_t(headers.size() * 12);
+        for (const auto& h : headers) {
+            std::array<uint32_t, 12> w = h;
+            w[0] += 4 * base;  // texel index in the whole buffer, four a word
+            images.insert(images.end(), w.begin(), w.end());
+        }
+        images.resize(base + (texels.size() + 3) / 4, 0u);
+        for (size_t i = 0; i < texels.size(); ++i) images[base + i / 4] |= uint32_t(texels[i]) << (8 * (i % 4));
+    }
+    std::vector<std::array<uint32_t, 12>> headers;
+    std::vector<uint8_t> texels;
 };
 
 glm::mat4 toFloat(const Mat4& m) { return glm::mat4(m); }
@@ -186,6 +249,10 @@ struct DirectLightSampler::Impl {
     DirectPhaseTimes times;
 
     std::vector<EmitterTexture> emitters;  // per light: its emission texture, if any
+    // Occluders with cut-outs (CutOuts): the MASKS variant of the coverage
+    // pass tests them per sample; a scene without any compiles MASKS 0.
+    bool masks = false;
+    GlBuffer maskFaces, maskImages;
     Vec3 origin;        // occluder positions are stored relative to this
     double sceneSize;   // bounding diagonal
     OccluderBvh bvh;
@@ -247,9 +314,10 @@ struct DirectLightSampler::Impl {
         jitter::strata(bits, sx, sy);
         const std::string defines = concat("#define BITS ", bits, "\n#define STRATA_X ", sx,
                                            "\n#define STRATA_Y ", sy, "\n#define JITTER ",
-                                           jitterOn ? "true" : "false", "\n");
+                                           jitterOn ? "true" : "false", "\n#define MASKS ", masks ? 1 : 0, "\n");
+        const std::string maskDefine = concat("#define MASKS ", masks ? 1 : 0, "\n");
         coverage = GlProgram(gl, {
-            {GL_VERTEX_SHADER, "direct_coverage.vert", glslSource({shaders::direct_coverage_vert})},
+            {GL_VERTEX_SHADER, "direct_coverage.vert", glslSource({maskDefine.c_str(), shaders::direct_coverage_vert})},
             {GL_FRAGMENT_SHADER, "direct_coverage.frag",
              glslSource({defines.c_str(), shaders::common_jitter_glsl, shaders::direct_coverage_frag})},
         });
@@ -285,19 +353,35 @@ struct DirectLightSampler::Impl {
             for (uint32_t t : light.triangles) lightOf[meshStart[light.mesh] + t] = uint32_t(l + 1);
             maxLightTriangles = std::max(maxLightTriangles, light.triangles.size());
         }
+        // Each triangle's cut-out record, in scene order (the order of `tris`).
+        CutOuts cutOuts;
+        std::vector<uint32_t> maskOf;
+        maskOf.reserve(tris.size());
+        for (const Mesh& m : scene.meshes)
+            for (size_t t = 0; t < m.triangles.size(); ++t) maskOf.push_back(cutOuts.add(scene, m, t));
         std::vector<Corner> corners;
         corners.reserve(tris.size() * 3);
         leafTriangles.reserve(tris.size());
         leafLightId.reserve(tris.size());
+        std::vector<uint32_t> polygonId;  // leafLightId, with faces that may have holes marked
         for (uint32_t index : bvh.order()) {
+            int k = 0;
             for (const Vec3& p : tris[index]) {
                 const glm::vec3 r(p - origin);
-                corners.push_back({r.x, r.y, r.z, lightOf[index]});
+                corners.push_back({r.x, r.y, r.z, k == 1 ? maskOf[index] : lightOf[index]});
+                ++k;
             }
             leafTriangles.push_back(tris[index]);
             leafLightId.push_back(lightOf[index]);
+            polygonId.push_back(maskOf[index] && !lightOf[index] ? OccluderPolygons::kHoled : lightOf[index]);
         }
-        polygons = std::make_unique<OccluderPolygons>(leafTriangles, leafLightId);
+        polygons = std::make_unique<OccluderPolygons>(leafTriangles, polygonId);
+        masks = !cutOuts.faces.empty();
+        if (masks) {
+            cutOuts.finish();
+            maskFaces = makeBuffer(gl, cutOuts.faces.size() * sizeof(glm::vec4), cutOuts.faces.data());
+            maskImages = makeBuffer(gl, cutOuts.images.size() * sizeof(uint32_t), cutOuts.images.data());
+        }
         occluderBuffer = makeBuffer(gl, std::max<size_t>(corners.size(), 1) * sizeof(Corner), corners.data());
         emptyVao = makeVertexArray(gl);
     }
@@ -626,6 +710,10 @@ struct DirectLightSampler::Impl {
 
     void setPassState(bool lightPass, bool planar, size_t lightIndex, const glm::mat4& clipFrom) {
         gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, lightPass ? lightBufferDrawn : occluderBuffer.id());
+        if (masks) {
+            gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, maskFaces.id());
+            gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, maskImages.id());
+        }
         gl.UniformMatrix4fv(loc.clipFromLocal, 1, GL_FALSE, &clipFrom[0][0]);
         gl.Uniform1i(loc.cullBackFaces, lightPass ? 1 : 0);
         gl.Uniform1ui(loc.skipLightId, lightPass ? 0u : uint32_t(lightIndex + 1));

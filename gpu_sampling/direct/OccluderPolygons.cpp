@@ -92,7 +92,7 @@ bool OccluderPolygons::hideAll(const std::vector<Polygon3>& pieces, const std::v
     if (pieces.empty()) return false;
     for (const OccluderBvh::Range& r : ranges)
         for (uint32_t i = r.first; i < r.first + r.count; ++i) {
-            if (lightId_[i] == rules.skipLightId && rules.skipLightId != 0) continue;
+            if ((lightId_[i] == rules.skipLightId && rules.skipLightId != 0) || lightId_[i] == kHoled) continue;
             const Triangle3& t = triangles_[i];
             Vec3 corners[4];
             int count = 0;

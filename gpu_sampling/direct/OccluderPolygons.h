@@ -34,7 +34,7 @@ namespace ml {
 class OccluderPolygons {
 public:
     // `triangles` in the BVH's leaf order, `lightId[i]` 1 + the light
-    // triangle i belongs to (0: none), as the sampler keeps them.
+    // triangle i belongs to (0: none), as the sampler keeps them, or kHoled.
     OccluderPolygons(const std::vector<Triangle3>& triangles, const std::vector<uint32_t>& lightId);
 
     // What the sampler ignores of an occluder, in world units: nothing
@@ -48,6 +48,11 @@ public:
         double planeTolerance = 0;
         uint32_t skipLightId = 0;  // 1 + the sampled light: its own triangles do not occlude it
     };
+
+    // The lightId of a face with a cut-out (Material::alphaMap): it may have
+    // holes anywhere, so it hides nothing here (nor joins a quad with a
+    // face that does).
+    static constexpr uint32_t kHoled = 0xffffffffu;
 
     // True when one polygon of a triangle in `ranges` hides every piece.
     bool hideAll(const std::vector<Polygon3>& pieces, const std::vector<OccluderBvh::Range>& ranges,

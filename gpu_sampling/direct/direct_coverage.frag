@@ -10,6 +10,56 @@
 noperspective in vec3 vBaryOverW;
 noperspective in float vPlaneOverW;
 
+#if MASKS
+// Occluders with a cut-out (Material::alphaMap; CutOuts in
+// DirectLightSampler.cpp): a sample where the face's coverage is below its
+// cut-off is not on the face, as Embree's filter decides for the ray-traced
+// sampler. Texture::coverage's lookup, in float: wrapped, nearest or bilinear.
+flat in uint vMask;  // 1 + the face's record, 0: opaque
+layout(std430, binding = 1) readonly buffer MaskFaces { vec4 uMaskFaces[]; };
+layout(std430, binding = 2) readonly buffer MaskImages { uint uMaskImages[]; };
+
+float maskWrapped(float u, uint mode) {  // TextureWrap: 0 repeat, 1 mirrored repeat, 2 clamp to edge
+    return mode == 2u ? clamp(u, -1.0, 2.0) : u - 2.0 * floor(u / 2.0);
+}
+
+int maskIndex(int i, int size, uint mode) {
+    if (mode == 2u) return clamp(i, 0, size - 1);
+    int period = mode == 1u ? 2 * size : size;
+    i = i - period * int(floor(float(i) / float(period)));
+    return mode == 1u && i >= size ? period - 1 - i : i;
+}
+
+float maskTexel(uint header, float x, float y) {
+    int width = int(uMaskImages[header + 1u]), height = int(uMaskImages[header + 2u]);
+    uint flags = uMaskImages[header + 3u];
+    int i = maskIndex(int(x), width, flags & 3u), j = maskIndex(int(y), height, (flags >> 2) & 3u);
+    uint texel = uMaskImages[header] + uint(j * width + i);
+    return float((uMaskImages[texel / 4u] >> (8u * (texel % 4u))) & 255u) / 255.0;
+}
+
+// Whether the face is cut away at barycentrics `bary` (summing to 1).
+bool cutAway(vec3 bary) {
+    vec4 a = uMaskFaces[2u * (vMask - 1u)], b = uMaskFaces[2u * (vMask - 1u) + 1u];
+    uint header = 12u * floatBitsToUint(b.z);
+    vec2 uv = bary.x * a.xy + bary.y * a.zw + bary.z * b.xy;
+    uv = uv * vec2(uintBitsToFloat(uMaskImages[header + 6u]), uintBitsToFloat(uMaskImages[header + 7u])) +
+         vec2(uintBitsToFloat(uMaskImages[header + 8u]), uintBitsToFloat(uMaskImages[header + 9u]));
+    uint flags = uMaskImages[header + 3u];
+    float x = maskWrapped(uv.x, flags & 3u) * float(uMaskImages[header + 1u]);
+    float y = maskWrapped(uv.y, (flags >> 2) & 3u) * float(uMaskImages[header + 2u]);
+    float coverage;
+    if ((flags & 16u) != 0u) {
+        coverage = maskTexel(header, floor(x), floor(y));
+    } else {
+        float x0 = floor(x - 0.5), y0 = floor(y - 0.5), fx = x - 0.5 - x0, fy = y - 0.5 - y0;
+        coverage = mix(mix(maskTexel(header, x0, y0), maskTexel(header, x0 + 1.0, y0), fx),
+                       mix(maskTexel(header, x0, y0 + 1.0), maskTexel(header, x0 + 1.0, y0 + 1.0), fx), fy);
+    }
+    return uintBitsToFloat(uMaskImages[header + 4u]) * coverage < uintBitsToFloat(uMaskImages[header + 5u]);
+}
+#endif
+
 // The same bits to both images: the first becomes "visible light" (occluders
 // AND into it), the second stays "light" (masked during the occluder pass).
 layout(location = 0) out uint outOutsideBits;
@@ -28,6 +78,9 @@ bool covers(vec2 o, vec3 bdx, vec3 bdy, float pdx, float pdy, float maxInvW) {
     float invW = b.x + b.y + b.z;
     bool inside = invW > 0.0 && invW <= maxInvW && all(greaterThanEqual(b, vec3(0.0)));
     if (uClipToLightPlane) inside = inside && (vPlaneOverW + o.x * pdx + o.y * pdy) >= uPlaneTolerance * invW;
+#if MASKS
+    if (inside && vMask != 0u) inside = !cutAway(b / invW);
+#endif
     return inside;
 }
 
@@ -54,6 +107,9 @@ void main() {
     if (any(lessThan(vBaryOverW + bReach, vec3(0.0))) || invW + wReach <= 0.0 || planeOut) discard;
     bool allInside = all(greaterThanEqual(vBaryOverW - bReach, vec3(0.0))) && invW - wReach > 0.0 &&
                      invW + wReach <= maxInvW && planeIn;
+#if MASKS
+    allInside = allInside && vMask == 0u;  // a face with holes is tested sample by sample
+#endif
     uint outside = unused;
     if (!allInside) {
         uint pixel = uint(gl_FragCoord.y) * uint(uImageSize) + uint(gl_FragCoord.x);

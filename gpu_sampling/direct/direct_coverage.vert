@@ -19,7 +19,8 @@
 // coordinates (the paper's unexplained loss of accuracy in §6.1).
 
 // Three vec4 per triangle: xyz relative to the buffer's origin; w of the
-// first holds 1 + the index of the light the face belongs to (0: none).
+// first holds 1 + the index of the light the face belongs to (0: none), w of
+// the second 1 + its cut-out record (MASKS; 0: opaque).
 layout(std430, binding = 0) readonly buffer Triangles { vec4 uTriangles[]; };
 
 uniform mat4 uClipFromLocal;    // projection × view, translation included (computed in double)
@@ -34,6 +35,9 @@ uniform float uPlaneTolerance;  // distance below which a face counts as on the 
 
 noperspective out vec3 vBaryOverW;
 noperspective out float vPlaneOverW;
+#if MASKS
+flat out uint vMask;
+#endif
 
 void dropTriangle() {
     // All six vertices at one point: zero area, no fragment.
@@ -94,6 +98,9 @@ void main() {
     // Two triangles of a quad: corners 0 1 2, 2 1 3 (bit 0: right, bit 1: top).
     int corner = i < 3 ? i : (i == 3 ? 2 : (i == 4 ? 1 : 3));
     vec4 p0 = uTriangles[3 * t], p1 = uTriangles[3 * t + 1], p2 = uTriangles[3 * t + 2];
+#if MASKS
+    vMask = floatBitsToUint(p1.w);
+#endif
     if (uSkipLightId != 0u && floatBitsToUint(p0.w) == uSkipLightId) { dropTriangle(); return; }
 
     vec3 c0 = (uClipFromLocal * vec4(p0.xyz, 1.0)).xyw;

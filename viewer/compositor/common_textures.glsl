@@ -14,7 +14,29 @@ uniform vec4 uKdTransform;  // TextureMap scale (xy) and offset (zw)
 uniform int uKeMapped;      // 1: emission scaled by the texture, else uniform
 uniform vec3 uKeScale;      // keMap.factor / Ke per channel (0 where Ke is 0): the texture relative to the light's radiance
 uniform vec4 uKeTransform;
+// A cut-out (Material::alphaMap): the face is absent where factor × its
+// coverage (alpha, or an image without alpha's grey level) is below the cut-off.
+layout(binding = 8) uniform sampler2D uAlphaTexture;
+uniform int uAlphaMapped;     // 1: the range's material has a cut-out
+uniform vec4 uAlphaTransform;
+uniform float uAlphaFactor;   // TextureMap::factor.r
+uniform float uAlphaCutoff;   // Material::alphaCutoff
+uniform int uAlphaFromGrey;   // 1: no alpha channel, the grey level is the coverage
 #endif
+
+// Whether this fragment falls in a hole of its face's cut-out. (The grey
+// level of an image without alpha is read decoded from sRGB here, not as the
+// CPU reads it: the same for the black and white masks map_d files hold.)
+bool cutAway() {
+#if TEXTURES
+    if (uAlphaMapped != 0) {
+        vec4 t = texture(uAlphaTexture, vUv * uAlphaTransform.xy + uAlphaTransform.zw);
+        float coverage = uAlphaFromGrey != 0 ? (t.r + t.g + t.b) / 3.0 : t.a;
+        return uAlphaFactor * coverage < uAlphaCutoff;
+    }
+#endif
+    return false;
+}
 
 vec3 surfaceKd(vec3 faceKd) {
 #if TEXTURES

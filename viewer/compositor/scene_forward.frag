@@ -12,6 +12,7 @@ uniform vec3 uLuxFactors;  // lm/W per channel: Photometry::factors(), efficacy 
 layout(location = 0) out vec4 outColor;
 
 void main() {
+    if (cutAway()) discard;  // a hole of a cut-out: what lies behind shows
 #if QUANTITY == 1
     vec3 value = surfaceKd(vKd);
 #else

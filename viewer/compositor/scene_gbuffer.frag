@@ -11,6 +11,7 @@ layout(location = 1) out vec4 outEmissionScale;
 #endif
 
 void main() {
+    if (cutAway()) discard;  // a hole of a cut-out: what lies behind shows
     // Emitters radiate from their front (counter-clockwise) face only.
     outSurface = vec4(surfaceKd(vKd), gl_FrontFacing && vLight >= 0 ? 2.0 + float(vLight) : 1.0);
 #if TEXTURES
