@@ -1,7 +1,9 @@
 #include "VirtualPointLights.h"
 
+#include "RadianceProxy.h"
 #include "RayGather.h"
 #include "core/Error.h"
+#include "core/Random.h"
 #include "core/raytrace/EmbreeScene.h"
 
 #include <algorithm>
@@ -17,6 +19,8 @@ void VirtualPointLightSettings::validate() const {
         throw InputError(concat("virtual point lights: a negative share of ", negativeShare, " is not within 0..4"));
     if (sitesPerLight < 1 || sitesPerLight > 64)
         throw InputError(concat("virtual point lights: ", sitesPerLight, " candidate points per light is not within 1..64"));
+    if (nearRays < 0 || nearRays > 4096)
+        throw InputError(concat("virtual point lights: ", nearRays, " near-field rays is not within 0..4096"));
 }
 
 // --- Sampling ------------------------------------------------------------------------------
@@ -280,6 +284,14 @@ void VirtualPointLights::setSource(size_t slot, const std::vector<IrradianceMesh
     const double share = std::clamp(importance, 0.0, 1.0);
     const int count = std::max(std::min(settings_.lights, 32), int(std::lround(settings_.lights * share)));
     source->positive = placePositive(irradiance, count, source->power);
+    source->placed = count;
+    if (settings_.nearRays > 0) {
+        // Lookup cells of 1/64 of the scene, as the ray gather's.
+        const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
+        source->meshes = irradiance;
+        for (const IrradianceMeshCopy& m : source->meshes)
+            source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+    }
     if (settings_.visibility) {
         const int negatives = int(std::lround(settings_.negativeShare * count));
         source->negative = placeNegative(source->positive, settings_.sitesPerLight * count, negatives);
@@ -307,14 +319,58 @@ const std::vector<VirtualLight>& VirtualPointLights::positive(size_t slot) const
 const std::vector<VirtualLight>& VirtualPointLights::negative(size_t slot) const { return source(slot).negative; }
 Rgb VirtualPointLights::reflectedPower(size_t slot) const { return source(slot).power; }
 
-Rgb VirtualPointLights::estimate(size_t slot, const Vec3& x, const Vec3& nIn, uint32_t) {
+Rgb VirtualPointLights::estimate(size_t slot, const Vec3& x, const Vec3& nIn, uint32_t seed) {
     const Source& s = source(slot);
     const auto start = std::chrono::steady_clock::now();
     const Vec3 n = glm::normalize(nIn);
-    const Rgb e = virtualLightIrradiance(s.positive, x, n) - virtualLightIrradiance(s.negative, x, n);
+    Rgb e = glm::max(virtualLightIrradiance(s.positive, x, n) - virtualLightIrradiance(s.negative, x, n), Rgb(0.0));
+    if (!s.lookups.empty()) e += nearCompensation(s, x, n, seed);
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return glm::max(e, Rgb(0.0));
+    return e;
+}
+
+Rgb VirtualPointLights::nearCompensation(const Source& source, const Vec3& x, const Vec3& n, uint32_t seed) const {
+    const double power = luminance(source.power);
+    if (!(power > 0) || source.placed < 1) return Rgb(0.0);
+    Vec3 t, b;
+    orthonormalBasis(n, t, b);
+    const Vec3 origin = rays_->spawnPoint(x, n, n);
+    const int strata = std::max(1, int(std::lround(std::sqrt(double(settings_.nearRays)))));
+    uint32_t state = hash32(seed ^ 0x6a09e667u);
+    const auto next = [&state] {
+        state = hash32(state + 0x9e3779b9u);
+        return (state >> 8) * (1.0 / 16777216.0);
+    };
+    Rgb sum(0.0);
+    for (int i = 0; i < strata; ++i)
+        for (int j = 0; j < strata; ++j) {
+            // Cosine-weighted (Malley) over a jittered stratum: E = π/M Σ L·w.
+            const double u1 = (i + next()) / strata, u2 = (j + next()) / strata;
+            const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+            const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+            RayHit hit;
+            if (!rays_->intersect(origin, w, 0.0, kInf, hit)) continue;
+            const SurfacePoint y = rays_->surface(hit);
+            Vec3 side = y.geometricNormal;
+            if (glm::dot(side, w) > 0) {
+                if (closed_[hit.mesh]) continue;  // a closed object's inside is black
+                side = -side;
+            }
+            // Kd as the lights were placed with it: the triangle's albedo.
+            const Rgb kd = scene_.albedo(hit.mesh, hit.triangle);
+            const double d2 = glm::dot(y.position - x, y.position - x);
+            // Each mesh's lights stand for areas of their own (a light's a is
+            // from its mesh's power at y alone).
+            for (const auto& lookup : source.lookups) {
+                const Rgb reflected = kd * lookup->at(y.position, side);  // π Lo
+                const double lum = luminance(reflected);
+                if (!(lum > 0)) continue;
+                const double disc = power / (source.placed * lum) / kPi;  // a(y)/π
+                sum += reflected * (disc / (d2 + disc));
+            }
+        }
+    return sum / double(strata * strata);
 }
 
 IndirectStats VirtualPointLights::stats() const { return stats_; }
