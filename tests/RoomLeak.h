@@ -1,9 +1,11 @@
-// How much light reaches a room no light path reaches (test_indirect's two
-// rooms): the indirect meshes of every bounce read on the dark room's floor
-// and far wall, relative to the lit room's floor. Every indirect method's
-// leak test measures it the same way.
+// Two rooms side by side, one lit and one that no light path reaches (the
+// scene of test_indirect's leak test), and how much light reaches the dark
+// one: the indirect meshes of every bounce read on its floor and far wall,
+// relative to the lit room's floor. Every indirect method's leak test
+// measures it the same way.
 #pragma once
 
+#include "TestScenes.h"
 #include "cache/IrradianceCache.h"
 #include "gpu_sampling/indirect/RadianceProxy.h"
 
@@ -11,6 +13,33 @@
 #include <vector>
 
 namespace ml::test {
+
+// Two rooms, [−2, 0] and [0, 2] × [0, 2] × [0, 2] (metres), each with its
+// own floor, ceiling and walls facing in, open where they meet; a thin
+// single-sided partition at x = 0 facing the lit room, a lamp under the
+// lit room's ceiling. No light path reaches the dark room.
+inline Scene twoRooms() {
+    Material white;
+    white.name = "white";
+    white.kd = Rgb(0.7);
+    Material lamp = white;
+    lamp.name = "lamp";
+    lamp.ke = Rgb(10.0);
+    Mesh shell;
+    shell.name = "shell";
+    for (const double x0 : {-2.0, 0.0}) {
+        const Vec3 lo(x0, 0, 0);
+        addQuad(shell, 0, lo, 2.0 * kZ, 2.0 * kX);                  // floor, facing up
+        addQuad(shell, 0, lo + 2.0 * kY, 2.0 * kX, 2.0 * kZ);       // ceiling, facing down
+        addQuad(shell, 0, lo, 2.0 * kX, 2.0 * kY);                  // z = 0, facing +z
+        addQuad(shell, 0, lo + 2.0 * kZ, 2.0 * kY, 2.0 * kX);       // z = 2, facing −z
+        if (x0 < 0) addQuad(shell, 0, lo, 2.0 * kY, 2.0 * kZ);      // x = −2, facing +x
+        else addQuad(shell, 0, lo + 2.0 * kX, 2.0 * kZ, 2.0 * kY);  // x = 2, facing −x
+    }
+    Mesh partition = quadMesh("partition", 0, Vec3(0.0), 2.0 * kZ, 2.0 * kY);    // facing −x
+    Mesh light = quadMesh("lamp", 1, Vec3(-1.3, 1.99, 0.7), 0.6 * kX, 0.6 * kZ);  // facing down
+    return sceneOf("two rooms", {white, lamp}, {shell, partition, light});
+}
 
 // Relative to the lit room's floor (mean indirect irradiance at 36 points).
 struct RoomLeak {

@@ -468,34 +468,6 @@ TEST(IrradianceVolume, ABlockTopIsOffByTheChangeUpToItsProbes) {
 
 // --- Leaks: test_indirect's two rooms ----------------------------------------------------
 
-// Two rooms, [−2, 0] and [0, 2] × [0, 2] × [0, 2] (metres), each with its
-// own floor, ceiling and walls facing in, open where they meet; a thin
-// single-sided partition at x = 0 facing the lit room, a lamp under the
-// lit room's ceiling. No light path reaches the dark room.
-Scene twoRooms() {
-    Material white;
-    white.name = "white";
-    white.kd = Rgb(0.7);
-    Material lamp = white;
-    lamp.name = "lamp";
-    lamp.ke = Rgb(10.0);
-    using test::kX, test::kY, test::kZ;
-    Mesh shell;
-    shell.name = "shell";
-    for (const double x0 : {-2.0, 0.0}) {
-        const Vec3 lo(x0, 0, 0);
-        test::addQuad(shell, 0, lo, 2.0 * kZ, 2.0 * kX);                  // floor, facing up
-        test::addQuad(shell, 0, lo + 2.0 * kY, 2.0 * kX, 2.0 * kZ);       // ceiling, facing down
-        test::addQuad(shell, 0, lo, 2.0 * kX, 2.0 * kY);                  // z = 0, facing +z
-        test::addQuad(shell, 0, lo + 2.0 * kZ, 2.0 * kY, 2.0 * kX);       // z = 2, facing −z
-        if (x0 < 0) test::addQuad(shell, 0, lo, 2.0 * kY, 2.0 * kZ);      // x = −2, facing +x
-        else test::addQuad(shell, 0, lo + 2.0 * kX, 2.0 * kZ, 2.0 * kY);  // x = 2, facing −x
-    }
-    Mesh partition = test::quadMesh("partition", 0, Vec3(0.0), 2.0 * kZ, 2.0 * kY);   // facing −x
-    Mesh light = test::quadMesh("lamp", 1, Vec3(-1.3, 1.99, 0.7), 0.6 * kX, 0.6 * kZ);  // facing down
-    return test::sceneOf("two rooms", {white, lamp}, {shell, partition, light});
-}
-
 // Direct light exact on its cache, every bounce gathered by the volume to
 // convergence; the dark room's light at test_indirect's points.
 test::RoomLeak leakOf(const Scene& scene, bool visibility) {
@@ -523,7 +495,7 @@ test::RoomLeak leakOf(const Scene& scene, bool visibility) {
 }
 
 TEST(IrradianceVolume, VisibilityWeightingStopsTheLeakThroughAWall) {
-    const Scene scene = twoRooms();
+    const Scene scene = test::twoRooms();
     const test::RoomLeak blind = leakOf(scene, false), seeing = leakOf(scene, true);
     std::printf("leak, relative to the lit floor (near the partition, beyond, mean): trilinear %.4f %.4f %.4f, "
                 "with visibility %.4f %.4f %.4f\n",
