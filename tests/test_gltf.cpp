@@ -471,6 +471,14 @@ TEST_F(Gltf, MaskedAlphaTextureIsACutOutPerPixel) {
     EXPECT_FALSE(hasWarning(scene, "materials[0] 'leaf': alpha texture ignored, rendered opaque"));
 }
 
+TEST_F(Gltf, AnImageStbFailsWithoutAReasonIsAnError) {
+    // fuzz_gltf_loader's first finding: a data-URI image stb_image fails on
+    // without saying why was taken as decoded, a texture of no texels whose
+    // lookups then looped for ever.
+    const std::string finding = MESHLIGHT_TEST_DATA "/../fuzz/corpus_gltf/finding_image_without_reason.gltf";
+    EXPECT_NE(loadError(finding).find("cannot decode"), std::string::npos) << loadError(finding);
+}
+
 // --- Cameras and lights -------------------------------------------------------------
 
 TEST_F(Gltf, FirstPerspectiveCameraBecomesTheScenesCamera) {

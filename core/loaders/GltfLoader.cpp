@@ -150,6 +150,18 @@ std::string glbJson(const std::vector<unsigned char>& bytes) {
 // tinygltf's image callback: keeps the encoded bytes of images given as data
 // URIs. Images in buffer views are read later, with their byte range checked
 // (tinygltf does not check it); image files are read when needed.
+// File access for a glTF read from memory (loadGltfFromMemory): none, so
+// that no URI reaches the disk, whatever the bytes say.
+bool noFileExists(const std::string&, void*) { return false; }
+bool noFileRead(std::vector<unsigned char>*, std::string* error, const std::string& path, void*) {
+    if (error) *error += "no files for a glTF read from memory: " + path;
+    return false;
+}
+bool noFileWrite(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (error) *error += "no files for a glTF read from memory";
+    return false;
+}
+
 using EncodedImages = std::map<int, std::vector<unsigned char>>;
 bool keepEncodedImage(tg::Image* image, const int index, std::string*, std::string*, int, int,
                       const unsigned char* bytes, int size, void* encoded) {
@@ -209,8 +221,10 @@ void compactVertices(Mesh& mesh) {
 
 class GltfReader {
 public:
-    GltfReader(const std::string& path, const GltfOptions& options)
-        : path_(path), options_(options) {}
+    // `memory`: the file's bytes, read from memory with no disk access at
+    // all (loadGltfFromMemory); null: read `path`.
+    GltfReader(const std::string& path, const GltfOptions& options, const std::vector<unsigned char>* memory = nullptr)
+        : path_(path), options_(options), memory_(memory) {}
 
     Scene read();
 
@@ -283,6 +297,7 @@ private:
 
     std::string path_;
     GltfOptions options_;
+    const std::vector<unsigned char>* memory_;  // the file's bytes when read from memory
     fs::path baseDir_;
     tg::Model model_;
     EncodedImages encodedImages_;
@@ -366,15 +381,20 @@ void GltfReader::readModel() {
     const fs::path file(path_);
     std::vector<unsigned char> bytes;
     std::string error;
-    if (!fs::is_regular_file(file, ec) || !tg::ReadWholeFile(&bytes, &error, path_, nullptr))
-        fail("cannot open glTF file");
-    baseDir_ = fs::absolute(file, ec).parent_path();
+    if (memory_) {
+        bytes = *memory_;
+    } else {
+        if (!fs::is_regular_file(file, ec) || !tg::ReadWholeFile(&bytes, &error, path_, nullptr))
+            fail("cannot open glTF file");
+        baseDir_ = fs::absolute(file, ec).parent_path();
+    }
     if (bytes.size() > UINT32_MAX) fail("file larger than 4 GiB");
     const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
     checkBufferFiles(binary ? glbJson(bytes) : std::string(bytes.begin(), bytes.end()));
 
     tg::TinyGLTF parser;
     parser.SetImageLoader(&keepEncodedImage, &encodedImages_);
+    if (memory_) parser.SetFsCallbacks({&noFileExists, &tg::ExpandFilePath, &noFileRead, &noFileWrite, nullptr});
     std::string warnings;
     bool ok = false;
     try {
@@ -410,6 +430,7 @@ void GltfReader::readModel() {
 // also look in the working directory); an empty path for a data URI.
 fs::path GltfReader::requireFile(const std::string& field, const std::string& uri) const {
     if (tg::IsDataURI(uri)) return {};
+    if (memory_) fail(field, ": file '", uri, "' not found (the glTF is read from memory, with no files)");
     const fs::path file = (baseDir_ / tg::dlib::urldecode(uri)).lexically_normal();
     std::error_code ec;
     if (uri.empty() || !fs::is_regular_file(file, ec))
@@ -610,6 +631,7 @@ void GltfReader::readLuminaire(int node, const Mat4& world) {
     const std::string at = item("nodes", node) + ".extras";
     const tg::Value& file = n.extras.Get("photometry");
     if (!file.IsString() || file.Get<std::string>().empty()) fail(at, ".photometry is not a file name");
+    if (memory_) fail(at, ".photometry: file '", file.Get<std::string>(), "' not found (the glTF is read from memory, with no files)");
     LuminairePlacement p;
     if (n.extras.Has("multiplier")) {
         const tg::Value& m = n.extras.Get("multiplier");
@@ -1182,6 +1204,11 @@ void GltfReader::addBackFaces(const Mesh& front) {
 
 Scene loadGltf(const std::string& path, const GltfOptions& options) {
     return GltfReader(path, options).read();
+}
+
+Scene loadGltfFromMemory(const std::string& name, const std::vector<unsigned char>& bytes,
+                         const GltfOptions& options) {
+    return GltfReader(name, options, &bytes).read();
 }
 
 }  // namespace ml

@@ -11,6 +11,7 @@
 #include "core/Scene.h"
 
 #include <string>
+#include <vector>
 
 namespace ml {
 
@@ -91,5 +92,13 @@ struct GltfOptions {
 // a negative emissive value, an unknown alphaMode, an unsupported required
 // extension, a file without triangles, and options out of range.
 Scene loadGltf(const std::string& path, const GltfOptions& options = {});
+
+// loadGltf on a .gltf or .glb file's bytes held in memory, `name` standing
+// for its path in messages and Scene::name. Nothing is read from disk: a
+// URI naming a file (a buffer, an image, a photometric file) is an
+// InputError "not found"; data URIs and a .glb's own buffer are read. The
+// fuzz target's entry (tests/fuzz/fuzz_gltf_loader.cpp).
+Scene loadGltfFromMemory(const std::string& name, const std::vector<unsigned char>& bytes,
+                         const GltfOptions& options = {});
 
 }  // namespace ml

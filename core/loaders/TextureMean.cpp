@@ -126,7 +126,16 @@ std::string decodeTexture(const unsigned char* bytes, size_t size, Texture& out)
     if (size > INT_MAX) return "larger than 2 GiB";
     int width = 0, height = 0, channels = 0;
     unsigned char* pixels = stbi_load_from_memory(bytes, static_cast<int>(size), &width, &height, &channels, 4);
-    if (!pixels) return stbi_failure_reason();
+    if (!pixels) {
+        // stb leaves no reason for some failures (found by fuzz_gltf_loader:
+        // an empty reason read as success gave a texture of no texels).
+        const char* why = stbi_failure_reason();
+        return why && *why ? why : "not an image stb_image can decode";
+    }
+    if (width <= 0 || height <= 0) {  // no texel to look up
+        stbi_image_free(pixels);
+        return "an image of " + std::to_string(width) + " x " + std::to_string(height) + " texels";
+    }
     out.width = width;
     out.height = height;
     out.rgba.assign(pixels, pixels + size_t(4) * width * height);
@@ -139,10 +148,6 @@ std::string decodeTexture(const unsigned char* bytes, size_t size, Texture& out)
 
 Rgb footprintMean(const Texture& texture, const std::array<Vec2, 3>& uv) {
     return footprint(texture, uv, [&](Vec2 p) { return texture.sample(p); });
-}
-
-double footprintCoverage(const Texture& texture, const std::array<Vec2, 3>& uv) {
-    return footprint(texture, uv, [&](Vec2 p) { return texture.coverage(p); });
 }
 
 std::string rgbText(const Rgb& c) {

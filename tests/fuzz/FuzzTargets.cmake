@@ -13,6 +13,10 @@ set(MESHLIGHT_FUZZ_SECONDS 50 CACHE STRING "Seconds each fuzz test runs its fuzz
 # The photometric loaders are small and fast (about 15000 inputs a second):
 # a shorter run of `fuzz_photometric` reaches them.
 set(MESHLIGHT_FUZZ_PHOTOMETRIC_SECONDS 20 CACHE STRING "Seconds the ctest fuzz_photometric runs its fuzzer")
+# The glTF loader runs about 1000 inputs a second under the sanitizers
+# (tinygltf's JSON parsing dominates): 30 s reach past the corpus's seeds
+# into every accessor and material path.
+set(MESHLIGHT_FUZZ_GLTF_SECONDS 30 CACHE STRING "Seconds the ctest fuzz_gltf_loader runs its fuzzer")
 
 if(MESHLIGHT_FUZZ STREQUAL "OFF")
   return()
@@ -51,7 +55,7 @@ if(NOT _fuzz_ok)
   if(MESHLIGHT_FUZZ STREQUAL "ON")
     message(FATAL_ERROR "MESHLIGHT_FUZZ=ON but ${_fuzz_why}")
   endif()
-  message(WARNING "\n*** The loader fuzzers (ctest fuzz_obj_loader, fuzz_photometric) are NOT built and NOT run: ${_fuzz_why}\n"
+  message(WARNING "\n*** The loader fuzzers (ctest fuzz_obj_loader, fuzz_photometric, fuzz_gltf_loader) are NOT built and NOT run: ${_fuzz_why}\n"
                   "*** Install them (.ci/install-deps does) or configure with -DMESHLIGHT_FUZZ=OFF.\n")
   return()
 endif()
@@ -88,3 +92,13 @@ add_test(NAME fuzz_photometric
                  -DSECONDS=${MESHLIGHT_FUZZ_PHOTOMETRIC_SECONDS}
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/fuzz/RunFuzzer.cmake)
 set_tests_properties(fuzz_photometric PROPERTIES LABELS fuzz TIMEOUT 300)
+
+add_test(NAME fuzz_gltf_loader
+         COMMAND ${CMAKE_COMMAND}
+                 -DFUZZER=${CMAKE_CURRENT_BINARY_DIR}/fuzz/fuzz_gltf_loader
+                 -DCORPUS=${CMAKE_CURRENT_SOURCE_DIR}/fuzz/corpus_gltf
+                 -DDICT=${CMAKE_CURRENT_SOURCE_DIR}/fuzz/gltf.dict
+                 -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fuzz-run/gltf_loader
+                 -DSECONDS=${MESHLIGHT_FUZZ_GLTF_SECONDS}
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/fuzz/RunFuzzer.cmake)
+set_tests_properties(fuzz_gltf_loader PROPERTIES LABELS fuzz TIMEOUT 300)

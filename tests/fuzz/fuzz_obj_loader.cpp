@@ -13,6 +13,7 @@
 // returns, a crash, a sanitizer report, a leak or a hang is a finding.
 #include "core/Error.h"
 #include "core/loaders/ObjLoader.h"
+#include "SceneChecks.h"
 
 #include <cmath>
 #include <cstdint>
@@ -24,56 +25,17 @@
 
 namespace {
 
-[[noreturn]] void finding(const std::string& what) {
-    std::fprintf(stderr, "fuzz_obj_loader: %s\n", what.c_str());
-    std::abort();  // libFuzzer saves the input as a crash artifact
-}
+constexpr const char* kTarget = "fuzz_obj_loader";
 
-#define EXPECT(cond, ...) \
-    if (!(cond)) finding(ml::concat("broken promise: " #cond " ", ##__VA_ARGS__))
+[[noreturn]] void finding(const std::string& what) { ml::fuzz::finding(kTarget, what); }
 
-bool finiteRgb(const ml::Rgb& c) { return ml::isFinite(c); }
-
-// What ObjLoader.h and Scene.h promise about a scene loadObj returns.
+// SceneChecks.h's promises, and ObjLoader.h's: every triangle names its
+// line of the OBJ.
 void checkScene(const ml::Scene& scene, size_t inputLines) {
-    using namespace ml;
-    EXPECT(!scene.meshes.empty());
-    for (const Material& m : scene.materials) {
-        EXPECT(finiteRgb(m.kd) && finiteRgb(m.ks) && finiteRgb(m.ke) && std::isfinite(m.ns), m.name);
-        // Kd and Ks are clamped to [0, 1]; negative values are errors.
-        EXPECT(glm::all(glm::greaterThanEqual(m.kd, Rgb(0.0))) && glm::all(glm::lessThanEqual(m.kd, Rgb(1.0))));
-        EXPECT(glm::all(glm::greaterThanEqual(m.ks, Rgb(0.0))) && glm::all(glm::lessThanEqual(m.ks, Rgb(1.0))));
-        EXPECT(glm::all(glm::greaterThanEqual(m.ke, Rgb(0.0))) && m.ns >= 0);
-    }
-    for (const Mesh& mesh : scene.meshes) {
-        EXPECT(!mesh.triangles.empty(), mesh.name);
-        EXPECT(mesh.normals.size() == mesh.positions.size(), mesh.name);
-        EXPECT(mesh.materials.size() == mesh.triangles.size(), mesh.name);
-        EXPECT(mesh.sourceLines.size() == mesh.triangles.size(), mesh.name);
-        for (size_t v = 0; v < mesh.positions.size(); ++v) {
-            EXPECT(isFinite(mesh.positions[v]), mesh.name, " vertex ", v);
-            // "unit shading normal per vertex": 1e-9 is a million times the
-            // rounding of a normalisation in double.
-            const double len = glm::length(mesh.normals[v]);
-            EXPECT(std::abs(len - 1) <= 1e-9, mesh.name, " vertex ", v, " normal length ", len);
-        }
-        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-            for (int k = 0; k < 3; ++k) EXPECT(mesh.triangles[t][k] < mesh.positions.size(), mesh.name);
-            EXPECT(mesh.materials[t] < scene.materials.size(), mesh.name);
-            EXPECT(mesh.sourceLines[t] >= 1 && size_t(mesh.sourceLines[t]) <= inputLines, mesh.name);
-            // Degenerate triangles are dropped.
-            const double area = mesh.area(t);
-            EXPECT(area > 0 && std::isfinite(area), mesh.name, " triangle ", t, " area ", area);
-        }
-    }
-    for (const Light& light : scene.lights) {
-        EXPECT(light.area > 0 && std::isfinite(light.area), light.name);
-        EXPECT(light.mesh < scene.meshes.size() && light.material < scene.materials.size(), light.name);
-        EXPECT(scene.materials[light.material].emissive() && finiteRgb(light.radiance), light.name);
-        EXPECT(isFinite(light.centroid) && isFinite(light.normal), light.name);
-        EXPECT(light.geometry.size() == light.triangles.size() && !light.triangles.empty(), light.name);
-        for (uint32_t t : light.triangles) EXPECT(t < scene.meshes[light.mesh].triangles.size(), light.name);
-    }
+    ml::fuzz::checkScene(kTarget, scene);
+    for (const ml::Mesh& mesh : scene.meshes)
+        for (int line : mesh.sourceLines)
+            ML_FUZZ_EXPECT(kTarget, line >= 1 && size_t(line) <= inputLines, mesh.name, " line ", line);
 }
 
 }  // namespace
