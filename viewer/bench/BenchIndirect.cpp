@@ -786,6 +786,13 @@ std::string verdictLine(const Comparison& c) {
                   "× (", c.perspective.how, ")");
 }
 
+// "walls / blocks / corners": a row's relative RMS error per group of points.
+std::string groupErrors(const Row& r) {
+    return concat(benchPct(r.byGroup.at(PointGroup::Walls).relRms), " / ",
+                  benchPct(r.byGroup.at(PointGroup::Blocks).relRms), " / ",
+                  benchPct(r.byGroup.at(PointGroup::Fixed).relRms));
+}
+
 // The irradiance volume's rows: what an update (every probe captured) and
 // an estimate cost, against the paper's GPU timings, and what a GL cube map
 // per probe would cost here (the hemicube of the paper's 16-pixel faces
@@ -800,10 +807,7 @@ std::string volumeSection(const std::vector<Row>& rows) {
         const ProbeGrid& grid = r.probes;
         t.addRow({r.config.label(), concat(grid.dims[0], "x", grid.dims[1], "x", grid.dims[2]),
                   benchNumber(r.updateSeconds), benchNumber(1e3 * r.updateSeconds / double(grid.count())),
-                  benchNumber(1e3 * r.totalMs), benchPct(r.single.relRms),
-                  concat(benchPct(r.byGroup.at(PointGroup::Walls).relRms), " / ",
-                         benchPct(r.byGroup.at(PointGroup::Blocks).relRms), " / ",
-                         benchPct(r.byGroup.at(PointGroup::Fixed).relRms))});
+                  benchNumber(1e3 * r.totalMs), benchPct(r.single.relRms), groupErrors(r)});
         ++shown;
     }
     if (shown == 0) return {};
@@ -843,10 +847,7 @@ std::string vplSection(const std::vector<Row>& rows, const std::string& upsampli
     for (const Row& r : rows) {
         if (r.config.method != "vpl") continue;
         t.addRow({r.config.label(), benchNumber(r.updateSeconds), benchNumber(1e3 * r.totalMs),
-                  benchPct(r.single.relRms),
-                  concat(benchPct(r.byGroup.at(PointGroup::Walls).relRms), " / ",
-                         benchPct(r.byGroup.at(PointGroup::Blocks).relRms), " / ",
-                         benchPct(r.byGroup.at(PointGroup::Fixed).relRms))});
+                  benchPct(r.single.relRms), groupErrors(r)});
         ++shown;
     }
     if (shown == 0) return {};
