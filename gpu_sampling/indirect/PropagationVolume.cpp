@@ -214,6 +214,7 @@ std::array<int, 3> PropagationGrid::cellOf(const Vec3& p) const {
 
 PropagationVolume::PropagationVolume(const Scene& scene, const PropagationVolumeSettings& settings)
     : scene_(scene), settings_(validated(settings)), grid_(scene.bounds, settings.cells) {
+    sparse();  // the transfer, built once per process: here rather than in the first update's time
     const std::vector<char> closed = closedMeshesOf(scene);
     const double spacing = 0.5 * std::min({grid_.cell.x, grid_.cell.y, grid_.cell.z});
     for (size_t a = 0; a < 3; ++a) blocking_[a].assign(grid_.count(), 0.0f);
