@@ -191,7 +191,7 @@ InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indi
     direct.sceneChanged(after);
     // A moved light: its own mesh whole, and the shared mesh where it has weight there.
     for (size_t l : change.lights) {
-        if (l < lights) r.lightVertices += direct.forget(l, [](const Vec3&, const Vec3&) { return true; });
+        if (l < lights) r.lightVertices += direct.rebuildMesh(l, after);
         if (shared && coverage)
             r.lightVertices += direct.forget(lights, [&](const Vec3& x, const Vec3&) { return coverage->weight(l, x) < 1; });
     }
@@ -219,11 +219,8 @@ InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indi
     const size_t forgotten = direct.unsampledCount();
     r.keptVertices = total > forgotten ? total - forgotten : 0;
     if (indirect) {
-        indirect->sceneChanged([&](IrradianceCache& c) {
-            r.movedVertices += c.moveFaces(before, change);
-            c.sceneChanged(after);
-        });
         r.indirectVertices = indirect->totalVertices();
+        indirect->sceneChanged();
     }
     return r;
 }

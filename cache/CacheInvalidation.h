@@ -5,9 +5,11 @@
 // forgotten vertices are unsampled again, so refinement takes them before
 // any other work (IrradianceCache::refine samples unsampled vertices
 // first), and copies fill them from their sampled neighbours meanwhile.
-//  - A moved light: its own direct mesh is forgotten whole; with lights
-//    sharing, the shared mesh where that light has weight in it too
-//    (LightCoverage weight < 1). Coverage itself is kept as it was: its
+//  - A moved light: its own direct mesh is laid again on the base mesh,
+//    unsampled (its refinement followed shadows that have moved: sampling
+//    it again costs more than a fresh base, measured by bench dynamic);
+//    with lights sharing, the shared mesh is forgotten where that light has
+//    weight in it (LightCoverage weight < 1). Coverage itself is kept: its
 //    weights split each light between its own mesh and the shared one, and
 //    any split adds up to the light, so the sum stays exact (only less
 //    economical until the cache is made again).
@@ -16,14 +18,13 @@
 //    the object's old or new bounding box meets the convex hull of the
 //    vertex and the light's bounds (hullMeets: exact for a point and a box,
 //    so the test is conservative only by the object's box). The object's
-//    own cache faces move with it (every mesh, direct and indirect) and are
-//    forgotten.
-//  - Indirect light: every bounce is stale and gathered again, bounce after
-//    bounce, keeping its old values on display meanwhile
-//    (IndirectSolver::sceneChanged).
-//  - Refinement itself (splits, levels) is kept: where a shadow has gone the
-//    mesh stays finer than it needs, and new shadow edges are split as the
-//    forgotten vertices' new samples find them.
+//    own cache faces move with it (every direct mesh) and are forgotten.
+//  - Indirect light: every bounce is stale; the bounces are made again from
+//    base meshes and gathered bounce after bounce, the old indirect meshes
+//    shown meanwhile (IndirectSolver::sceneChanged).
+//  - Elsewhere (a moved object), refinement (splits, levels) is kept: where
+//    a shadow has gone the mesh stays finer than it needs, and new shadow
+//    edges are split as the forgotten vertices' new samples find them.
 #pragma once
 
 #include "IndirectSolver.h"
@@ -35,11 +36,11 @@ namespace ml {
 
 // What invalidateCache did: vertices forgotten and kept, over every mesh.
 struct InvalidationReport {
-    size_t lightVertices = 0;     // direct vertices forgotten because their light moved
+    size_t lightVertices = 0;     // direct vertices dropped or forgotten because their light moved
     size_t shadowVertices = 0;    // direct vertices forgotten because the object may change what they see
-    size_t movedVertices = 0;     // vertices of the moved faces (every mesh, direct and indirect)
+    size_t movedVertices = 0;     // direct vertices on the moved faces, moved with them
     size_t keptVertices = 0;      // direct vertices that keep their samples
-    size_t indirectVertices = 0;  // indirect vertices marked stale (every bounce's)
+    size_t indirectVertices = 0;  // indirect vertices dropped (every bounce's, made again)
     std::string describe() const;
 };
 

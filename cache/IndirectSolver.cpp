@@ -136,6 +136,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // round only samples them (IrradianceCache::refine).
     RefineReport report = caches_[slot]->refine(gather, budget, seedFor(seed, 0x1d1ec7u, uint32_t(bounce)), view);
     if (bounce == 1 && caches_[0]->unsampledCount() == 0) regathering_ = false;
+    if (!stale_.empty() && firstBounceShown()) stale_.clear();
     if (first) {
         report.candidates = std::max<size_t>(report.candidates, 1);  // the first pass goes on
         return report;
@@ -175,14 +176,13 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     }
 }
 
-void IndirectSolver::sceneChanged(const std::function<void(IrradianceCache&)>& update) {
-    for (auto& c : caches_) {
-        update(*c);
-        c->resetSamples();
-    }
+void IndirectSolver::sceneChanged() {
+    std::vector<IrradianceMeshCopy> shown = displayMeshes();
+    if (!shown.empty()) stale_ = std::move(shown);
+    caches_.clear();
     finished_ = 0;
     directRefreshed_ = false;
-    regathering_ = !caches_.empty();
+    regathering_ = false;
     sourceBuilt_.assign(sourceBuilt_.size(), false);
 }
 
@@ -264,6 +264,7 @@ bool IndirectSolver::firstBounceGathered() const {
 }
 
 std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
+    if (!stale_.empty() && !firstBounceShown()) return stale_;
     // The bounces whose first pass is complete, bounce 1 from a quarter of
     // it on; a bounce 1 being gathered again (restart) counts, its copies
     // showing old values until new ones.

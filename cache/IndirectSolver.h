@@ -103,12 +103,15 @@ public:
     // old value.
     void restart(IndirectEstimator& estimator);
 
-    // The scene changed (CacheInvalidation.h): `update` makes each bounce's
-    // cache follow it (moved faces); then every bounce is stale and is
-    // gathered again, bounce after bounce (its first pass again), each from
-    // a source built anew, for the worker's estimator is made anew too.
-    // Until a vertex is gathered again, copies show its old value.
-    void sceneChanged(const std::function<void(IrradianceCache&)>& update);
+    // The scene changed (CacheInvalidation.h): every bounce is stale. They
+    // are made again from the changed scene's base meshes and gathered
+    // bounce after bounce as at the start (a refined cache gathered again
+    // costs its refined vertices, more than a fresh one: measured by bench
+    // dynamic), each from a source built anew, for the worker's estimator
+    // is made anew too. Until bounce 1 is shown again (firstBounceShown),
+    // displayMeshes() gives what it gave before the change: the old
+    // indirect light, on the old geometry, as a stand-in.
+    void sceneChanged();
 
     // Once every bounce has converged: one more refinement level for every
     // bounce's cache (IrradianceCache::tighten), and pass 2 again from
@@ -164,6 +167,7 @@ private:
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
     bool regathering_ = false;       // bounce 1 gathered again since restart()
+    std::vector<IrradianceMeshCopy> stale_;  // shown after sceneChanged() until bounce 1 is
 };
 
 }  // namespace ml

@@ -227,6 +227,31 @@ void bisectLongEdges(CacheTriMesh& mesh, double maxLength) {
     }
 }
 
+// Mesh `l` laid on `base` as the layout asks (a light's own mesh keeps the
+// faces where it has weight when lights share), with no sample.
+void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& scene, const CacheTriMesh& base) {
+    detail::LightMesh& lm = s.meshes[l];
+    lm.mesh = base;
+    lm.provisional.clear();
+    lm.needsGpu.clear();
+    lm.gridNeedsGpu.clear();
+    // A light's own mesh keeps the faces where it has weight; a gathered
+    // light's keeps none (LightCoverage::gathered).
+    const bool gathered =
+        layout.coverage && layout.meshes == 0 && l < scene.lights.size() && layout.coverage->gathered(l);
+    if ((s.sharedMesh && l < scene.lights.size()) || gathered) {
+        for (const auto fh : lm.mesh.faces()) {
+            Triangle3 t;
+            int k = 0;
+            for (const auto vh : lm.mesh.fv_range(fh)) t[size_t(k++)] = toVec3(lm.mesh.point(vh));
+            if (!layout.coverage->covers(l, t)) lm.mesh.delete_face(fh, true);
+        }
+        lm.mesh.garbage_collection();
+    }
+    lm.stats.assign(lm.mesh.n_vertices(), {});
+    lm.gridStats.assign(s.gridSamples, {});
+}
+
 }  // namespace
 
 IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings, const CacheLayout& layout)
@@ -268,25 +293,21 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     const bool share = layout.coverage && layout.coverage->sharing() && layout.meshes == 0;
     s.sharedMesh = share;
     s.meshes.resize(share ? scene.lights.size() + 1 : layout.meshes ? layout.meshes : scene.lights.size());
-    for (size_t l = 0; l < s.meshes.size(); ++l) {
-        detail::LightMesh& lm = s.meshes[l];
-        lm.mesh = base;
-        // A light's own mesh keeps the faces where it has weight; a gathered
-        // light's keeps none (LightCoverage::gathered).
-        const bool gathered = layout.coverage && layout.meshes == 0 && l < scene.lights.size() &&
-                              layout.coverage->gathered(l);
-        if ((share && l < scene.lights.size()) || gathered) {
-            for (const auto fh : lm.mesh.faces()) {
-                Triangle3 t;
-                int k = 0;
-                for (const auto vh : lm.mesh.fv_range(fh)) t[size_t(k++)] = toVec3(lm.mesh.point(vh));
-                if (!layout.coverage->covers(l, t)) lm.mesh.delete_face(fh, true);
-            }
-            lm.mesh.garbage_collection();
-        }
-        lm.stats.assign(lm.mesh.n_vertices(), {});
-        lm.gridStats.assign(s.gridSamples, {});
-    }
+    impl_->layout = layout;
+    for (size_t l = 0; l < s.meshes.size(); ++l) layMesh(s, layout, l, scene, base);
+}
+
+size_t IrradianceCache::rebuildMesh(size_t l, const Scene& scene) {
+    CacheState& s = impl_->state;
+    const size_t before = s.meshes.at(l).mesh.n_vertices();
+    std::vector<bool> gridded(scene.meshes.size(), false);
+    for (const detail::GridObject& g : s.grids) gridded[g.mesh] = true;
+    CacheTriMesh base;
+    size_t backFaces = 0;
+    buildBaseMesh(scene, gridded, impl_->layout.backFaces, base, backFaces);
+    bisectLongEdges(base, s.settings.maxEdgeFraction * s.diagonal);
+    layMesh(s, impl_->layout, l, scene, base);
+    return before;
 }
 
 IrradianceCache::~IrradianceCache() = default;

@@ -217,6 +217,10 @@ public:
     // those faces moves with them and is forgotten; a grid-cached object is
     // laid on its moved mesh again. Returns the vertices moved.
     size_t moveFaces(const Scene& before, const AppliedChange& change);
+    // Lays mesh `mesh` anew on `scene`'s base mesh, unrefined and
+    // unsampled, as the cache was made: a moved light's own mesh, whose
+    // refinement followed shadows that are gone. Returns the vertices it had.
+    size_t rebuildMesh(size_t mesh, const Scene& scene);
     // Follows the changed scene: its emitters (where border vertices are
     // sampled) and the fingerprint a saved cache records.
     void sceneChanged(const Scene& after);

@@ -14,11 +14,14 @@
 #include "core/reference/ExactIrradiance.h"
 #include "gpu_sampling/SamplerFactory.h"
 
+#include "TestSamplers.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <string>
 
 namespace ml {
@@ -326,13 +329,15 @@ TEST(CacheInvalidation, ALightMovedAndMovedBackRestoresTheCache) {
     refineToConvergence(session);
     const IrradianceMeshCopy first = session.cache().copyMesh(0);
     const InvalidationReport away = session.applyChange(scene, SceneChange::moveLight(0, Vec3(0.8, 0.9, 0.3)));
-    // Every vertex of its mesh is forgotten: the light's own quad as it
-    // moves, the rest as its light; the scene's only light, nothing is kept.
+    // Its mesh is laid again on the base: every vertex it had is dropped,
+    // the light's own quad among them (moved first), and as the scene's only
+    // light nothing is kept.
     size_t quad = 0;
     for (const Vec3& p : first.positions) quad += p.y > 0.99;
     EXPECT_EQ(away.movedVertices, quad);
-    EXPECT_EQ(away.lightVertices + away.movedVertices, first.positions.size());
+    EXPECT_EQ(away.lightVertices, first.positions.size());
     EXPECT_EQ(away.keptVertices, 0u);
+    EXPECT_LT(session.cache().totalVertices(), first.positions.size());  // the base, unrefined
     refineToConvergence(session);
     const IrradianceMeshCopy moved = session.cache().copyMesh(0);
     const size_t centre = floorVertexNear(moved, Vec3(0.0));
@@ -340,18 +345,39 @@ TEST(CacheInvalidation, ALightMovedAndMovedBackRestoresTheCache) {
     session.applyChange(scene, SceneChange::moveLight(0, Vec3(0.0, 1.0, 0.0)));
     refineToConvergence(session);
     const IrradianceMeshCopy back = session.cache().copyMesh(0);
-    // Refinement only adds vertices (they keep their numbers): every vertex
-    // of the first cache is there, sampled again at the same point by the
-    // exact sampler, so the same value to rounding (the light's corners are
-    // moved back by adding and subtracting offsets).
-    ASSERT_GE(back.positions.size(), first.positions.size());
+    // The mesh is laid on the same base and refined by the same rules from
+    // the same exact samples: the same vertices (numbered in another order:
+    // rounding in the light's corners, moved away and back, breaks ties
+    // between edges of equal length differently, and measured 10 of 3,079
+    // penumbra splits taken elsewhere) with the same values to rounding.
+    ASSERT_EQ(back.positions.size(), first.positions.size());
+    // A vertex by its place and its normal (a face's reversed copy shares
+    // its place).
+    using Key = std::array<long long, 6>;
+    const auto key = [](const IrradianceMeshCopy& m, size_t v) {
+        const Vec3 p = m.positions[v] * 1e7, n = m.normals[v] * 1e3;
+        return Key{std::llround(p.x), std::llround(p.y), std::llround(p.z),
+                   std::llround(n.x), std::llround(n.y), std::llround(n.z)};
+    };
+    std::map<Key, size_t> where;
+    for (size_t v = 0; v < back.positions.size(); ++v) where[key(back, v)] = v;
     double worst = 0;
+    size_t missing = 0;
     for (size_t v = 0; v < first.positions.size(); ++v) {
-        if (first.positions[v].y > 0.99) continue;  // the light's own faces: not lit by themselves
-        expectNear(back.positions[v], first.positions[v], "vertex kept its place");
-        worst = std::max(worst, glm::length(back.irradiance[v] - first.irradiance[v]) / (1e-3 + glm::length(first.irradiance[v])));
+        const auto it = where.find(key(first, v));
+        if (it == where.end()) {
+            ++missing;
+            continue;
+        }
+        worst = std::max(worst, glm::length(back.irradiance[it->second] - first.irradiance[v]) /
+                                    (1e-3 + glm::length(first.irradiance[v])));
     }
+    EXPECT_LE(missing, first.positions.size() / 100);
     EXPECT_LT(worst, 1e-9);
+    // And the image: the light the meshes give, interpolated over every
+    // face, is the same to rounding (measured 5e-16 relative).
+    const double a = luminance(test::integrate(first)), b = luminance(test::integrate(back));
+    EXPECT_NEAR(b, a, 1e-9 * a);
 }
 
 TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
@@ -375,29 +401,25 @@ TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
     ASSERT_TRUE(session.indirect()->firstPassDone());
     const IrradianceMeshCopy gathered = session.indirect()->copyMesh(1);
     const InvalidationReport r = session.applyChange(scene, SceneChange::moveObject("plate", Vec3(1.0, 0.0, 0.0)));
-    const IrradianceCache& bounce = session.indirect()->cache(1);
-    EXPECT_EQ(r.indirectVertices, bounce.totalVertices());
-    EXPECT_EQ(bounce.unsampledCount(), bounce.totalVertices());  // all of it stale
+    EXPECT_EQ(r.indirectVertices, gathered.positions.size());
+    EXPECT_EQ(session.indirect()->started(), 0);  // made again from the base, bounce by bounce
     EXPECT_FALSE(session.indirect()->firstPassDone());
-    // Copies keep showing every old value meanwhile, except on the moved
-    // plate (forgotten, its vertices moved: filled from its neighbours).
-    const IrradianceMeshCopy shown = session.indirect()->copyMesh(1);
-    ASSERT_EQ(shown.irradiance.size(), gathered.irradiance.size());
-    size_t movedVertices = 0;
-    for (size_t v = 0; v < shown.irradiance.size(); ++v) {
-        if (shown.positions[v] != gathered.positions[v]) {
-            ++movedVertices;
-            continue;
-        }
-        EXPECT_EQ(shown.irradiance[v], gathered.irradiance[v]) << "vertex " << v;
-    }
-    EXPECT_GT(movedVertices, 0u);
+    // Until bounce 1 is shown again, the image keeps the old indirect light.
+    const std::vector<IrradianceMeshCopy> shown = session.indirect()->displayMeshes();
+    ASSERT_FALSE(shown.empty());
+    EXPECT_EQ(shown.front().positions, gathered.positions);
+    EXPECT_EQ(shown.front().irradiance, gathered.irradiance);
     session.start();
     CacheWorker::Reader again = session.reader();
     session.refineUntil(again, stop, 0);
     session.stop();
     EXPECT_TRUE(session.indirect()->firstPassDone());
     EXPECT_EQ(session.indirect()->cache(1).unsampledCount(), 0u);
+    // Gathered on the moved plate: its vertices are where it is now.
+    const IrradianceMeshCopy now = session.indirect()->copyMesh(1);
+    bool onMovedPlate = false;
+    for (const Vec3& p : now.positions) onMovedPlate |= p.x > 0.8 + 1e-9 && p.y > 0.4 - 1e-9 && p.y < 0.5 + 1e-9;
+    EXPECT_TRUE(onMovedPlate);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@ namespace ml {
 
 struct IrradianceCache::Impl {
     detail::CacheState state;
+    CacheLayout layout;  // as made: rebuildMesh lays a mesh again the same way
 };
 
 namespace detail {
