@@ -6,6 +6,7 @@
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
+#include "viewer/bench/BenchDynamic.h"
 #include "viewer/bench/BenchIndirect.h"
 #include "viewer/bench/BenchLights.h"
 #include "viewer/bench/BenchOptions.h"
@@ -20,7 +21,7 @@ namespace ml {
 namespace {
 
 // More benches arrive with later issues; each adds itself here.
-const char* const kBenches = "direct, scaling, convergence, view, indirect, lights, report";
+const char* const kBenches = "direct, scaling, convergence, view, indirect, lights, dynamic, report";
 
 // What a bench's --help says of the options every bench takes: the same
 // options, in each bench's own words.
@@ -150,6 +151,11 @@ int runBench(const std::vector<std::string>& args) {
                          {"CI size: 3 and 12 panels at 96x54, 5 s each, a 512-spp reference",
                           "jitter seed of the cache's sampler and the path tracer's streams"},
                          rest, runBenchLights);
+    if (name == "dynamic")
+        return runCommon(name,
+                         {"CI size: 320x180 frames, errors at 64x36 against 64 spp, 3 steps, 8 s after each motion",
+                          "jitter seed of the cache's sampler and the path tracer's streams"},
+                         rest, runBenchDynamic);
     if (name == "view") {
         CommonHelp help{"CI size: 4 s per scenario, 8 light changes", "the worker's jitter seed"};
         help.headless = false;  // it opens a GLFW window, as `view` does

@@ -1,0 +1,367 @@
+#include "BenchDynamic.h"
+
+#include "BenchRun.h"
+#include "BenchStatistics.h"
+#include "BenchTable.h"
+#include "Gnuplot.h"
+#include "SessionCheckpoints.h"
+
+#include "cache/ProgressiveSession.h"
+#include "core/Error.h"
+#include "core/Random.h"
+#include "core/SceneChange.h"
+#include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "core/scenes/CornellBox.h"
+#include "gpu_sampling/SamplerFactory.h"
+#include "gpu_sampling/gl/GlContext.h"
+#include "viewer/compositor/Compositor.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+namespace ml {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+struct Workload {
+    int frameWidth = 1280, frameHeight = 720;  // the frames composited while moving
+    int errorWidth = 160, errorHeight = 90;    // the images measured
+    int spp = 256;                             // the path tracer's reference
+    int steps = 6;                             // per motion
+    double settle = 20;                        // s refined before the motion
+    double limit = 20;                         // s followed after it
+    double cold = 40;                          // s of the cold start (its last image: converged)
+};
+
+Workload workloadFor(bool quick) {
+    Workload w;
+    if (!quick) return w;
+    w.frameWidth = 320, w.frameHeight = 180;
+    w.errorWidth = 64, w.errorHeight = 36;
+    w.spp = 64;
+    w.steps = 3;
+    w.settle = 6;
+    w.limit = 8;
+    w.cold = 12;
+    return w;
+}
+
+// Images are taken this often after a motion stops (and from a cold start).
+constexpr double kEvery = 0.25;
+// A step is applied this long after the one before was, at the soonest.
+constexpr double kStepInterval = 0.25;
+
+struct Motion {
+    std::string name;
+    std::vector<SceneChange> steps;
+};
+
+// The light 180 mm along x in `steps` steps, 2 mm below the ceiling (548.8);
+// the short block 150 mm along +z and 40 mm along −x.
+std::vector<Motion> motionsFor(const Scene& cornell, int steps) {
+    Motion light{"light", {}}, block{"block", {}};
+    const Vec3 c = cornell.lights.at(0).centroid;
+    for (int k = 1; k <= steps; ++k) {
+        light.steps.push_back(SceneChange::moveLight(0, Vec3(c.x + 180.0 * k / steps, 546.8, c.z)));
+        block.steps.push_back(SceneChange::moveObject("shortBlock", Vec3(-40.0, 0.0, 150.0) / double(steps)));
+    }
+    return {light, block};
+}
+
+struct Choices {
+    DirectChoice direct;
+    IndirectChoice indirect;
+    uint32_t seed = 1;
+};
+
+std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c) {
+    SessionSettings ss;
+    ss.worker.seed = c.seed;
+    if (c.indirect.active()) ss.indirect = c.indirect.solver;
+    return std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, c.direct, c.indirect));
+}
+
+struct TimedImage {
+    double seconds = 0;
+    ImageRgb image;
+};
+
+// The latest snapshot composited at the error size every kEvery seconds
+// from `start` until `limit` seconds after it.
+std::vector<TimedImage> follow(ProgressiveSession& session, CacheWorker::Reader& reader, Compositor& compositor,
+                               const Camera& camera, const Workload& w, Clock::time_point start, double limit) {
+    CompositorSettings comp;
+    comp.width = w.errorWidth;
+    comp.height = w.errorHeight;
+    std::vector<TimedImage> images;
+    for (double due = kEvery; due <= limit + 1e-9; due += kEvery) {
+        const CacheSnapshot* s = snapshotAt(session, reader, start, due);
+        images.push_back({due, compositor.render(camera, s->direct, s->indirect, comp)});
+    }
+    return images;
+}
+
+struct MotionResult {
+    std::string name;
+    std::vector<double> frameMs;      // every frame while moving
+    std::vector<double> stepSeconds;  // the helper's time per step
+    std::vector<size_t> stepFrames;   // frames drawn while each step was being applied
+    std::vector<std::string> reports;
+    std::vector<double> warmCurve, coldCurve;  // relative RMSE against converged, every kEvery s
+    double warmPt05 = 0, warmPt5 = 0, coldPt05 = 0, coldPt5 = 0;  // against the path tracer
+    double convergedPt = 0;           // the converged image against the path tracer
+    double referenceNoise = 0;        // the reference's mean relative standard error
+    std::optional<double> warmWithin2, coldWithin2;
+};
+
+// Relative RMSE of each image against `reference`.
+std::vector<double> curve(const std::vector<TimedImage>& images, const ImageRgb& reference) {
+    std::vector<double> e;
+    for (const TimedImage& t : images) e.push_back(relativeRmse(t.image, reference));
+    return e;
+}
+
+double at(const std::vector<TimedImage>& images, const ImageRgb& reference, double seconds) {
+    for (const TimedImage& t : images)
+        if (t.seconds >= seconds - 1e-9) return relativeRmse(t.image, reference);
+    return relativeRmse(images.back().image, reference);
+}
+
+// The first time the curve is within `level` and stays there.
+std::optional<double> within(const std::vector<double>& errors, double level) {
+    std::optional<double> t;
+    for (size_t i = 0; i < errors.size(); ++i) {
+        if (errors[i] > level) t.reset();
+        else if (!t) t = kEvery * double(i + 1);
+    }
+    return t;
+}
+
+MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& motion, const Choices& choices,
+                       const Workload& w) {
+    MotionResult r;
+    r.name = motion.name;
+    Scene live = makeCornellBox();  // the session's: the helper thread changes it
+    Scene shown = live;             // the compositor's
+    const Camera camera = *live.camera;
+    auto compositor = std::make_unique<Compositor>(context, shown);
+    std::unique_ptr<ProgressiveSession> session = newSession(live, choices);
+    session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
+    CacheWorker::Reader reader = session->reader();
+    run.progress("%s: settling for %.0f s\n", motion.name.c_str(), w.settle);
+    snapshotAt(*session, reader, Clock::now(), w.settle);
+
+    // The frame loop while moving, each step applied on a helper thread.
+    CompositorSettings frame;
+    frame.width = w.frameWidth;
+    frame.height = w.frameHeight;
+    frame.supersample = 1;  // the viewer's while interactive (ViewSettings::supersample)
+    std::vector<IrradianceMeshCopy> lastDirect, lastIndirect;  // shown until the new worker's first snapshot
+    bool fromCopies = false;
+    std::thread helper;
+    std::atomic<bool> helperDone{false};
+    double helperSeconds = 0;
+    std::string helperReport;
+    size_t next = 0, framesThisStep = 0;
+    const Clock::time_point loop = Clock::now();
+    double nextStepAt = 0;
+    while (next < motion.steps.size() || helper.joinable()) {
+        if (!helper.joinable() && next < motion.steps.size() && secondsSince(loop) >= nextStepAt) {
+            helperDone = false;
+            helper = std::thread([&, change = motion.steps[next++]] {
+                const Clock::time_point t = Clock::now();
+                helperReport = session->applyChange(live, change).describe();
+                helperSeconds = secondsSince(t);
+                helperDone = true;
+            });
+        }
+        if (helper.joinable() && helperDone.load()) {
+            helper.join();
+            r.stepSeconds.push_back(helperSeconds);
+            r.stepFrames.push_back(framesThisStep);
+            framesThisStep = 0;
+            r.reports.push_back(helperReport);
+            nextStepAt = secondsSince(loop) + kStepInterval;
+            // The viewer's finishChange: the last snapshot stays on screen
+            // until the new worker's first, the compositor made again.
+            if (const CacheSnapshot* s = reader.acquire()) lastDirect = s->direct, lastIndirect = s->indirect;
+            fromCopies = true;
+            reader = CacheWorker::Reader();
+            compositor.reset();
+            shown = live;
+            compositor = std::make_unique<Compositor>(context, shown);
+            session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
+            reader = session->reader();
+        }
+        const Clock::time_point f = Clock::now();
+        const CacheSnapshot* s = reader.acquire();
+        if (s) fromCopies = false;
+        if (s || fromCopies) {
+            compositor->render(camera, s ? s->direct : lastDirect, s ? s->indirect : lastIndirect, frame);
+            r.frameMs.push_back(1e3 * secondsSince(f));
+            if (helper.joinable()) ++framesThisStep;
+        }
+    }
+    session->rethrowIfFailed();
+
+    // After the motion: the warm cache, then a cold start on the final pose.
+    run.progress("%s: %zu steps applied; following the cache for %.0f s\n", motion.name.c_str(), motion.steps.size(),
+                 w.limit);
+    const std::vector<TimedImage> warm = follow(*session, reader, *compositor, camera, w, Clock::now(), w.limit);
+    reader = CacheWorker::Reader();
+    session.reset();
+    run.progress("%s: cold start for %.0f s\n", motion.name.c_str(), w.cold);
+    Scene coldScene = live;
+    const Clock::time_point coldStart = Clock::now();  // the cache's construction counts
+    std::unique_ptr<ProgressiveSession> fresh = newSession(coldScene, choices);
+    fresh->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
+    CacheWorker::Reader coldReader = fresh->reader();
+    const std::vector<TimedImage> cold = follow(*fresh, coldReader, *compositor, camera, w, coldStart, w.cold);
+    coldReader = CacheWorker::Reader();
+    fresh.reset();
+    const ImageRgb& converged = cold.back().image;
+
+    run.progress("%s: path tracer reference, %d spp at %dx%d\n", motion.name.c_str(), w.spp, w.errorWidth,
+                 w.errorHeight);
+    const EmbreeScene rays(shown);
+    PathTracerSettings pts;
+    pts.seed = seedFor(choices.seed, 0xd1a3u);
+    const ReferenceImage reference = PathTracer(rays, pts).render(camera, w.errorWidth, w.errorHeight, w.spp);
+    r.referenceNoise = reference.meanRelativeError;
+    r.warmCurve = curve(warm, converged);
+    r.coldCurve = curve(cold, converged);
+    r.warmPt05 = at(warm, reference.radiance, 0.5);
+    r.warmPt5 = at(warm, reference.radiance, 5.0);
+    r.coldPt05 = at(cold, reference.radiance, 0.5);
+    r.coldPt5 = at(cold, reference.radiance, 5.0);
+    r.convergedPt = relativeRmse(converged, reference.radiance);
+    r.warmWithin2 = within(r.warmCurve, 0.02);
+    r.coldWithin2 = within(r.coldCurve, 0.02);
+    return r;
+}
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+std::string cell(const std::optional<double>& t) { return t ? benchNumber(*t) : std::string("never"); }
+
+const std::vector<GnuplotOutput> kPlots = {{"out_curves", "dynamic_curves.png"}};
+
+std::string gnuplotScript(const std::vector<MotionResult>& results) {
+    std::ostringstream gp;
+    gp << "# Written by 'meshlight bench dynamic'; run with gnuplot in this folder.\n"
+       << gnuplotOutputDefaults(kPlots)
+       << "set terminal pngcairo enhanced size 1000,600 font ',11'\n"
+          "set datafile separator ','\n"
+          "set grid\nset logscale y\n"
+          "set xlabel 'seconds after the motion stopped (warm) or the session started (cold)'\n"
+          "set ylabel 'relative RMSE against the converged image, %'\n"
+          "set output out_curves\n";
+    for (size_t i = 0; i < results.size(); ++i)
+        for (const char* kind : {"warm", "cold"}) {
+            const std::vector<double>& c = std::string(kind) == "warm" ? results[i].warmCurve : results[i].coldCurve;
+            gp << "$" << results[i].name << "_" << kind << " << EOD\n";
+            for (size_t k = 0; k < c.size(); ++k) gp << benchNumber(kEvery * double(k + 1)) << "," << benchPct(std::max(c[k], 1e-5)) << "\n";
+            gp << "EOD\n";
+        }
+    gp << "plot 2 with lines dt 2 lc 'black' title '2%'";
+    for (const MotionResult& r : results)
+        for (const char* kind : {"warm", "cold"})
+            gp << ", $" << r.name << "_" << kind << " using 1:2 with linespoints title '" << r.name << " " << kind << "'";
+    gp << "\n";
+    return gp.str();
+}
+
+}  // namespace
+
+int runBenchDynamic(const BenchOptions& options) {
+    BenchRun run(options);
+    const Workload w = workloadFor(options.quick);
+    const std::unique_ptr<GlContext> context = run.openContext();
+    Choices choices;
+    choices.seed = options.seed;
+    choices.direct.seed = options.seed;
+    choices.direct.backend = options.backend;
+    const Scene cornell = makeCornellBox();
+    choices.indirect.decide(cornell);
+    std::printf("bench dynamic (%s): Cornell box, full GI (%s, %d bounces), frames %dx%d, errors at %dx%d against "
+                "%d spp\n",
+                run.mode(), choices.indirect.method.c_str(), choices.indirect.solver.bounces, w.frameWidth,
+                w.frameHeight, w.errorWidth, w.errorHeight, w.spp);
+
+    std::vector<MotionResult> results;
+    for (const Motion& m : motionsFor(cornell, w.steps)) results.push_back(runMotion(run, *context, m, choices, w));
+
+    BenchTable frames({"motion", "frame", "ms"});
+    BenchTable summary({"motion", "steps", "frames", "frame_median_ms", "frame_p95_ms", "frame_max_ms",
+                        "step_median_ms", "step_max_ms", "warm_0.5s_vs_converged_pct", "warm_5s_vs_converged_pct",
+                        "warm_0.5s_vs_pt_pct", "warm_5s_vs_pt_pct", "cold_0.5s_vs_pt_pct", "cold_5s_vs_pt_pct",
+                        "converged_vs_pt_pct", "reference_noise_pct", "warm_within_2pct_s", "cold_within_2pct_s"});
+    BenchTable targets({"motion", "target", "measured", "met"});
+    BenchTable curves({"motion", "start", "seconds", "vs_converged_pct"});
+    for (const MotionResult& r : results) {
+        for (size_t i = 0; i < r.frameMs.size(); ++i) frames.addRow({r.name, std::to_string(i), benchNumber(r.frameMs[i])});
+        std::vector<double> stepMs;
+        for (double s : r.stepSeconds) stepMs.push_back(1e3 * s);
+        const double at05 = r.warmCurve.size() >= 2 ? r.warmCurve[1] : r.warmCurve.back();
+        const double at5 = r.warmCurve[std::min(r.warmCurve.size() - 1, size_t(5.0 / kEvery) - 1)];
+        summary.addRow({r.name, std::to_string(r.stepSeconds.size()), std::to_string(r.frameMs.size()),
+                        benchNumber(median(r.frameMs)), benchNumber(percentile(r.frameMs, 0.95)),
+                        benchNumber(percentile(r.frameMs, 1.0)), benchNumber(median(stepMs)),
+                        benchNumber(percentile(stepMs, 1.0)), benchPct(at05), benchPct(at5), benchPct(r.warmPt05),
+                        benchPct(r.warmPt5), benchPct(r.coldPt05), benchPct(r.coldPt5), benchPct(r.convergedPt),
+                        benchPct(r.referenceNoise), cell(r.warmWithin2), cell(r.coldWithin2)});
+        for (size_t k = 0; k < r.warmCurve.size(); ++k)
+            curves.addRow({r.name, "warm", benchNumber(kEvery * double(k + 1)), benchPct(r.warmCurve[k])});
+        for (size_t k = 0; k < r.coldCurve.size(); ++k)
+            curves.addRow({r.name, "cold", benchNumber(kEvery * double(k + 1)), benchPct(r.coldCurve[k])});
+        // Frames never wait: frames kept coming while every step was being
+        // applied (the helper's time is what a frame would have waited).
+        const size_t fewest = r.stepFrames.empty() ? 0 : *std::min_element(r.stepFrames.begin(), r.stepFrames.end());
+        targets.addRow({r.name, "frames never wait for the cache (fewest frames drawn during a step)",
+                        std::to_string(fewest) + " frames during a step of up to " +
+                            benchNumber(percentile(stepMs, 1.0)) + " ms",
+                        benchYesNo(fewest > 0)});
+        targets.addRow({r.name, "0.5 s after the motion within 10% of converged", benchPct(at05) + "%",
+                        benchYesNo(at05 <= 0.10)});
+        const bool half = r.warmWithin2 && r.coldWithin2 && *r.warmWithin2 < 0.5 * *r.coldWithin2;
+        targets.addRow({r.name, "back within 2% in under half a cold start's time",
+                        cell(r.warmWithin2) + " s vs " + cell(r.coldWithin2) + " s", benchYesNo(half)});
+        for (size_t i = 0; i < r.reports.size(); ++i)
+            std::printf("%s step %zu: %s (%.0f ms)\n", r.name.c_str(), i + 1, r.reports[i].c_str(), stepMs[i]);
+    }
+    std::printf("\n%s\n%s\n", summary.aligned().c_str(), targets.aligned().c_str());
+    run.writeCsv("dynamic_frames.csv", frames);
+    run.writeCsv("dynamic_summary.csv", summary);
+    run.writeCsv("dynamic_targets.csv", targets);
+    run.writeCsv("dynamic_curves.csv", curves);
+    run.plot("dynamic_plots.gp", gnuplotScript(results), kPlots);
+    const double wall = run.seconds();
+    std::ostringstream md;
+    md << "# bench dynamic (" << run.mode() << ")\n\nCornell box, full GI; frames " << w.frameWidth << "x"
+       << w.frameHeight << ", errors at " << w.errorWidth << "x" << w.errorHeight << " against " << w.spp
+       << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
+       << summary.markdown() << "\n" << targets.markdown();
+    run.write("dynamic_summary.md", md.str());
+    run.printWallTime(wall);
+    return 0;
+}
+
+}  // namespace ml
