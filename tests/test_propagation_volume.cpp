@@ -196,39 +196,10 @@ TEST(PropagationVolume, AnEmptyGridConservesFlux) {
 
 // --- Scenes --------------------------------------------------------------------------
 
-// Two rooms, [−2, 0] and [0, 2] × [0, 2] × [0, 2] (metres), each with its
-// own floor, ceiling and walls facing in, open where they meet; a thin
-// single-sided partition at x = 0 facing the lit room, a lamp under the lit
-// room's ceiling (test_indirect's leak scene). No light path reaches the
-// dark room.
-Scene twoRooms() {
-    Material white;
-    white.name = "white";
-    white.kd = Rgb(0.7);
-    Material lamp = white;
-    lamp.name = "lamp";
-    lamp.ke = Rgb(10.0);
-    using test::kX, test::kY, test::kZ;
-    Mesh shell;
-    shell.name = "shell";
-    for (const double x0 : {-2.0, 0.0}) {
-        const Vec3 lo(x0, 0, 0);
-        test::addQuad(shell, 0, lo, 2.0 * kZ, 2.0 * kX);             // floor
-        test::addQuad(shell, 0, lo + 2.0 * kY, 2.0 * kX, 2.0 * kZ);  // ceiling
-        test::addQuad(shell, 0, lo, 2.0 * kX, 2.0 * kY);             // z = 0
-        test::addQuad(shell, 0, lo + 2.0 * kZ, 2.0 * kY, 2.0 * kX);  // z = 2
-        if (x0 < 0) test::addQuad(shell, 0, lo, 2.0 * kY, 2.0 * kZ);
-        else test::addQuad(shell, 0, lo + 2.0 * kX, 2.0 * kZ, 2.0 * kY);
-    }
-    Mesh partition = test::quadMesh("partition", 0, Vec3(0.0), 2.0 * kZ, 2.0 * kY);     // facing −x
-    Mesh light = test::quadMesh("lamp", 1, Vec3(-1.3, 1.99, 0.7), 0.6 * kX, 0.6 * kZ);  // facing down
-    return test::sceneOf("two rooms", {white, lamp}, {shell, partition, light});
-}
-
 // With a wall inside the grid, what the geometry volume stops is accounted
 // for too: injected = left + blocked + still moving, to rounding.
 TEST(PropagationVolume, FluxStoppedByTheGeometryIsAccountedFor) {
-    const Scene scene = twoRooms();
+    const Scene scene = test::twoRooms();
     PropagationVolume v(scene, PropagationVolumeSettings{});
     v.setSource(0, test::exactDirectSource(scene));
     const PropagationVolume::Report& r = v.report(0);
@@ -378,7 +349,7 @@ test::RoomLeak leakOf(const Scene& scene, const std::vector<IrradianceMeshCopy>&
 }
 
 TEST(PropagationVolume, TheGeometryVolumeStopsTheLeakThroughAWall) {
-    const Scene scene = twoRooms();
+    const Scene scene = test::twoRooms();
     const std::vector<IrradianceMeshCopy> direct = test::exactDirectSource(scene);
     const test::RoomLeak open = leakOf(scene, direct, false), occluded = leakOf(scene, direct, true);
     std::printf("leak relative to the lit floor (near the partition, beyond, mean): without occlusion %.4f %.4f "
