@@ -78,16 +78,28 @@ CausticCache::CausticCache(const Scene& scene, const CausticSettings& settings)
     rays_ = std::make_unique<EmbreeScene>(scene);
     photons_ = std::make_unique<CausticPhotons>(scene, *rays_);
     if (!photons_->active()) return;
-    // The mesh: the cache's base mesh at the caustic's edge length, sides
-    // as for direct light (a light shining on a surface from behind can
-    // send photons there too).
+    // The mesh: the cache's base mesh at the caustic's edge length over the
+    // objects photons can land on (not those wholly of mirror or glass,
+    // often finely tessellated: bounce 1's gather looks this mesh up where
+    // its rays end, and a sphere's thousand faces in a few lookup cells
+    // doubled a gather's cost), sides as for direct light (a light shining
+    // on a surface from behind can send photons there too).
+    Scene receivers;
+    receivers.name = scene.name;
+    receivers.materials = scene.materials;
+    receivers.lights = scene.lights;
+    receivers.bounds = scene.bounds;
+    for (const Mesh& m : scene.meshes)
+        if (std::any_of(m.materials.begin(), m.materials.end(),
+                        [&](uint32_t k) { return !scene.materials[k].specular(); }))
+            receivers.meshes.push_back(m);
     CacheSettings c;
     c.maxEdgeFraction = settings_.edgeFraction;
     c.minEdgeFraction = settings_.edgeFraction;
     CacheLayout layout;
     layout.meshes = 1;
     layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
-    mesh_ = IrradianceCache(scene, c, layout).copyMesh(0);
+    mesh_ = IrradianceCache(receivers, c, layout).copyMesh(0);
     mesh_.irradiance.clear();
     mesh_.samples.clear();
     mesh_.standardError.clear();
