@@ -6,8 +6,12 @@
 #pragma once
 
 #include "TestScenes.h"
+#include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
+#include "core/raytrace/BounceCount.h"
 #include "gpu_sampling/indirect/RadianceProxy.h"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <vector>
@@ -80,6 +84,21 @@ inline RoomLeak roomLeak(const std::vector<IrradianceMeshCopy>& bounces) {
     }
     leak.mean /= count;
     return leak;
+}
+
+// Every bounce of the scene's bounce count gathered by `estimator` through
+// the cache's solver, to convergence, from `direct`; the leak of its meshes.
+inline RoomLeak solvedRoomLeak(const Scene& scene, IndirectEstimator& estimator,
+                               const std::vector<IrradianceMeshCopy>& direct) {
+    const BounceCount plan = countBounces(scene);
+    IndirectSettings is;
+    is.bounces = plan.bounces;
+    is.albedo = plan.meanAlbedo;
+    IndirectSolver solver(scene, is);
+    for (int r = 0; r < 4000 && !solver.allFinished(); ++r)
+        solver.step(estimator, [&] { return direct; }, 512, 7, std::nullopt);
+    EXPECT_TRUE(solver.allFinished());
+    return roomLeak(solver.copyMeshes());
 }
 
 }  // namespace ml::test

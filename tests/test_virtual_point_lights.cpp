@@ -13,10 +13,8 @@
 #include "TestSamplers.h"
 #include "TestScenes.h"
 #include "GlTestContext.h"
-#include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"
-#include "core/raytrace/BounceCount.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/SamplerFactory.h"
@@ -256,14 +254,7 @@ test::RoomLeak leakOf(const Scene& scene, const std::vector<IrradianceMeshCopy>&
     s.lights = 512;
     s.visibility = visibility;
     VirtualPointLights vpl(scene, s);
-    const BounceCount plan = countBounces(scene);
-    IndirectSettings is;
-    is.bounces = plan.bounces;
-    is.albedo = plan.meanAlbedo;
-    IndirectSolver solver(scene, is);
-    for (int r = 0; r < 4000 && !solver.allFinished(); ++r) solver.step(vpl, [&] { return direct; }, 512, 7, std::nullopt);
-    EXPECT_TRUE(solver.allFinished());
-    const test::RoomLeak leak = test::roomLeak(solver.copyMeshes());
+    const test::RoomLeak leak = test::solvedRoomLeak(scene, vpl, direct);
     EXPECT_GT(leak.lit, 0.05);
     return leak;
 }
