@@ -124,7 +124,10 @@ std::string IndirectChoice::describe() const {
         return concat("vpl: ", vpl.lights, " virtual point lights placed by a Halton sequence over the source's "
                       "reflected power", vpl.visibility ? concat(", ", std::lround(vpl.negativeShare * vpl.lights),
                                                                  " negative lights for their occlusion")
-                                                          : std::string(", no visibility"));
+                                                          : std::string(", no visibility"),
+                      vpl.nearRays > 0 ? concat(", the clamp near a point compensated by ", vpl.nearRays,
+                                                " rays (Embree) reading the cache")
+                                       : std::string());
     return concat(method, ": the radiance proxy's triangles (", gather.resolution,
                   " voxels along the longest side set its size), gathered at image size ", gather.imageSize);
 }
