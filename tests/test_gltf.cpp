@@ -175,6 +175,18 @@ std::string loadError(const std::string& path) {
 
 const json kQuarterTurnZ = {0, 0, std::sin(kPi / 4), std::cos(kPi / 4)};
 
+// A PNG of width × height RGBA texels, in memory (for data URIs).
+std::vector<unsigned char> pngBytes(int width, int height, const unsigned char* rgba) {
+    std::vector<unsigned char> png;
+    stbi_write_png_to_func(
+        [](void* out, void* data, int size) {
+            auto* v = static_cast<std::vector<unsigned char>*>(out);
+            v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
+        },
+        &png, width, height, 4, rgba, 4 * width);
+    return png;
+}
+
 }  // namespace
 
 // --- Transforms and winding -----------------------------------------------------
@@ -421,13 +433,7 @@ TEST_F(Gltf, MaskedMaterialBelowCutoffIsRemoved) {
 TEST_F(Gltf, SrgbTextureMeanBecomesKd) {
     // 2 x 2 texels: red, green, blue and sRGB grey 128 (linear 0.2158605).
     const unsigned char texels[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 128, 128, 128, 255};
-    std::vector<unsigned char> png;
-    stbi_write_png_to_func(
-        [](void* out, void* data, int size) {
-            auto* v = static_cast<std::vector<unsigned char>*>(out);
-            v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
-        },
-        &png, 2, 2, 4, texels, 8);
+    const std::vector<unsigned char> png = pngBytes(2, 2, texels);
     GltfFile f = quadScene({}, {{"name", "tiles"},
                                 {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0}}}});
     f.add("images", {{"uri", "data:image/png;base64," + base64(png)}, {"name", "tiles.png"}});
@@ -447,13 +453,7 @@ TEST_F(Gltf, MaskedAlphaTextureIsACutOutPerPixel) {
     // material keeps the texture as its cut-out (factor alpha 0.9 × the
     // texel's alpha against the cut-off 0.6), its triangles all kept.
     const unsigned char texels[8] = {200, 100, 50, 255, 200, 100, 50, 0};
-    std::vector<unsigned char> png;
-    stbi_write_png_to_func(
-        [](void* out, void* data, int size) {
-            auto* v = static_cast<std::vector<unsigned char>*>(out);
-            v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
-        },
-        &png, 2, 1, 4, texels, 8);
+    const std::vector<unsigned char> png = pngBytes(2, 1, texels);
     GltfFile f = quadScene({}, {{"name", "leaf"}, {"alphaMode", "MASK"}, {"alphaCutoff", 0.6},
                                 {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}},
                                                           {"baseColorFactor", {1, 1, 1, 0.9}}, {"metallicFactor", 0}}}});
