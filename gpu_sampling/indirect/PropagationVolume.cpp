@@ -331,8 +331,7 @@ Rgb PropagationVolume::absorbed(size_t slot, size_t cell, int side) const {
     return sources_[slot]->absorbed.at(size_t(side)).at(cell);
 }
 
-void PropagationVolume::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
-    const auto start = std::chrono::steady_clock::now();
+std::vector<ShRgb> PropagationVolume::inject(const std::vector<IrradianceMeshCopy>& irradiance) const {
     // The cache's irradiance at each sample, as the ray gather reads it.
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
     std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
@@ -344,17 +343,22 @@ void PropagationVolume::setSource(size_t slot, const std::vector<IrradianceMeshC
         for (const auto& l : lookups) e += l->at(s.position, n);
         if (!(luminance(e) > 0)) return;
         // Half a cell in front of the surface, in the cell that holds it.
-        const Vec3 q = s.position + 0.5 * n * grid_.cell;
-        const std::array<int, 3> c = grid_.cellOf(q);
+        const std::array<int, 3> c = grid_.cellOf(s.position + 0.5 * n * grid_.cell);
         const Rgb scaled = (s.area / kPi) * s.kd * e;  // Lo dA
         const std::array<double, kShCoefficients> lobe = shCosineLobeProjection(n);
-        ShRgb& cell = injected[grid_.index(c[0], c[1], c[2])];
+        ShRgb& cell = injected[grid_.index(c)];
         for (int i = 0; i < kShCoefficients; ++i) cell.c[size_t(i)] += lobe[size_t(i)] * scaled;
     };
     for (const SurfaceSample& s : samples_) {
         inject(s, s.normal);
         if (s.twoSided) inject(s, -s.normal);
     }
+    return injected;
+}
+
+void PropagationVolume::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double) {
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<ShRgb> injected = inject(irradiance);
     const double injectSeconds = seconds(start);
     propagateInjected(slot, injected);
     sources_[slot]->report.injectSeconds = injectSeconds;

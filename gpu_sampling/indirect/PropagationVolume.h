@@ -87,7 +87,9 @@
 // measure it). Within a cell of a lit surface, a point takes that
 // surface's first step directly.
 //
-// On the CPU (plain loops, one thread): see gpu_sampling/README.md.
+// On the CPU (plain loops, one thread): bench indirect times the same
+// steps as a GL compute shader (PropagationCompute.h), slower on this
+// machine's llvmpipe; see gpu_sampling/README.md.
 #pragma once
 
 #include "cache/IndirectEstimator.h"
@@ -170,6 +172,7 @@ public:
     IndirectStats stats() const override;
 
     const PropagationGrid& grid() const { return grid_; }
+    const PropagationVolumeSettings& settings() const { return settings_; }
     // Steps the rule gives this grid (settings.iterations when set).
     int iterations() const;
 
@@ -187,6 +190,9 @@ public:
     // The geometry volume: the share of the face between cell (i, j, k)
     // and its +axis neighbour that surfaces block, in [0, 1].
     double blocking(int axis, int i, int j, int k) const;
+    // The source's virtual point lights gathered per cell (SH intensity,
+    // W·sr⁻¹ coefficients): what setSource propagates.
+    std::vector<ShRgb> inject(const std::vector<IrradianceMeshCopy>& irradiance) const;
     // Injects raw intensity (SH coefficients, W·sr⁻¹) into cells and
     // propagates it as setSource does; for the energy tests.
     void propagateInjected(size_t slot, const std::vector<ShRgb>& injected);

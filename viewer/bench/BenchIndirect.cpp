@@ -14,6 +14,7 @@
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
+#include "gpu_sampling/indirect/PropagationCompute.h"
 #include "gpu_sampling/indirect/PropagationVolume.h"
 #include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
@@ -989,6 +990,35 @@ std::string lpvSection(const std::vector<Row>& rows) {
     return md.str();
 }
 
+// The propagation's steps on the CPU (the estimator's loops, double, one
+// thread) and as a GL compute shader (PropagationCompute, float), on the
+// same injected light of the bench's source: which is faster on this GL.
+std::string lpvComputeSection(GlContext& context, const Scene& scene, const std::vector<IrradianceMeshCopy>& source) {
+    BenchTable t({"cells", "steps", "CPU s", "GL compute s", "GL upload + readback ms", "GL / CPU"});
+    for (const int cells : {8, 16, 32}) {
+        PropagationVolumeSettings s;
+        s.cells = cells;
+        PropagationVolume v(scene, s);
+        const std::vector<ShRgb> injected = v.inject(source);
+        v.propagateInjected(0, injected);
+        const PropagationVolume::Report& cpu = v.report(0);
+        PropagationCompute gpu(context, v);
+        gpu.propagate(injected, 1);  // untimed: the first dispatch compiles the shader
+        const PropagationCompute::Result r = gpu.propagate(injected, cpu.steps);
+        const PropagationGrid& g = v.grid();
+        t.addRow({concat(g.dims[0], "x", g.dims[1], "x", g.dims[2]), std::to_string(cpu.steps),
+                  benchNumber(cpu.propagateSeconds), benchNumber(r.propagateSeconds),
+                  benchNumber(1e3 * (r.uploadSeconds + r.readbackSeconds)),
+                  benchNumber(r.propagateSeconds / cpu.propagateSeconds)});
+    }
+    std::ostringstream md;
+    md << "\nThe same steps as a GL compute shader (propagate_step.comp: a cell per invocation gathering from its 6 "
+          "neighbours, 4×4×4 work groups, float) against the estimator's CPU loops (double, one thread), on the "
+          "source's injected light:\n\n"
+       << t.markdown();
+    return md.str();
+}
+
 std::string summaryMarkdown(const BenchRun& run, const RunInfo& info, const std::vector<Row>& rows,
                             const std::vector<Comparison>& cs) {
     std::ostringstream md;
@@ -1053,7 +1083,6 @@ std::string summaryMarkdown(const BenchRun& run, const RunInfo& info, const std:
           "configuration), "
           "indirect_equal_error.csv (the target), indirect_points.csv (points and references).\n";
     md << volumeSection(rows);
-    md << lpvSection(rows);
     return md.str();
 }
 
@@ -1161,7 +1190,8 @@ int runBenchIndirect(const BenchOptions& options) {
     std::printf("\nSlices against the perspective triangle gather at equal error (target: %gx faster).\n\n%s",
                 kSpeedupTarget, compareT.aligned().c_str());
     std::printf("%s", volumeSection(rows).c_str());
-    std::printf("%s", lpvSection(rows).c_str());
+    const std::string lpv = lpvSection(rows) + lpvComputeSection(*context, scene, source);
+    std::printf("%s", lpv.c_str());
     const std::string vpl = vplSection(rows, upsamplingSection(scene, source, options.quick ? 128 : 320, 256));
     std::printf("%s", vpl.c_str());
 
@@ -1177,7 +1207,7 @@ int runBenchIndirect(const BenchOptions& options) {
     info.sourceRays = work.sourceRaysSide * work.sourceRaysSide;
     info.passes = work.passes;
     info.wallSeconds = run.seconds();
-    run.write("indirect_summary.md", summaryMarkdown(run, info, rows, comparisons) + vpl);
+    run.write("indirect_summary.md", summaryMarkdown(run, info, rows, comparisons) + vpl + lpv);
     std::printf("\n");
     run.printWallTime(info.wallSeconds);
     return 0;
