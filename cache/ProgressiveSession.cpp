@@ -75,11 +75,15 @@ ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings
     }
     if (settings_.indirect && settings_.indirect->bounces > 0) {
         solver_ = std::make_unique<IndirectSolver>(scene_, *settings_.indirect);
-        // Caustics are indirect light: only with it, and only where a light
-        // sees a specular object (no BVH is built for a scene without one).
-        auto caustics = std::make_unique<CausticCache>(scene_, settings_.caustics);
-        if (caustics->active()) caustics_ = std::move(caustics);
+        traceCaustics();
     }
+}
+
+void ProgressiveSession::traceCaustics() {
+    // Caustics are indirect light: only with it, and only where a light
+    // sees a specular object (no BVH is built for a scene without one).
+    auto caustics = std::make_unique<CausticCache>(scene_, settings_.caustics);
+    caustics_ = caustics->active() ? std::move(caustics) : nullptr;
 }
 
 ProgressiveSession::~ProgressiveSession() {
@@ -179,7 +183,11 @@ InvalidationReport ProgressiveSession::applyChange(Scene& scene, const SceneChan
     Scene before = std::move(scene);
     scene = applied.scene;
     try {
-        return invalidateCache(cache_, solver_.get(), coverage_.get(), before, applied);
+        const InvalidationReport report = invalidateCache(cache_, solver_.get(), coverage_.get(), before, applied);
+        // Photons start over in the changed scene: a moved light or object
+        // moves its caustics everywhere they fall.
+        if (solver_) traceCaustics();
+        return report;
     } catch (...) {
         scene = std::move(before);
         throw;

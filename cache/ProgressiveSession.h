@@ -124,6 +124,9 @@ private:
     // its thread, but a viewer's window context must not see any context's
     // teardown on the window's thread.
     void release();
+    // Makes the caustic cache for the scene as it is (none if no light sees
+    // a specular object).
+    void traceCaustics();
 
     const Scene& scene_;
     SessionSettings settings_;

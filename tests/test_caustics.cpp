@@ -5,6 +5,7 @@
 
 #include "cache/CausticCache.h"
 #include "cache/ProgressiveSession.h"
+#include "core/SceneChange.h"
 #include "core/SmoothSpecular.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/reference/Lambert.h"
@@ -219,6 +220,24 @@ TEST(Caustics, NoSpecularMaterialMakesNoCausticMesh) {
     settings.indirect = IndirectSettings{};
     ProgressiveSession session(scene, settings, [] { return WorkerSamplers{}; });
     EXPECT_EQ(session.caustics(), nullptr);
+}
+
+// A moved object moves its caustics: the session traces them again in the
+// changed scene (none once the mirror is taken below the floor, where the
+// light facing up cannot see it; photons anew once it is back).
+TEST(Caustics, ASceneChangeTracesThemAgain) {
+    Scene scene = sceneOf("mirror", {emitter(), grey(), mirror(0.9)},
+                          {quadMesh("light", 0, Vec3(-0.1, 0.5, -0.1), 0.2 * kZ, 0.2 * kX), test::floorMesh(),
+                           quadMesh("mirror", 2, Vec3(-1.5, 1.0, -1.5), 3.0 * kX, 3.0 * kZ)});
+    SessionSettings settings;
+    settings.indirect = IndirectSettings{};
+    ProgressiveSession session(scene, settings, [] { return WorkerSamplers{}; });
+    ASSERT_NE(session.caustics(), nullptr);
+    session.applyChange(scene, SceneChange::moveObject("mirror", Vec3(0.0, -3.0, 0.0)));
+    EXPECT_EQ(session.caustics(), nullptr);
+    session.applyChange(scene, SceneChange::moveObject("mirror", Vec3(0.0, 3.0, 0.0)));
+    ASSERT_NE(session.caustics(), nullptr);
+    EXPECT_EQ(session.caustics()->photonsEmitted(), 0u);
 }
 
 // A mirror no light sees (facing away from the only light) has no caustics.
