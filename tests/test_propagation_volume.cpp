@@ -20,7 +20,6 @@
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"
 #include "core/SphericalHarmonics.h"
-#include "core/raytrace/BounceCount.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/SamplerFactory.h"
@@ -361,14 +360,7 @@ test::RoomLeak leakOf(const Scene& scene, const std::vector<IrradianceMeshCopy>&
     PropagationVolumeSettings s;
     s.occlusion = occlusion;
     PropagationVolume v(scene, s);
-    const BounceCount plan = countBounces(scene);
-    IndirectSettings is;
-    is.bounces = plan.bounces;
-    is.albedo = plan.meanAlbedo;
-    IndirectSolver solver(scene, is);
-    for (int r = 0; r < 4000 && !solver.allFinished(); ++r) solver.step(v, [&] { return direct; }, 512, 7, std::nullopt);
-    EXPECT_TRUE(solver.allFinished());
-    const test::RoomLeak leak = test::roomLeak(solver.copyMeshes());
+    const test::RoomLeak leak = test::solvedRoomLeak(scene, v, direct);
     EXPECT_GT(leak.lit, 0.05);
     return leak;
 }
