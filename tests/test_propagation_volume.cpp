@@ -240,11 +240,12 @@ TEST(PropagationVolume, TheComputeShaderPropagatesAsTheLoopsDo) {
 // its cell over the face's area, so at the centres of all the grid's outer
 // faces it averages exactly to a·E0 times the share of the injected flux
 // that arrived (the rest still moving after the last step): to rounding.
-// Pointwise, the lattice spreads a beam sideways by 7% a step (see
+// Pointwise, the lattice spreads a beam sideways by 7.4% a step (see
 // ASettledBeamGoesOnAndNeverBack), so light running along a wall lands on
-// the walls it meets at edges and corners: measured at 16 cells 5-8% low
-// over the walls' middle halves (more than 4 cells from an edge), up to
-// 35% high in the corner cells. Allowed: 10% over the middle halves.
+// the walls it meets at edges and corners: measured at 16 cells at most
+// 8.6% off (low) over the walls' middle halves (4 cells or more from an
+// edge), up to 35% high in the corner cells. Allowed: 10% over the middle
+// halves.
 TEST(PropagationVolume, UniformBoxFirstBounce) {
     const double a = 0.8, e0 = 2.0;
     const Scene scene = test::furnaceBox(a, 0.0);
