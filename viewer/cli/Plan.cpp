@@ -249,7 +249,12 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         std::printf("  indirect light: %s\n", b.reason.c_str());
         std::printf("  indirect gather: %s; %s\n", indirect.describe().c_str(), indirect.methodReason.c_str());
         std::printf("  gathered lights: %s\n", indirect.gatheredReason.c_str());
-        if (indirect.method != "raytrace" && indirect.method != "volume") {  // the others gather from voxels or a proxy cut to them
+        // The slice, raymarch and triangle gathers draw a proxy cut to
+        // voxels; the ray gather reads the cache itself, and the volume, the
+        // virtual point lights and the propagation volume have grids of their own.
+        const bool voxelProxy = indirect.method != "raytrace" && indirect.method != "volume" &&
+                                indirect.method != "vpl" && indirect.method != "lpv";
+        if (voxelProxy) {
             const VoxelGrid grid = VoxelGrid::fit(scene.bounds, indirect.gather.resolution);
             std::printf("  voxel grid: %s voxels of %.4g, at most %d slice faces of %.1f MB in all per bounce "
                         "(empty faces are freed)\n",
