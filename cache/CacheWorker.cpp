@@ -204,8 +204,12 @@ void CacheWorker::run() {
                 const double firstPass = 1 - double(unsampled) / double(std::max<size_t>(cache_.totalVertices(), 1));
                 const double left = directRate > 0 ? double(unsampled) / directRate : 1e30;
                 const IndirectSettings& is = indirect_->settings();
+                // After a scene change the image shows the old indirect light
+                // until bounce 1 is gathered again: it starts at once, from
+                // direct light as far as it is (gathered again when complete).
                 if (!indirectStarted &&
-                    (directConverged || unsampled == 0 || (firstPass >= is.startFraction && left > is.startSeconds))) {
+                    (directConverged || unsampled == 0 || indirect_->showingStale() ||
+                     (firstPass >= is.startFraction && left > is.startSeconds))) {
                     indirectStarted = true;
                     sourceIncomplete = unsampled > 0;
                 }

@@ -112,6 +112,8 @@ public:
     // displayMeshes() gives what it gave before the change: the old
     // indirect light, on the old geometry, as a stand-in.
     void sceneChanged();
+    // displayMeshes() shows the light from before a scene change.
+    bool showingStale() const { return !stale_.empty() && !firstBounceShown(); }
 
     // Once every bounce has converged: one more refinement level for every
     // bounce's cache (IrradianceCache::tighten), and pass 2 again from

@@ -98,6 +98,9 @@ std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c) {
 struct TimedImage {
     double seconds = 0;
     ImageRgb image;
+    uint64_t samples = 0;         // the snapshot's
+    int bouncesFinished = 0;      // of its indirect light
+    double estimatedError = 1;    // the cache's own
 };
 
 // The latest snapshot composited at the error size every kEvery seconds
@@ -110,7 +113,8 @@ std::vector<TimedImage> follow(ProgressiveSession& session, CacheWorker::Reader&
     std::vector<TimedImage> images;
     for (double due = kEvery; due <= limit + 1e-9; due += kEvery) {
         const CacheSnapshot* s = snapshotAt(session, reader, start, due);
-        images.push_back({due, compositor.render(camera, s->direct, s->indirect, comp)});
+        images.push_back({due, compositor.render(camera, s->direct, s->indirect, comp), s->samples, s->bouncesFinished,
+                          s->estimatedError});
     }
     return images;
 }
@@ -122,6 +126,9 @@ struct MotionResult {
     std::vector<size_t> stepFrames;   // frames drawn while each step was being applied
     std::vector<std::string> reports;
     std::vector<double> warmCurve, coldCurve;  // relative RMSE against converged, every kEvery s
+    std::vector<TimedImage> warm, cold;         // their images (samples, bounces, estimated error)
+    int levelAtMove = 0;                        // the direct cache's refinement level when the motion began
+    size_t verticesAtMove = 0;
     double warmPt05 = 0, warmPt5 = 0, coldPt05 = 0, coldPt5 = 0;  // against the path tracer
     double convergedPt = 0;           // the converged image against the path tracer
     double referenceNoise = 0;        // the reference's mean relative standard error
@@ -164,6 +171,13 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     CacheWorker::Reader reader = session->reader();
     run.progress("%s: settling for %.0f s\n", motion.name.c_str(), w.settle);
     snapshotAt(*session, reader, Clock::now(), w.settle);
+    session->stop();  // to read the cache: the frame loop's first step would stop it anyway
+    r.levelAtMove = session->cache().level();
+    r.verticesAtMove = session->cache().totalVertices();
+    reader = CacheWorker::Reader();
+    session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
+    reader = session->reader();
+    snapshotAt(*session, reader, Clock::now(), 0);
 
     // The frame loop while moving, each step applied on a helper thread.
     CompositorSettings frame;
@@ -250,6 +264,8 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     r.coldPt5 = at(cold, reference.radiance, 5.0);
     r.convergedPt = relativeRmse(converged, reference.radiance);
     r.warmWithin2 = within(r.warmCurve, 0.02);
+    r.warm = warm;
+    r.cold = cold;
     r.coldWithin2 = within(r.coldCurve, 0.02);
     return r;
 }
@@ -315,7 +331,8 @@ int runBenchDynamic(const BenchOptions& options) {
                         "warm_0.5s_vs_pt_pct", "warm_5s_vs_pt_pct", "cold_0.5s_vs_pt_pct", "cold_5s_vs_pt_pct",
                         "converged_vs_pt_pct", "reference_noise_pct", "warm_within_2pct_s", "cold_within_2pct_s"});
     BenchTable targets({"motion", "target", "measured", "met"});
-    BenchTable curves({"motion", "start", "seconds", "vs_converged_pct"});
+    BenchTable curves({"motion", "start", "seconds", "vs_converged_pct", "samples", "bounces_finished",
+                       "estimated_error_pct"});
     for (const MotionResult& r : results) {
         for (size_t i = 0; i < r.frameMs.size(); ++i) frames.addRow({r.name, std::to_string(i), benchNumber(r.frameMs[i])});
         std::vector<double> stepMs;
@@ -328,10 +345,16 @@ int runBenchDynamic(const BenchOptions& options) {
                         benchNumber(percentile(stepMs, 1.0)), benchPct(at05), benchPct(at5), benchPct(r.warmPt05),
                         benchPct(r.warmPt5), benchPct(r.coldPt05), benchPct(r.coldPt5), benchPct(r.convergedPt),
                         benchPct(r.referenceNoise), cell(r.warmWithin2), cell(r.coldWithin2)});
-        for (size_t k = 0; k < r.warmCurve.size(); ++k)
-            curves.addRow({r.name, "warm", benchNumber(kEvery * double(k + 1)), benchPct(r.warmCurve[k])});
-        for (size_t k = 0; k < r.coldCurve.size(); ++k)
-            curves.addRow({r.name, "cold", benchNumber(kEvery * double(k + 1)), benchPct(r.coldCurve[k])});
+        for (const char* kind : {"warm", "cold"}) {
+            const bool isWarm = std::string(kind) == "warm";
+            const std::vector<double>& c = isWarm ? r.warmCurve : r.coldCurve;
+            const std::vector<TimedImage>& im = isWarm ? r.warm : r.cold;
+            for (size_t k = 0; k < c.size(); ++k)
+                curves.addRow({r.name, kind, benchNumber(im[k].seconds), benchPct(c[k]), std::to_string(im[k].samples),
+                               std::to_string(im[k].bouncesFinished), benchPct(im[k].estimatedError)});
+        }
+        std::printf("%s: the direct cache was at refinement level %d with %zu vertices when the motion began\n",
+                    r.name.c_str(), r.levelAtMove, r.verticesAtMove);
         // Frames never wait: frames kept coming while every step was being
         // applied (the helper's time is what a frame would have waited).
         const size_t fewest = r.stepFrames.empty() ? 0 : *std::min_element(r.stepFrames.begin(), r.stepFrames.end());

@@ -30,7 +30,8 @@
 // converged image is the cold start's own last one, which favours the cold
 // start (its last images share that image's refinement and jitter).
 // Writes dynamic_frames.csv (every frame while moving), dynamic_curves.csv
-// (the error curves), dynamic_summary.csv, dynamic_targets.csv,
+// (the error curves, with each image's samples, bounces finished and the
+// cache's estimated error), dynamic_summary.csv, dynamic_targets.csv,
 // dynamic_plots.gp and its PNG, dynamic_summary.md. Times are measured and
 // reported, never asserted.
 //
