@@ -112,6 +112,10 @@ public:
     // displayMeshes() gives what it gave before the change: the old
     // indirect light, on the old geometry, as a stand-in.
     void sceneChanged();
+    // A new worker's estimator holds none of the sources built in the one
+    // before (ProgressiveSession::start after a stop): they are built again
+    // when next needed.
+    void sourcesLost() { sourceBuilt_.assign(sourceBuilt_.size(), false); }
     // displayMeshes() shows the light from before a scene change.
     bool showingStale() const { return !stale_.empty() && !firstBounceShown(); }
 

@@ -106,6 +106,7 @@ uint64_t ProgressiveSession::start(const std::optional<RefinementCamera>& view, 
         setup();
         return inner();
     };
+    if (solver_) solver_->sourcesLost();  // the new worker's estimator starts empty
     worker_ = std::make_unique<CacheWorker>(cache_, std::move(factory), settings_.worker, solver_.get(), caustics_.get());
     const uint64_t serial = worker_->setCamera(view);
     startTime_ = Clock::now();

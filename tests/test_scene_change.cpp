@@ -424,3 +424,47 @@ TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
 
 }  // namespace
 }  // namespace ml
+
+namespace ml {
+namespace {
+
+TEST(CacheInvalidation, ARefusedChangeLeavesASessionThatRefinesOn) {
+    // A change refused (an unknown object) leaves scene and cache as they
+    // were, and the viewer starts a new worker on them. A new worker's
+    // estimator has none of the sources the solver built with the one
+    // before (before the fix: "ray gather: source 0 is not built"), so the
+    // session is stopped and started again every 0.05 s while indirect
+    // light is gathered (about 0.3 s here), a refused change between each.
+    Scene scene = plateScene();
+    SessionSettings s = coarse();
+    IndirectChoice indirect;
+    indirect.method = "raytrace";
+    indirect.bounces.forced = 2;
+    indirect.decide(scene);
+    s.indirect = indirect.solver;
+    s.indirect->cache.maxEdgeFraction = 1.0 / 8;
+    DirectChoice direct;
+    direct.exact = true;
+    ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect));
+    StopRule slice;
+    slice.seconds = 0.05;
+    int restartsWhileGathering = 0;
+    for (int i = 0; i < 400 && !session.indirect()->allFinished(); ++i) {
+        session.start();
+        CacheWorker::Reader reader = session.reader();
+        ASSERT_NO_THROW(session.refineUntil(reader, slice, 0)) << "slice " << i;
+        reader = CacheWorker::Reader();
+        session.stop();
+        ASSERT_NO_THROW(session.rethrowIfFailed()) << "slice " << i;
+        restartsWhileGathering += session.indirect()->started() > 0 && !session.indirect()->allFinished();
+        const size_t vertices = session.cache().totalVertices();
+        EXPECT_THROW(session.applyChange(scene, SceneChange::moveObject("ghost", kX)), InputError);
+        EXPECT_EQ(session.cache().totalVertices(), vertices);
+    }
+    EXPECT_EQ(scene.meshes[2].positions, plateScene().meshes[2].positions);
+    EXPECT_TRUE(session.indirect()->allFinished());
+    EXPECT_GT(restartsWhileGathering, 0);  // the case the fix is for was met
+}
+
+}  // namespace
+}  // namespace ml
