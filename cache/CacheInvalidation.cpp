@@ -202,7 +202,7 @@ InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indi
     if (object && !after.lights.empty()) {
         for (size_t mesh = 0; mesh < direct.meshCount(); ++mesh) {
             const bool isShared = shared && mesh == lights;
-            r.shadowVertices += direct.forget(mesh, [&](const Vec3& x, const Vec3&) {
+            const size_t forgotten = direct.forget(mesh, [&](const Vec3& x, const Vec3&) {
                 for (size_t l = 0; l < after.lights.size(); ++l) {
                     if (!isShared && l != mesh) continue;
                     if (std::find(change.lights.begin(), change.lights.end(), l) != change.lights.end()) continue;
@@ -213,6 +213,12 @@ InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indi
                 }
                 return false;
             });
+            r.shadowVertices += forgotten;
+            // Where shadows moved, the mesh's refinement followed them: laid
+            // again on the base, keeping the base's valid samples, it is
+            // back sooner than by sampling those refined vertices again
+            // (bench dynamic).
+            if (forgotten > 0) direct.rebuildKeepingBase(mesh, after);
         }
     }
     const size_t total = direct.totalVertices();

@@ -19,12 +19,15 @@
 //    vertex and the light's bounds (hullMeets: exact for a point and a box,
 //    so the test is conservative only by the object's box). The object's
 //    own cache faces move with it (every direct mesh) and are forgotten.
+//    A mesh where any vertex was forgotten is then laid again on the base,
+//    keeping the samples of the base vertices that still have them
+//    (IrradianceCache::rebuildKeepingBase): its refinement was densest
+//    where the shadows were, and sampling those vertices again (most need
+//    the rasteriser) took far longer than refining anew (bench dynamic).
 //  - Indirect light: every bounce is stale; the bounces are made again from
 //    base meshes and gathered bounce after bounce, the old indirect meshes
 //    shown meanwhile (IndirectSolver::sceneChanged).
-//  - Elsewhere (a moved object), refinement (splits, levels) is kept: where
-//    a shadow has gone the mesh stays finer than it needs, and new shadow
-//    edges are split as the forgotten vertices' new samples find them.
+//  - Meshes nothing was forgotten in keep their refinement and samples.
 #pragma once
 
 #include "IndirectSolver.h"

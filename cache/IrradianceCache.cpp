@@ -297,6 +297,34 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     for (size_t l = 0; l < s.meshes.size(); ++l) layMesh(s, layout, l, scene, base);
 }
 
+size_t IrradianceCache::rebuildKeepingBase(size_t l, const Scene& scene) {
+    CacheState& s = impl_->state;
+    const detail::LightMesh old = s.meshes.at(l);
+    rebuildMesh(l, scene);
+    // A base vertex keeps the samples of the vertex that was at its very
+    // place, facing its very way (the base is built the same way each time,
+    // to the bit; moved parts were forgotten already).
+    using Key = std::array<double, 6>;
+    std::map<Key, size_t> sampled;
+    for (auto v : old.mesh.vertices()) {
+        const size_t i = size_t(v.idx());
+        if (old.stats[i].count == 0) continue;
+        const auto p = old.mesh.point(v), n = old.mesh.normal(v);
+        sampled.emplace(Key{p[0], p[1], p[2], n[0], n[1], n[2]}, i);
+    }
+    detail::LightMesh& lm = s.meshes[l];
+    size_t kept = 0;
+    for (auto v : lm.mesh.vertices()) {
+        const auto p = lm.mesh.point(v), n = lm.mesh.normal(v);
+        const auto it = sampled.find(Key{p[0], p[1], p[2], n[0], n[1], n[2]});
+        if (it == sampled.end()) continue;
+        lm.stats[size_t(v.idx())] = old.stats[it->second];
+        ++kept;
+    }
+    lm.gridStats = old.gridStats;
+    return kept;
+}
+
 size_t IrradianceCache::rebuildMesh(size_t l, const Scene& scene) {
     CacheState& s = impl_->state;
     const size_t before = s.meshes.at(l).mesh.n_vertices();

@@ -221,6 +221,11 @@ public:
     // unsampled, as the cache was made: a moved light's own mesh, whose
     // refinement followed shadows that are gone. Returns the vertices it had.
     size_t rebuildMesh(size_t mesh, const Scene& scene);
+    // The same, keeping the samples of base vertices that still have them:
+    // after a moved object, the mesh's refinement away from the base costs
+    // more to sample again where it was forgotten than to refine anew
+    // (bench dynamic). Returns the vertices that kept their samples.
+    size_t rebuildKeepingBase(size_t mesh, const Scene& scene);
     // Follows the changed scene: its emitters (where border vertices are
     // sampled) and the fingerprint a saved cache records.
     void sceneChanged(const Scene& after);

@@ -256,49 +256,49 @@ TEST(CacheInvalidation, AMovedObjectForgetsWhatItMayShadowAndKeepsTheRest) {
     const IrradianceMeshCopy before = session.cache().copyMesh(0);
     const InvalidationReport r = session.applyChange(scene, SceneChange::moveObject("plate", Vec3(1.0, 0.0, 0.0)));
     const IrradianceMeshCopy after = session.cache().copyMesh(0);
-    ASSERT_EQ(after.positions.size(), before.positions.size());
+    // Where shadows moved, the light's mesh is laid again on the base (its
+    // vertices numbered first, as before refinement), keeping the base's
+    // valid samples.
+    ASSERT_LT(after.positions.size(), before.positions.size());
     ASSERT_EQ(session.cache().meshCount(), 1u);
     EXPECT_EQ(r.lightVertices, 0u);
     EXPECT_EQ(r.indirectVertices, 0u);
-    // The plate's own vertices moved with it, and only they moved.
+    // The plate's vertices are where it is now, unsampled; elsewhere exactly
+    // the vertices whose view of the light the plate may have changed are
+    // unsampled, and every kept sample is the new scene's exact irradiance
+    // (the sampler is exact: one sample is the value, to rounding).
     size_t moved = 0;
     const ExactDirect exact(scene);
     const Bounds3 oldBox{Vec3(-0.2, 0.4, -0.2), Vec3(0.2, 0.5, 0.2)}, newBox{Vec3(0.8, 0.4, -0.2), Vec3(1.2, 0.5, 0.2)};
     const Bounds3 light = scene.lights[0].bounds;
     size_t kept = 0, forgotten = 0;
-    for (size_t v = 0; v < before.positions.size(); ++v) {
-        const Vec3& p = before.positions[v];
-        const bool onPlate = p.y >= 0.4 - 1e-12 && p.y <= 0.5 + 1e-12 && std::abs(p.x) <= 0.2 + 1e-12 &&
+    for (size_t v = 0; v < after.positions.size(); ++v) {
+        const Vec3& p = after.positions[v];
+        const bool onPlate = p.y >= 0.4 - 1e-12 && p.y <= 0.5 + 1e-12 && std::abs(p.x - 1.0) <= 0.2 + 1e-12 &&
                              std::abs(p.z) <= 0.2 + 1e-12;
         if (onPlate) {
             ++moved;
-            expectNear(after.positions[v], p + Vec3(1, 0, 0), "a plate vertex moved by the offset");
             EXPECT_EQ(after.samples[v], 0u) << "plate vertex " << v << " kept a sample";
             continue;
         }
-        expectNear(after.positions[v], p, "a vertex off the plate stays");
         const Vec3 x = session.cache().position(0, v);
         const bool reach = hullMeets(x, light, oldBox) || hullMeets(x, light, newBox);
-        // Exactly the vertices whose view of the light the plate may have
-        // changed are forgotten ...
         EXPECT_EQ(after.samples[v] == 0, reach) << "vertex " << v << " at " << p.x << "," << p.y << "," << p.z;
         if (after.samples[v] == 0) {
             ++forgotten;
             continue;
         }
-        // ... and every kept sample is the new scene's exact irradiance (the
-        // sampler is exact: one sample is the value, to rounding).
         ++kept;
         const Rgb e = exact.irradiance(0, x, after.normals[v]);
         EXPECT_LE(glm::length(after.irradiance[v] - e), 1e-9 * (1 + glm::length(e))) << "kept vertex " << v;
     }
-    EXPECT_EQ(r.movedVertices, moved);
+    EXPECT_GE(r.movedVertices, moved);  // the report counts the refined mesh's, before it was laid again
     EXPECT_GT(moved, 0u);
     EXPECT_GT(forgotten, 0u);
     // The floor's far corner sees the light past both boxes: kept.
-    EXPECT_GT(after.samples[floorVertexNear(before, Vec3(-1.5, 0.0, -1.5))], 0u);
+    EXPECT_GT(after.samples[floorVertexNear(after, Vec3(-1.5, 0.0, -1.5))], 0u);
     EXPECT_GT(kept, 0u);
-    EXPECT_EQ(r.shadowVertices, forgotten);
+    EXPECT_GE(r.shadowVertices, forgotten);
     EXPECT_EQ(r.keptVertices, kept);
 }
 
@@ -311,16 +311,19 @@ TEST(CacheInvalidation, AMovedObjectsOldShadowDisappears) {
     ASSERT_LT(glm::length(before.positions[v]), 1e-9);  // the floor's centre is a base vertex
     EXPECT_EQ(before.irradiance[v], Rgb(0.0));         // in the plate's umbra
     session.applyChange(scene, SceneChange::moveObject("plate", Vec3(1.0, 0.0, 0.0)));
-    EXPECT_EQ(session.cache().copyMesh(0).samples[v], 0u);  // forgotten, to be sampled first
+    const IrradianceMeshCopy changed = session.cache().copyMesh(0);
+    EXPECT_EQ(changed.samples[floorVertexNear(changed, Vec3(0.0))], 0u);  // forgotten, to be sampled first
     refineToConvergence(session);
     const IrradianceMeshCopy after = session.cache().copyMesh(0);
+    const size_t c = floorVertexNear(after, Vec3(0.0));
+    ASSERT_LT(glm::length(after.positions[c]), 1e-9);
     // Nothing is in the way any more: Lambert's value for the light at the
     // centre, E = L × the unoccluded cosine solid angle (to rounding: the
     // sampler is exact).
     const ExactDirect exact(scene);
-    const double unoccluded = 10.0 * exact.unoccludedCosineSolidAngle(0, after.positions[v], kY);
+    const double unoccluded = 10.0 * exact.unoccludedCosineSolidAngle(0, after.positions[c], kY);
     EXPECT_GT(unoccluded, 0.3);  // 0.2² / 1² × π/π: about 0.4
-    EXPECT_NEAR(after.irradiance[v].r, unoccluded, 1e-9 * unoccluded);
+    EXPECT_NEAR(after.irradiance[c].r, unoccluded, 1e-9 * unoccluded);
 }
 
 TEST(CacheInvalidation, ALightMovedAndMovedBackRestoresTheCache) {
