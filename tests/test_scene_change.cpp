@@ -22,6 +22,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <string>
 
 namespace ml {
@@ -228,6 +229,21 @@ SamplerFactory exactFactory(const Scene& scene) {
     return samplerFactory(scene, direct, indirect);
 }
 
+// A session with indirect light too: the exact direct sampler and the ray
+// gather (Embree, no GL), `bounces` bounces on a coarse indirect cache.
+std::unique_ptr<ProgressiveSession> indirectSession(Scene& scene, int bounces) {
+    SessionSettings s = coarse();
+    IndirectChoice indirect;
+    indirect.method = "raytrace";
+    indirect.bounces.forced = bounces;
+    indirect.decide(scene);
+    s.indirect = indirect.solver;
+    s.indirect->cache.maxEdgeFraction = 1.0 / 8;
+    DirectChoice direct;
+    direct.exact = true;
+    return std::make_unique<ProgressiveSession>(scene, s, samplerFactory(scene, direct, indirect));
+}
+
 void refineToConvergence(ProgressiveSession& session) {
     session.start();
     CacheWorker::Reader reader = session.reader();
@@ -385,16 +401,8 @@ TEST(CacheInvalidation, ALightMovedAndMovedBackRestoresTheCache) {
 
 TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
     Scene scene = plateScene();
-    SessionSettings s = coarse();
-    IndirectChoice indirect;
-    indirect.method = "raytrace";
-    indirect.bounces.forced = 1;
-    indirect.decide(scene);
-    s.indirect = indirect.solver;
-    s.indirect->cache.maxEdgeFraction = 1.0 / 8;
-    DirectChoice direct;
-    direct.exact = true;
-    ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect));
+    const std::unique_ptr<ProgressiveSession> owned = indirectSession(scene, 1);
+    ProgressiveSession& session = *owned;
     session.start();
     CacheWorker::Reader reader = session.reader();
     StopRule stop;
@@ -439,16 +447,8 @@ TEST(CacheInvalidation, ARefusedChangeLeavesASessionThatRefinesOn) {
     // session is stopped and started again every 0.05 s while indirect
     // light is gathered (about 0.3 s here), a refused change between each.
     Scene scene = plateScene();
-    SessionSettings s = coarse();
-    IndirectChoice indirect;
-    indirect.method = "raytrace";
-    indirect.bounces.forced = 2;
-    indirect.decide(scene);
-    s.indirect = indirect.solver;
-    s.indirect->cache.maxEdgeFraction = 1.0 / 8;
-    DirectChoice direct;
-    direct.exact = true;
-    ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect));
+    const std::unique_ptr<ProgressiveSession> owned = indirectSession(scene, 2);
+    ProgressiveSession& session = *owned;
     StopRule slice;
     slice.seconds = 0.05;
     int restartsWhileGathering = 0;
