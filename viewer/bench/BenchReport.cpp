@@ -6,6 +6,7 @@
 #include "BenchLights.h"
 #include "BenchRun.h"
 #include "BenchScaling.h"
+#include "BenchScenes.h"
 #include "BenchView.h"
 #include "Gnuplot.h"
 #include "ReportHtml.h"
@@ -186,6 +187,22 @@ std::vector<ReportSection> reportSections() {
               "Direct-light pairs by how they are answered: below the horizon, nothing in the way (closed form), "
               "the light behind one occluder polygon (zero), rasterised; share and microseconds each.",
               {}},
+         }},
+        {"scenes", "Public scenes: render against the path tracer",
+         "The scenes of ../shared/scenes as a user renders them: `meshlight render --time T` (left) and "
+         "`meshlight reference` (right) of the same view at the reference's exposure, with the relative RMSE and "
+         "the mean ratio. A mirror and a glass ball (CornellBox-Sphere: the specular pass and caustics), a water "
+         "surface (CornellBox-Water) and the glTF back rooms (textures, 16 lights of which six glowing walls are "
+         "gathered).",
+         runBenchScenes, "scenes_summary.md",
+         {
+             {"scenes_sphere.png", "CornellBox-Sphere: render (left), path tracer (right).", {"scenes.csv"}},
+             {"scenes_water.png", "CornellBox-Water: render (left), path tracer (right).", {"scenes.csv"}},
+             {"scenes_backrooms.png", "The glTF back rooms: render (left), path tracer (right).", {"scenes.csv"}},
+         },
+         {
+             {"scenes.csv", "Relative RMSE and mean ratio of each render against its reference, and the commands.",
+              {"scene", "width", "height", "render_s", "reference_spp", "relative_rmse_pct", "mean_ratio"}},
          }},
     };
 }
