@@ -216,11 +216,14 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
             source = cache.copyMeshes();
         else
             source.push_back(solver.copyMesh(b - 1));
-        estimator->setSource(0, source);
+        // Slot 0 is bounce 1's (where the ray gather would add gathered
+        // lights' emission, GatheredLights.h); later bounces use slot 1.
+        const size_t slot = b == 1 ? 0 : 1;
+        estimator->setSource(slot, source);
         for (size_t i = 0; i < points.size(); ++i) {
             Rgb e(0.0);
             for (int k = 0; k < choice.passes; ++k)
-                e += estimator->estimate(0, points[i].position, points[i].normal,
+                e += estimator->estimate(slot, points[i].position, points[i].normal,
                                          seedFor(choice.seed, uint32_t(i), 0x1d1ec7u + uint32_t(b), uint32_t(k)));
             sum[i] += e / double(choice.passes);
             progress.update(size_t(b - 1) * points.size() + i + 1);
@@ -238,6 +241,10 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
 SensorReadings measureCache(const Scene& scene, SensorSettings& s, const std::vector<SensorPoint>& points,
                             const char* label, const InterruptGuard* interrupt) {
     s.indirect.decide(scene);
+    // The direct columns sample every light at the points themselves, so no
+    // light may also come through the gather (GatheredLights.h).
+    s.indirect.solver.gatheredLights.clear();
+    s.indirect.gatheredReason = "every light is sampled directly (probe and grid report each light's direct light)";
     if (s.indirect.enabled) std::printf("indirect light: %s\n", s.indirect.bounceCount.reason.c_str());
     SensorReadings r;
     r.indirect = s.indirect.enabled;
