@@ -24,8 +24,6 @@
 #include "gpu_sampling/indirect/IrradianceVolume.h"
 #include "gpu_sampling/indirect/RadianceProxy.h"
 #include "gpu_sampling/indirect/RayGather.h"
-#include "gpu_sampling/indirect/RayGather.h"
-#include "core/raytrace/EmbreeScene.h"
 
 #include <gtest/gtest.h>
 
@@ -470,33 +468,19 @@ TEST(IrradianceVolume, ABlockTopIsOffByTheChangeUpToItsProbes) {
 
 // Direct light exact on its cache, every bounce gathered by the volume to
 // convergence; the dark room's light at test_indirect's points.
-test::RoomLeak leakOf(const Scene& scene, bool visibility) {
-    const ExactDirect exact(scene);
-    CacheSettings cs;
-    cs.maxEdgeFraction = 1.0 / 32;
-    IrradianceCache direct(scene, cs);
-    test::sampleEveryVertex(
-        direct, [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) { return exact.irradiance(l, x, n); }, 1, 1);
-    const std::vector<IrradianceMeshCopy> directMeshes = direct.copyMeshes();
+test::RoomLeak leakOf(const Scene& scene, const std::vector<IrradianceMeshCopy>& direct, bool visibility) {
     IrradianceVolumeSettings vs;
     vs.visibility = visibility;
     IrradianceVolume volume(scene, vs);
-    const BounceCount plan = countBounces(scene);
-    IndirectSettings is;
-    is.bounces = plan.bounces;
-    is.albedo = plan.meanAlbedo;
-    IndirectSolver solver(scene, is);
-    for (int r = 0; r < 4000 && !solver.allFinished(); ++r)
-        solver.step(volume, [&] { return directMeshes; }, 512, 7, std::nullopt);
-    EXPECT_TRUE(solver.allFinished());
-    const test::RoomLeak leak = test::roomLeak(solver.copyMeshes());
+    const test::RoomLeak leak = test::solvedRoomLeak(scene, volume, direct);
     EXPECT_GT(leak.lit, 0.1);
     return leak;
 }
 
 TEST(IrradianceVolume, VisibilityWeightingStopsTheLeakThroughAWall) {
     const Scene scene = test::twoRooms();
-    const test::RoomLeak blind = leakOf(scene, false), seeing = leakOf(scene, true);
+    const std::vector<IrradianceMeshCopy> direct = test::exactDirectSource(scene);
+    const test::RoomLeak blind = leakOf(scene, direct, false), seeing = leakOf(scene, direct, true);
     std::printf("leak, relative to the lit floor (near the partition, beyond, mean): trilinear %.4f %.4f %.4f, "
                 "with visibility %.4f %.4f %.4f\n",
                 blind.nearMax, blind.farMax, blind.mean, seeing.nearMax, seeing.farMax, seeing.mean);
