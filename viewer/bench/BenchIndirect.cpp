@@ -198,48 +198,42 @@ Gatherer gathererOf(std::unique_ptr<Gather> gather, Drawn drawn) {
     return g;
 }
 
+// The estimators that trace or loop on the CPU: no GL phases, nothing drawn.
+Gatherer cpuGatherer(std::unique_ptr<IndirectEstimator> estimator) {
+    Gatherer g;
+    g.estimator = std::move(estimator);
+    g.timePhases = [](bool) {};
+    g.phases = [] { return GatherPhaseTimes{}; };
+    g.drawn = [] { return size_t(0); };
+    return g;
+}
+
 Gatherer makeGatherer(GlContext& context, const Scene& scene, const Config& c) {
     auto nearCount = [](const auto& gather) { return gather.lastNearCount(); };
-    if (c.method == "vpl") {  // CPU: no GL phases, nothing drawn
+    if (c.method == "vpl") {
         VirtualPointLightSettings s;
         s.lights = c.resolution;
         s.nearRays = c.imageSize;
         s.visibility = c.visibility;
-        Gatherer g;
-        g.estimator = std::make_unique<VirtualPointLights>(scene, s);
-        g.timePhases = [](bool) {};
-        g.phases = [] { return GatherPhaseTimes{}; };
-        g.drawn = [] { return size_t(0); };
-        return g;
+        return cpuGatherer(std::make_unique<VirtualPointLights>(scene, s));
     }
-    if (c.method == "lpv") {  // CPU loops: no GL phases, nothing drawn
+    if (c.method == "lpv") {
         PropagationVolumeSettings s;
         s.cells = c.resolution;
         s.occlusion = c.visibility;
-        Gatherer g;
-        g.estimator = std::make_unique<PropagationVolume>(scene, s);
-        g.timePhases = [](bool) {};
-        g.phases = [] { return GatherPhaseTimes{}; };
-        g.drawn = [] { return size_t(0); };
-        return g;
+        return cpuGatherer(std::make_unique<PropagationVolume>(scene, s));
     }
-    if (c.method == "raytrace" || c.method == "volume") {  // CPU rays: no GL phases, nothing drawn
-        Gatherer g;
-        if (c.method == "raytrace") {
-            RayGatherSettings s;
-            s.rays = c.imageSize * c.imageSize / 4;
-            g.estimator = std::make_unique<RayGather>(scene, s);
-        } else {
-            IrradianceVolumeSettings s;
-            s.faceSize = c.imageSize;
-            s.probes = c.resolution;
-            s.visibility = c.visibility;
-            g.estimator = std::make_unique<IrradianceVolume>(scene, s);
-        }
-        g.timePhases = [](bool) {};
-        g.phases = [] { return GatherPhaseTimes{}; };
-        g.drawn = [] { return size_t(0); };
-        return g;
+    if (c.method == "raytrace") {
+        RayGatherSettings s;
+        s.rays = c.imageSize * c.imageSize / 4;
+        return cpuGatherer(std::make_unique<RayGather>(scene, s));
+    }
+    if (c.method == "volume") {
+        IrradianceVolumeSettings s;
+        s.faceSize = c.imageSize;
+        s.probes = c.resolution;
+        s.visibility = c.visibility;
+        return cpuGatherer(std::make_unique<IrradianceVolume>(scene, s));
     }
     if (c.method == "slices" || c.method == "slice-quads") {
         GatherSettings s;
