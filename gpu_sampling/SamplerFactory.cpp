@@ -33,6 +33,12 @@ RayGatherSettings rayGatherSettings(const IndirectChoice& choice) {
 
 // --- Choices -----------------------------------------------------------------
 
+DirectSamplerSettings DirectChoice::commandSampler() {
+    DirectSamplerSettings s;
+    s.cpuCoverageTriangles = kCpuCoverageTriangles;
+    return s;
+}
+
 std::string DirectChoice::describe() const {
     if (exact) return "exact (visible light polygon from CGAL, Lambert's closed form)";
     const bool jittered = sampler.method == DirectMethod::Jittered;
@@ -40,7 +46,11 @@ std::string DirectChoice::describe() const {
                   jittered ? concat(", ", sampler.bits, " bits/pixel") : std::string(),
                   sampler.method == DirectMethod::OcclusionQuery ? std::string()
                                                                  : concat(", ", directEstimatorName(sampler.estimator), " estimator"),
-                  ", ", passes, passes == 1 ? " pass" : " passes");
+                  ", ", passes, passes == 1 ? " pass" : " passes",
+                  sampler.cpuCoverageTriangles > 0 && sampler.estimator == DirectEstimator::ControlVariate &&
+                          sampler.method != DirectMethod::OcclusionQuery
+                      ? concat(", up to ", sampler.cpuCoverageTriangles, " occluder triangles on the CPU")
+                      : std::string());
 }
 
 std::vector<std::string> indirectMethodNames() {

@@ -37,12 +37,18 @@ enum class GlBackend;
 // How direct light is sampled.
 struct DirectChoice {
     bool exact = false;                 // --method exact: closed form, CPU
-    DirectSamplerSettings sampler;      // otherwise the GPU scheme
+    DirectSamplerSettings sampler = commandSampler();  // otherwise the GPU scheme
     int passes = 1;                     // estimates averaged per point (probe)
     uint32_t seed = 1;
     GlBackend backend{};                // GlBackend::Auto
 
     std::string describe() const;       // "jittered 64x64, 8 bits/pixel, cv estimator, 1 pass"
+
+    // The commands' sampler: DirectSamplerSettings' defaults, with pairs
+    // of up to kCpuCoverageTriangles occluder triangles decided on the CPU
+    // (--cpu-coverage).
+    static constexpr int kCpuCoverageTriangles = 64;
+    static DirectSamplerSettings commandSampler();
 };
 
 // How indirect light is gathered, and how many bounces.

@@ -1,6 +1,7 @@
 #include "DirectLightSampler.h"
 
 #include "Jitter.h"
+#include "CpuCoverage.h"
 #include "LightFrustum.h"
 #include "OccluderBvh.h"
 #include "OccluderPolygons.h"
@@ -52,6 +53,7 @@ const char* directPathName(DirectPath p) {
         case DirectPath::Unoccluded: return "unoccluded";
         case DirectPath::Rasterised: return "rasterised";
         case DirectPath::Occluded: return "occluded";
+        case DirectPath::CpuRasterised: return "cpu-rasterised";
     }
     return "?";
 }
@@ -65,6 +67,8 @@ void DirectSamplerSettings::validate() const {
         throw InputError(concat("maximum half angle ", maxHalfAngleDegrees, " is not in (10, 80) degrees"));
     if (!(eyeOffset > 0 && eyeOffset < 1e-2) || !(planeTolerance > 0 && planeTolerance < 1e-2))
         throw InputError("eye offset and plane tolerance must be in (0, 1e-2) of the scene size");
+    if (cpuCoverageTriangles < 0)
+        throw InputError(concat("CPU coverage triangles ", cpuCoverageTriangles, " is negative"));
 }
 
 namespace {
@@ -228,6 +232,17 @@ void addTextured(const EmitterTexture& texture, const SamplingFrustum& f, const 
         if ((mask >> k & 1u) && w[k] > 0) sum += w[k] * texture.weightAlong(f.eye, f.direction(u[k], v[k]));
 }
 
+// ∫ cosθ·dω over the window rectangle [u0, u1] × [v0, v1] of `grid`'s
+// frustum: the integral of SampleGrid::weights' w du dv, in closed form
+// (Lambert's, in camera coordinates, where the receiver's normal is
+// (nx, ny, nz) and the window lies at depth 1). The rectangle must lie above
+// the receiver's horizon, as the light's pieces do.
+double windowRectangleWeight(const SampleGrid& grid, double u0, double u1, double v0, double v1) {
+    const std::vector<Vec3> local = {Vec3(0.0), Vec3(u1 - u0, 0.0, 0.0), Vec3(u1 - u0, v1 - v0, 0.0),
+                                     Vec3(0.0, v1 - v0, 0.0)};
+    return std::abs(signedCosineSolidAngle(Vec3(grid.nx, grid.ny, grid.nz), Vec3(u0, v0, 1.0), local));
+}
+
 // Pixels per side of the blocks that textureCorrection draws one sample from.
 constexpr int kCorrectionBlock = 4;
 
@@ -261,6 +276,7 @@ struct DirectLightSampler::Impl {
     std::vector<Triangle3> leafTriangles;
     std::vector<uint32_t> leafLightId;
     std::unique_ptr<OccluderPolygons> polygons;  // for pairs in umbra (OccluderPolygons.h)
+    std::unique_ptr<CpuCoverage> cpuCoverage;    // for pairs with few occluders (CpuCoverage.h)
 
     GlProgram coverage;
     GlBuffer occluderBuffer;
@@ -375,6 +391,7 @@ struct DirectLightSampler::Impl {
             polygonId.push_back(maskOf[index] && !lightOf[index] ? OccluderPolygons::kHoled : lightOf[index]);
         }
         polygons = std::make_unique<OccluderPolygons>(leafTriangles, polygonId);
+        cpuCoverage = std::make_unique<CpuCoverage>(leafTriangles, polygonId);
         masks = !cutOuts.faces.empty();
         if (masks) {
             cutOuts.finish();
@@ -883,22 +900,6 @@ struct DirectLightSampler::Impl {
                                 });
     }
 
-    // A convex piece of the light on the window plane: inside where every
-    // edge function a·u + b·v + c >= 0; `reach` is how much an edge function
-    // can change across half a pixel.
-    // Narrows [lo, hi] to the columns i in [0, size) where at0 + slope·i >= 0.
-    static void columnsWhere(double at0, double slope, int size, int& lo, int& hi) {
-        if (slope == 0) {
-            if (at0 < 0) hi = -1;
-            return;
-        }
-        const double root = -at0 / slope;  // where the edge function crosses zero
-        if (slope > 0)
-            lo = std::max(lo, int(std::clamp(std::ceil(root), -1.0, double(size))));
-        else
-            hi = std::min(hi, int(std::clamp(std::floor(root), -1.0, double(size))));
-    }
-
     // The control variate's weighting when only occluders were rasterised:
     // which samples lie on the light is decided here, at the same jittered
     // points, exactly (double precision). Whole pixels are classified from
@@ -913,27 +914,34 @@ struct DirectLightSampler::Impl {
         const double pw = grid.pw, ph = grid.ph;
         const uint32_t allBits = bits >= 32 ? ~0u : ((1u << bits) - 1u);
         const std::vector<WindowPiece> light = windowPieces(f, pieces, pw, ph);
-        // Along a row the edge functions are linear in the column, so each
-        // piece's fully covered and touched pixels are two column spans.
-        struct Span {
-            int fullLo, fullHi, anyLo, anyHi;
-        };
-        std::vector<Span> spans(light.size());
+        std::vector<WindowPiece::Span> spans(light.size());
         pixelClass.resize(size_t(size));
         const bool textured = texture.textured();
-        double occludedSum = 0;
+        double occludedSum = 0, occludedExact = 0;
         double u[32], v[32], w[32];
+        // A run of pixels wholly on the light whose every sample is
+        // occluded (the inside of an occluder's shadow on the window): the
+        // mean of their jittered weights' sum is the exact integral of the
+        // weight over them, which Lambert's form gives for the run's
+        // rectangle at once. Unbiased as the samples were, without their
+        // noise, and one closed form instead of a hash and a weight per
+        // sample (in the office most occluded samples are such). A
+        // textured light's Σ w·τ there is that integral plus its samples'
+        // Σ w (τ − 1), still read one by one (`runTextured`): unbiased too,
+        // and with a uniform texture what the untextured light gives.
+        Rgb runTextured(0.0);
+        int runStart = -1;
+        auto closeRun = [&](int j, int end) {
+            if (runStart < 0) return;
+            occludedExact += windowRectangleWeight(grid, f.left + runStart * pw, f.left + end * pw,
+                                                   f.bottom + j * ph, f.bottom + (j + 1) * ph);
+            runStart = -1;
+        };
         for (int j = 0; j < size; ++j) {
             const double vc = f.bottom + (j + 0.5) * ph;
             int rowLo = size, rowHi = -1;
             for (size_t k = 0; k < light.size(); ++k) {
-                Span sp{0, size - 1, 0, size - 1};
-                for (const WindowPiece::Edge& e : light[k].edges) {
-                    // e(i) = e.a·(left + (i + ½)·pw) + e.b·vc + e.c, linear in i.
-                    const double at0 = e.a * (f.left + 0.5 * pw) + e.b * vc + e.c, slope = e.a * pw;
-                    columnsWhere(at0 - e.reach, slope, size, sp.fullLo, sp.fullHi);
-                    columnsWhere(at0 + e.reach, slope, size, sp.anyLo, sp.anyHi);
-                }
+                const WindowPiece::Span sp = light[k].rowSpan(f.left, pw, vc, size);
                 spans[k] = sp;
                 if (sp.anyLo <= sp.anyHi) {
                     rowLo = std::min(rowLo, sp.anyLo);
@@ -943,7 +951,7 @@ struct DirectLightSampler::Impl {
             // Per pixel of the row: 0 off the light, 1 on its outline, 2 wholly on it.
             if (rowLo > rowHi) continue;
             std::fill(pixelClass.begin() + rowLo, pixelClass.begin() + rowHi + 1, uint8_t(0));
-            for (const Span& sp : spans) {
+            for (const WindowPiece::Span& sp : spans) {
                 for (int i = sp.anyLo; i <= sp.anyHi; ++i) pixelClass[i] = std::max<uint8_t>(pixelClass[i], 1);
                 for (int i = sp.fullLo; i <= sp.fullHi; ++i) pixelClass[i] = 2;
             }
@@ -957,6 +965,18 @@ struct DirectLightSampler::Impl {
                     const uint32_t occluded = visibleRow ? allBits & ~visibleRow[i] : 0u;
                     out.lightSamples += uint32_t(bits);
                     out.visibleSamples += uint32_t(bits) - bitCount(occluded);
+                    if (occluded == allBits) {
+                        if (runStart < 0) runStart = i;
+                        if (textured) {
+                            grid.points(i, j, pixel, u, v);
+                            grid.weights(u, v, w);
+                            Rgb wt(0.0);
+                            addTextured(texture, f, u, v, w, allBits, bits, wt);
+                            runTextured += wt - Rgb(addMasked(0.0, w, allBits, bits));
+                        }
+                        continue;
+                    }
+                    closeRun(j, i);
                     if (!occluded) continue;
                     grid.points(i, j, pixel, u, v);
                     grid.weights(u, v, w);
@@ -964,6 +984,7 @@ struct DirectLightSampler::Impl {
                     if (textured) addTextured(texture, f, u, v, w, occluded, bits, out.texturedOccluded);
                     continue;
                 }
+                closeRun(j, i);
                 if (pixelClass[i] == 0) continue;
                 grid.points(i, j, pixel, u, v);
                 onLight = 0;
@@ -981,17 +1002,19 @@ struct DirectLightSampler::Impl {
                 occludedSum = addMasked(occludedSum, w, occluded, bits);
                 if (textured) addTextured(texture, f, u, v, w, occluded, bits, out.texturedOccluded);
             }
+            closeRun(j, rowHi + 1);
         }
         const double sampleArea = pw * ph / bits;
-        out.occludedWeight = occludedSum * sampleArea;
-        out.texturedOccluded *= sampleArea;
+        out.occludedWeight = occludedSum * sampleArea + occludedExact;
+        out.texturedOccluded = (out.texturedOccluded + runTextured) * sampleArea + Rgb(occludedExact);
         if (textured) out.texturedLight = analyticCorrection(f, pieces, grid, bits, texture);  // lightWeight stays 0
     }
 
     // Setup of one pair: its frusta and their culls, or, where it needs no
-    // GL (unlit, or no occluder in any frustum), its answer. True when
-    // answered; `p.result` then holds it.
-    bool planPair(Pair& p, size_t lightIndex, const Vec3& x, const Vec3& nIn, uint32_t seed) {
+    // GL (unlit, no occluder in any frustum, in umbra, or with `cover` few
+    // occluders: CpuCoverage), its answer. True when answered; `p.result`
+    // then holds it.
+    bool planPair(Pair& p, size_t lightIndex, const Vec3& x, const Vec3& nIn, uint32_t seed, bool cover) {
         ML_ASSERT(lightIndex < scene.lights.size(), "light ", lightIndex);
         const Clock::time_point start = Clock::now();
         p.lightIndex = lightIndex;
@@ -1071,10 +1094,53 @@ struct DirectLightSampler::Impl {
             times.setup += seconds(start, Clock::now());
             return true;
         }
+        times.setup += seconds(start, Clock::now());
+        if (cover && p.cpuFrusta && settings.cpuCoverageTriangles > 0 && coverOnCpu(p, light)) {
+            p.result.path = DirectPath::CpuRasterised;
+            finishPair(p);
+            return true;
+        }
         p.result.path = DirectPath::Rasterised;
         p.images.assign(p.frusta.size(), ImageResult());
-        times.setup += seconds(start, Clock::now());
         return false;
+    }
+
+    // Every frustum of a planned pair weighed without GL: those with
+    // occluders from CpuCoverage's bits, in place of a drawn image. False
+    // when one has too many occluders or one with a cut-out (the pair is
+    // then rasterised whole: its images are made again).
+    bool coverOnCpu(Pair& p, const Light& light) {
+        p.images.assign(p.frusta.size(), ImageResult());
+        CpuCoverage::Rules rules;
+        rules.nearDistance = p.nearDistance;
+        rules.lightNormal = light.normal;
+        rules.lightPoint = light.centroid;
+        rules.planeTolerance = settings.planeTolerance * sceneSize;
+        rules.skipLightId = uint32_t(p.lightIndex + 1);
+        const int size = settings.imageSize, bits = bitsPerPixel();
+        Clock::time_point t0 = Clock::now();
+        for (size_t k = 0; k < p.frusta.size(); ++k) {
+            if (onCpu(p, k)) {
+                weighOnCpu(p, k, t0);
+                continue;
+            }
+            const SamplingFrustum& f = p.frusta[k];
+            const SampleGrid grid = gridFor(f, p.n, p.frustumSeed(k));
+            if (!cpuCoverage->prepare(f, p.culls[k].ranges, rules, grid.pw, grid.ph,
+                                      size_t(settings.cpuCoverageTriangles))) {
+                times.draw += seconds(t0, Clock::now());
+                return false;
+            }
+            cpuCoverage->draw(f, size, bits, grid.pw, grid.ph,
+                              [&](int i, int j, uint32_t pixel, double* u, double* v) { grid.points(i, j, pixel, u, v); },
+                              visiblePixels.data());
+            const Clock::time_point t1 = Clock::now();
+            times.draw += seconds(t0, t1);
+            weighAnalytic(f, p.pieces, grid, bits, visiblePixels.data(), emitters[p.lightIndex], p.images[k]);
+            t0 = Clock::now();
+            times.weighting += seconds(t1, t0);
+        }
+        return true;
     }
 
     // The light wholly behind one occluder polygon of the pair's frusta
@@ -1151,7 +1217,7 @@ struct DirectLightSampler::Impl {
     DirectSample sample(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed) {
         times = {};
         Pair& p = single;
-        if (planPair(p, lightIndex, x, n, seed)) return p.result;
+        if (planPair(p, lightIndex, x, n, seed, true)) return p.result;
         Clock::time_point t0 = Clock::now();
         for (size_t k = 0; k < p.frusta.size(); ++k) {
             if (onCpu(p, k)) {
@@ -1168,7 +1234,7 @@ struct DirectLightSampler::Impl {
 
     bool sampleWithoutGl(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed, DirectSample& out) {
         times = {};
-        if (!planPair(single, lightIndex, x, n, seed)) return false;
+        if (!planPair(single, lightIndex, x, n, seed, false)) return false;
         out = single.result;
         return true;
     }
@@ -1219,7 +1285,7 @@ struct DirectLightSampler::Impl {
             if (batchPairs.size() == pairs) batchPairs.emplace_back();
             Pair& p = batchPairs[pairs];
             bool answered = false;
-            asBatchRequest(i, [&] { answered = planPair(p, r.mesh, r.x, r.n, r.seed); });
+            asBatchRequest(i, [&] { answered = planPair(p, r.mesh, r.x, r.n, r.seed, true); });
             if (answered) {
                 results[i] = p.result;
                 continue;

@@ -66,6 +66,15 @@ struct DirectSamplerSettings {
     // OccluderPolygons.h). Needs cullOccluders (culling makes the
     // decision); off: every pair is rasterised, as before (for comparisons).
     bool cpuUnoccludedPairs = true;
+    // With cpuUnoccludedPairs, a pair of an analytic light whose frusta
+    // hold at most this many occluder triangles with a part in them (and
+    // none with a cut-out) has its occluded samples decided on the CPU
+    // (CpuCoverage.h), with no GL call: DirectPath::CpuRasterised, 10-100x
+    // cheaper than a sampling image on llvmpipe. 0: such pairs are
+    // rasterised, the paper's sampler; the default here, so that what
+    // tests of the GL path sample stays on it. The commands' default is
+    // DirectChoice's (SamplerFactory.h).
+    int cpuCoverageTriangles = 0;
 
     void validate() const;       // throws InputError on a bad value
 };
@@ -85,8 +94,12 @@ enum class DirectPath {
     // The light wholly behind one occluder polygon (cpuUnoccludedPairs):
     // zero, no GL call. No sample is tested (lightSamples = 0).
     Occluded,
+    // Few occluders (cpuCoverageTriangles): their samples decided on the
+    // CPU at the same jittered points, weighed as a rasterised image is.
+    CpuRasterised,
 };
-const char* directPathName(DirectPath);  // "unlit", "unoccluded", "rasterised", "occluded"
+// "unlit", "unoccluded", "rasterised", "occluded", "cpu-rasterised"
+const char* directPathName(DirectPath);
 
 // One estimate; repeats with fresh seeds are independent and their mean
 // converges to the exact irradiance.
@@ -161,8 +174,11 @@ public:
     // InputError passes through. lastTimes() then holds the whole batch's.
     void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<DirectSample>& results);
 
-    // sample()'s answer, bit for bit, where it takes no GL call: an Unlit
-    // or Unoccluded pair (DirectPath); false, `out` untouched, otherwise.
+    // sample()'s answer, bit for bit, where it takes microseconds and no
+    // GL call: an Unlit, Unoccluded or Occluded pair (DirectPath); false,
+    // `out` untouched, otherwise. (A CpuRasterised pair takes no GL call
+    // either, but weighs a sampling image: it is left to sample() and
+    // sampleBatch(), after the cheap pairs, as rasterised pairs are.)
     // Makes no GL call, but like sample() needs the context current.
     bool sampleWithoutGl(size_t lightIndex, const Vec3& x, const Vec3& n, uint32_t seed, DirectSample& out);
 

@@ -1,5 +1,6 @@
 #include "LightFrustum.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ml {
@@ -157,6 +158,34 @@ std::vector<SamplingFrustum> samplingFrusta(const Light& light, const std::vecto
         if (other.size() == 1 && windowArea(other[0]) < 0.5 * windowArea(frusta[0])) frusta = std::move(other);
     }
     return frusta;
+}
+
+namespace {
+
+// Narrows [lo, hi] to the columns i in [0, size) where at0 + slope·i >= 0.
+void columnsWhere(double at0, double slope, int size, int& lo, int& hi) {
+    if (slope == 0) {
+        if (at0 < 0) hi = -1;
+        return;
+    }
+    const double root = -at0 / slope;  // where the edge function crosses zero
+    if (slope > 0)
+        lo = std::max(lo, int(std::clamp(std::ceil(root), -1.0, double(size))));
+    else
+        hi = std::min(hi, int(std::clamp(std::floor(root), -1.0, double(size))));
+}
+
+}  // namespace
+
+WindowPiece::Span WindowPiece::rowSpan(double left, double pw, double vc, int size) const {
+    Span sp{0, size - 1, 0, size - 1};
+    for (const Edge& e : edges) {
+        // e(i) = e.a·(left + (i + ½)·pw) + e.b·vc + e.c, linear in i.
+        const double at0 = e.a * (left + 0.5 * pw) + e.b * vc + e.c, slope = e.a * pw;
+        columnsWhere(at0 - e.reach, slope, size, sp.fullLo, sp.fullHi);
+        columnsWhere(at0 + e.reach, slope, size, sp.anyLo, sp.anyHi);
+    }
+    return sp;
 }
 
 std::vector<WindowPiece> windowPieces(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, double pw,

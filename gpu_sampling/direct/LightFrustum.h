@@ -74,6 +74,17 @@ struct WindowPiece {
             if (e.a * u + e.b * v + e.c < 0) return false;
         return true;
     }
+
+    // Pixel columns of one row of a size × size image whose pixels lie
+    // wholly inside the piece, [fullLo, fullHi], and those that touch it,
+    // [anyLo, anyHi] (empty when lo > hi). Pixel i's centre is at
+    // (left + (i + ½)·pw, vc); the edges' reach must be for that pixel
+    // size. Along a row the edge functions are linear in the column, so
+    // each is two spans.
+    struct Span {
+        int fullLo, fullHi, anyLo, anyHi;
+    };
+    Span rowSpan(double left, double pw, double vc, int size) const;
 };
 
 // The light's pieces clipped to the frustum's pyramid and projected onto

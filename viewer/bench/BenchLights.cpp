@@ -272,9 +272,10 @@ struct CurvePoint {
 // (DirectPath), over cache-like points: 3 barycentric points on every
 // non-emitting triangle, every light. Share and mean time of each kind.
 struct PairKinds {
-    size_t count[4] = {0, 0, 0, 0};
-    double seconds[4] = {0, 0, 0, 0};
-    size_t total() const { return count[0] + count[1] + count[2] + count[3]; }
+    static constexpr size_t kKinds = 5;  // DirectPath's values
+    size_t count[kKinds] = {0, 0, 0, 0, 0};
+    double seconds[kKinds] = {0, 0, 0, 0, 0};
+    size_t total() const { return count[0] + count[1] + count[2] + count[3] + count[4]; }
 };
 
 struct SceneResult {
@@ -406,10 +407,11 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
 
 // --- How pairs are answered ------------------------------------------------------
 
-// measurePairKinds: the pairs of PairKinds, answered one by one and timed.
+// measurePairKinds: the pairs of PairKinds, answered one by one and timed,
+// by the sampler the commands use (DirectChoice::commandSampler).
 PairKinds measurePairKinds(GlContext& context, const Scene& scene, uint32_t seed) {
     context.use();
-    DirectLightSampler sampler(context, scene, DirectSamplerSettings{});
+    DirectLightSampler sampler(context, scene, DirectChoice::commandSampler());
     PairKinds k;
     uint32_t index = 0;
     for (const Mesh& m : scene.meshes)
@@ -725,10 +727,10 @@ BenchTable scenesTable(const std::vector<SceneResult>& scenes) {
 }
 
 BenchTable pairsTable(const std::vector<SceneResult>& scenes) {
-    BenchTable t({"scene", "lights", "pairs", "unlit_pct", "unoccluded_pct", "occluded_pct", "rasterised_pct",
-                  "unlit_us", "unoccluded_us", "occluded_us", "rasterised_us"});
-    const DirectPath kinds[4] = {DirectPath::Unlit, DirectPath::Unoccluded, DirectPath::Occluded,
-                                 DirectPath::Rasterised};
+    BenchTable t({"scene", "lights", "pairs", "unlit_pct", "unoccluded_pct", "occluded_pct", "cpu_rasterised_pct",
+                  "rasterised_pct", "unlit_us", "unoccluded_us", "occluded_us", "cpu_rasterised_us", "rasterised_us"});
+    const DirectPath kinds[PairKinds::kKinds] = {DirectPath::Unlit, DirectPath::Unoccluded, DirectPath::Occluded,
+                                                 DirectPath::CpuRasterised, DirectPath::Rasterised};
     for (const SceneResult& r : scenes) {
         const PairKinds& k = r.pairs;
         std::vector<std::string> row = {r.office.label, benchNumber(double(r.office.lights())),

@@ -13,6 +13,10 @@ void declareDirectOptions(Options& o) {
     o.value("image-size", "N", "sampling image side, pixels", std::string("64"));
     o.value("bits", "N", "jittered tests per pixel: 1, 4, 8, 16 or 32", std::string("8"));
     o.value("passes", "K", "estimates averaged per point", std::string("1"));
+    o.value("cpu-coverage", "N",
+            "a pair whose sampling images hold at most N occluder triangles has its occluded samples decided on the "
+            "CPU, not rasterised (cv estimator, planar lights; 0: rasterise them all)",
+            concat(DirectChoice::kCpuCoverageTriangles));
     o.value("seed", "N", "random seed; the same seed repeats bit for bit", std::string("1"));
     o.value("gl", "BACKEND", "OpenGL back end: auto, osmesa or egl", std::string("auto"));
 }
@@ -25,6 +29,7 @@ DirectChoice readDirectOptions(const Options& o) {
     c.sampler.estimator = parseDirectEstimator(o.str("estimator"));
     c.sampler.imageSize = o.integer("image-size", 4, 1024);
     c.sampler.bits = o.integer("bits", 1, 32);
+    c.sampler.cpuCoverageTriangles = o.integer("cpu-coverage", 0, 1 << 20);
     c.sampler.validate();
     c.passes = o.integer("passes", 1, 1 << 20);
     c.seed = o.seed("seed");
