@@ -102,6 +102,8 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->indirect = indirect_->displayMeshes();
         snap->bounces = indirect_->bounces();
         snap->bouncesFinished = indirect_->finished();
+        snap->indirectComplete = indirect_->firstPassDone() && !indirect_->showingStale();
+        if (!snap->indirectComplete) snap->bounceMeshes = indirect_->copyMeshes();
         snap->indirectVertices = indirect_->totalVertices();
         snap->indirectSamples = indirect_->totalSamples();
         snap->vertices += snap->indirectVertices;
@@ -207,9 +209,10 @@ void CacheWorker::run() {
                 // After a scene change the image shows the old indirect light
                 // until bounce 1 is gathered again: it starts at once, from
                 // direct light as far as it is (gathered again when complete).
-                if (!indirectStarted &&
-                    (directConverged || unsampled == 0 || indirect_->showingStale() ||
-                     (firstPass >= is.startFraction && left > is.startSeconds))) {
+                // With a stand-in for it in the image, it waits for direct
+                // light's first pass instead (WorkerSettings::indirectStandIn).
+                const bool early = indirect_->showingStale() || (firstPass >= is.startFraction && left > is.startSeconds);
+                if (!indirectStarted && (directConverged || unsampled == 0 || (early && !settings_.indirectStandIn))) {
                     indirectStarted = true;
                     sourceIncomplete = unsampled > 0;
                 }

@@ -41,6 +41,15 @@ struct CacheSnapshot {
     // (CausticCache). The irradiance a surface receives is Σ direct +
     // Σ indirect.
     std::vector<IrradianceMeshCopy> indirect;
+    // False while `indirect` is not yet every bounce as gathered for the
+    // scene as it is (IndirectSolver::firstPassDone, showingStale: at the
+    // start, after a scene change or restart()); then `bounceMeshes` holds
+    // every started bounce as gathered so far (IndirectSolver::copyMeshes: a
+    // vertex not gathered since has samples 0), which the real-time stand-in
+    // blends with (RealtimeIndirect.h); empty once complete. True with
+    // direct light only.
+    bool indirectComplete = true;
+    std::vector<IrradianceMeshCopy> bounceMeshes;
     size_t causticMeshes = 0;         // the last of `indirect` that are caustics (0 or 1)
     uint64_t causticPhotons = 0;      // photons emitted so far
     double causticError = 0;          // CausticCache::estimatedError
@@ -87,6 +96,15 @@ struct WorkerSettings {
     // to the exact answer; 0: stop at the settings' tolerances (idle once
     // converged). The commands use IrradianceCache::kMaxRefinementLevel.
     int refinementLevels = 0;
+    // The image shows a stand-in for indirect light while its bounces are
+    // gathered (RealtimeIndirect.h): indirect light then starts once direct
+    // light's first pass is complete, whose light it reflects, rather than
+    // early (IndirectSettings::startFraction) or at once after a scene
+    // change (for an image without a stand-in, which would show no indirect
+    // light or the old one meanwhile). Gathers from an incomplete first pass
+    // are made again (IndirectSolver::restart) and its worker time is then
+    // direct light's.
+    bool indirectStandIn = false;
 
     void validate() const;
 };

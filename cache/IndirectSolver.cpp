@@ -49,9 +49,9 @@ IndirectSolver::IndirectSolver(const Scene& scene, const IndirectSettings& setti
 
 IndirectSolver::~IndirectSolver() = default;
 
-CacheSettings IndirectSolver::settingsFor(int bounce) const {
-    CacheSettings c = settings_.cache;
-    const double share = std::pow(std::max(settings_.albedo, 1e-3), bounce - 1);
+CacheSettings bounceCacheSettings(const IndirectSettings& settings, int bounce) {
+    CacheSettings c = settings.cache;
+    const double share = std::pow(std::max(settings.albedo, 1e-3), bounce - 1);
     c.splitTolerance = std::min(0.5, c.splitTolerance / share);
     c.noiseTolerance = std::min(0.5, c.noiseTolerance / share);
     // Every bounce is smoother than the one before: later bounces keep bounce
@@ -60,6 +60,20 @@ CacheSettings IndirectSolver::settingsFor(int bounce) const {
     // but are split at most once.
     if (bounce > 1) c.minEdgeFraction = std::max(c.minEdgeFraction, c.maxEdgeFraction / 2);
     return c;
+}
+
+CacheSettings IndirectSolver::settingsFor(int bounce) const { return bounceCacheSettings(settings_, bounce); }
+
+CacheLayout bounceCacheLayout() {
+    CacheLayout layout;
+    layout.meshes = 1;
+    // Sides of open surfaces as for direct light: a side no light
+    // reaches gets no copy (and shows black). Faces with any scene
+    // behind them would also copy the insides of open boxes, which
+    // gather little but the voxels' leaks and cost as much as the rest.
+    layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
+    layout.insetBorders = true;
+    return layout;
 }
 
 void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
@@ -81,21 +95,13 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // Pass 1: the next bounce's base mesh, gathered once.
     if (!firstPassDone() && firstPassBounce() == 0) {
         const int bounce = int(caches_.size()) + 1;
-        CacheLayout layout;
-        layout.meshes = 1;
-        // Sides of open surfaces as for direct light: a side no light
-        // reaches gets no copy (and shows black). Faces with any scene
-        // behind them would also copy the insides of open boxes, which
-        // gather little but the voxels' leaks and cost as much as the rest.
-        layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
-        layout.insetBorders = true;
         // The previous bounce's source is not needed until pass 2.
         if (bounce > 2) {
             estimator.releaseSource(size_t(bounce - 2));
             sourceBuilt_[size_t(bounce - 2)] = false;
         }
         prepareSource(estimator, bounce, direct);
-        caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
+        caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), bounceCacheLayout()));
     }
     const bool first = !firstPassDone();
     const int bounce = first ? firstPassBounce() : allFinished() ? 1 : finished_ + 1;

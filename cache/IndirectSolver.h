@@ -65,6 +65,12 @@ struct IndirectSettings {
     void validate() const;
 };
 
+// Bounce `bounce`'s cache settings (bounce 1's tolerances relaxed by
+// ā^(n−1), see above) and the layout of every bounce's one mesh: how the
+// solver lays its bounces, and RealtimeIndirect the same base mesh.
+CacheSettings bounceCacheSettings(const IndirectSettings& settings, int bounce);
+CacheLayout bounceCacheLayout();
+
 // A vertex that sees almost no indirect light where its neighbours see
 // plenty is hidden: boxed in (the ceiling behind a light hung a hair below
 // it, the floor under a block). It is never seen, but the mesh would

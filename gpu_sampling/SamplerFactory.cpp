@@ -265,6 +265,15 @@ void ConfiguredDirectSampler::sampleBatch(const std::vector<SampleRequest>& requ
 
 // --- The indirect gather -----------------------------------------------------------
 
+std::unique_ptr<IndirectEstimator> makeCpuIndirectEstimator(const Scene& scene, const IndirectChoice& given) {
+    const IndirectChoice choice = given.resolved(scene);
+    if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
+    if (choice.method == "volume") return std::make_unique<IrradianceVolume>(scene, choice.volume);
+    if (choice.method == "lpv") return std::make_unique<PropagationVolume>(scene, choice.lpv);
+    if (choice.method == "vpl") return std::make_unique<VirtualPointLights>(scene, choice.vpl);
+    return nullptr;
+}
+
 std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, const Scene& scene,
                                                          const IndirectChoice& given) {
     const IndirectChoice choice = given.resolved(scene);
@@ -276,10 +285,7 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
         return std::make_unique<SliceGather>(context, scene, g);
     }
     if (choice.method == "raymarch") return std::make_unique<VoxelMarchGather>(context, scene, choice.gather);
-    if (choice.method == "raytrace") return std::make_unique<RayGather>(scene, rayGatherSettings(choice));
-    if (choice.method == "volume") return std::make_unique<IrradianceVolume>(scene, choice.volume);
-    if (choice.method == "lpv") return std::make_unique<PropagationVolume>(scene, choice.lpv);
-    if (choice.method == "vpl") return std::make_unique<VirtualPointLights>(scene, choice.vpl);
+    if (std::unique_ptr<IndirectEstimator> e = makeCpuIndirectEstimator(scene, choice)) return e;
     for (TriangleProjection p : {TriangleProjection::Fisheye, TriangleProjection::Perspective, TriangleProjection::Hemicube})
         if (choice.method == triangleProjectionName(p)) {
             TriangleGatherSettings t;
@@ -289,6 +295,52 @@ std::unique_ptr<IndirectEstimator> makeIndirectEstimator(GlContext& context, con
             return std::make_unique<TriangleGather>(context, scene, t);
         }
     throw InputError(concat("indirect method '", choice.method, "' is unknown"));
+}
+
+// --- The real-time stand-in ------------------------------------------------------------
+
+const std::vector<std::string>& realtimeMethodNames() {
+    static const std::vector<std::string> names = {"volume", "vpl", "lpv"};
+    return names;
+}
+
+void RealtimeChoice::validate() const {
+    const std::vector<std::string>& m = realtimeMethodNames();
+    const auto known = [&](const std::string& name) { return std::find(m.begin(), m.end(), name) != m.end(); };
+    if (realtime != "off" && !known(realtime))
+        throw InputError(concat("--realtime '", realtime, "': unknown (volume, vpl, lpv or off)"));
+    if (display != "cache" && !known(display))
+        throw InputError(concat("--indirect-display '", display, "': unknown (cache, volume, vpl or lpv)"));
+    if (methodBounces < 0 || methodBounces > 256)
+        throw InputError(concat("--realtime-bounces ", methodBounces, " is not in 0..256"));
+}
+
+RealtimeSettings RealtimeChoice::settings(uint32_t seed) const {
+    RealtimeSettings s;
+    s.live = display != "cache";
+    s.method = s.live ? display : realtime;
+    s.methodBounces = methodBounces;
+    s.seed = seed;
+    return s;
+}
+
+std::string RealtimeChoice::describe() const {
+    if (display != "cache") return concat("indirect light shown: ", display, " alone, live");
+    if (realtime == "off") return "indirect light shown: the cache (its old bounces while it catches up)";
+    return concat("indirect light shown: the cache, ", realtime, " standing in while it catches up (",
+                  methodBounces > 0 ? concat(methodBounces, " bounces estimated, the rest a tail")
+                                    : std::string("every bounce estimated"),
+                  ")");
+}
+
+RealtimeIndirect::EstimatorFactory realtimeEstimatorFactory(const IndirectChoice& indirect) {
+    return [indirect](const Scene& scene, const std::string& method) {
+        IndirectChoice c = indirect;
+        c.method = method;
+        std::unique_ptr<IndirectEstimator> e = makeCpuIndirectEstimator(scene, c);
+        if (!e) throw InputError(concat("'", method, "' cannot stand in for the cache's indirect light"));
+        return e;
+    };
 }
 
 // --- For the worker ------------------------------------------------------------------
@@ -336,16 +388,8 @@ SamplerFactory samplerFactory(const Scene& scene, const DirectChoice& direct, co
         if (indirect.active()) {
             // The ray gather and the volumes draw nothing: no GL context of their own.
             const IndirectChoice resolved = indirect.resolved(scene);
-            if (resolved.method == "raytrace")
-                samplers.indirect = std::make_unique<RayGather>(scene, rayGatherSettings(resolved));
-            else if (resolved.method == "volume")
-                samplers.indirect = std::make_unique<IrradianceVolume>(scene, resolved.volume);
-            else if (resolved.method == "lpv")
-                samplers.indirect = std::make_unique<PropagationVolume>(scene, resolved.lpv);
-            else if (resolved.method == "vpl")
-                samplers.indirect = std::make_unique<VirtualPointLights>(scene, resolved.vpl);
-            else
-                samplers.indirect = std::make_unique<OwnContextGather>(scene, resolved, direct.backend);
+            samplers.indirect = makeCpuIndirectEstimator(scene, resolved);
+            if (!samplers.indirect) samplers.indirect = std::make_unique<OwnContextGather>(scene, resolved, direct.backend);
         }
         return samplers;
     };

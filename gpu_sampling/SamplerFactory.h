@@ -18,6 +18,7 @@
 #include "cache/DirectSampler.h"
 #include "cache/IndirectEstimator.h"
 #include "cache/IndirectSolver.h"
+#include "cache/RealtimeIndirect.h"
 #include "core/raytrace/BounceCount.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
 #include "gpu_sampling/indirect/GatherSettings.h"
@@ -82,6 +83,34 @@ struct IndirectChoice {
     std::string describe() const;      // "slices: 40x40 fish-eye gathers over 64 voxels ..."
 };
 
+// What an image shows of indirect light (cache/RealtimeIndirect.h): the
+// cache, with a real-time method standing in while its bounces are gathered
+// (after a light or an object moved, and at the start), or one method's
+// estimate alone, live.
+struct RealtimeChoice {
+    // The stand-in while the cache catches up: one of realtimeMethodNames(),
+    // or "off" (the cache's own display: its old bounces after a change).
+    // The default by measurement: bench dynamic's table of the methods on the
+    // moved scenes (viewer/README.md).
+    std::string realtime = "vpl";
+    // "cache", or a method shown live whatever the cache holds.
+    std::string display = "cache";
+    // Bounces the method estimates, the rest following as a tail (0: all).
+    int methodBounces = 0;
+    // InputError for an unknown name (the options' words in the message).
+    void validate() const;
+    // For RealtimeIndirect: the displayed method if live, else the stand-in.
+    RealtimeSettings settings(uint32_t seed) const;
+    std::string describe() const;  // "volume stands in while the cache catches up", "vpl, live"
+};
+
+// "volume", "vpl", "lpv": the methods that can stand in for the cache.
+const std::vector<std::string>& realtimeMethodNames();
+
+// Makes those methods' estimators with `indirect`'s settings (--probes,
+// --vpls, --lpv-cells) for RealtimeIndirect.
+RealtimeIndirect::EstimatorFactory realtimeEstimatorFactory(const IndirectChoice& indirect);
+
 // "slices" (the paper's), "raytrace" (consistent), "volume" (the irradiance
 // volume of SH probes), "lpv" (voxel light propagation with occlusion),
 // "vpl" (virtual point lights with negative lights for their occlusion), and
@@ -126,6 +155,11 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
+
+// The estimators that draw nothing, on the CPU: "raytrace", "volume",
+// "lpv" and "vpl" (null for the others, which need a GL context). Any
+// thread may make and use one (the real-time stand-in makes them on its own).
+std::unique_ptr<IndirectEstimator> makeCpuIndirectEstimator(const Scene& scene, const IndirectChoice& choice);
 
 // The gather `choice.method` names, drawing with `context` (current on this
 // thread for the estimator's lifetime).

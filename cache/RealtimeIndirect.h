@@ -1,0 +1,205 @@
+// The real-time stand-in for indirect light (issue 17): while the cache's
+// bounces are being gathered (after a light or an object moved, and at the
+// start), the image shows indirect light from one of the real-time methods
+// (irradiance volume, virtual point lights, propagation volume:
+// gpu_sampling/indirect), computed on a thread of its own from the cache's
+// direct light, and blends to the cache's bounces vertex by vertex as they
+// are gathered.
+//
+// The estimate. For the scene as it is, bounce 1's base mesh is laid as the
+// indirect solver lays it (bounceCacheSettings, bounceCacheLayout: the same
+// vertices, bit for bit). The method is given the cache's direct light (and
+// caustics) as source 0 and estimates bounce 1 at every vertex; that bounce,
+// hidden vertices filled as the solver fills them, is source 1 for bounce 2,
+// and so on for `methodBounces` bounces; the bounces after those follow the
+// last as the solver's own display does while bounces are missing, each
+// `tailAlbedo` times the one before. Where the cache's direct light is valid
+// (every sample a change left, every vertex sampled since) the source is
+// exact; where it is still being sampled, its copies' fill (sampled
+// neighbours' means) stands in, and the estimate is made again as direct
+// light fills in (offer()).
+//
+// The blend (blendIndirect). Bounce by bounce: a bounce the cache has not
+// started shows the estimate's; a bounce in its first pass (on the base
+// mesh, the estimate's own vertices) shows at each vertex the cache's value
+// if the vertex was gathered since the change, the estimate's if not (the
+// weight is 1 or 0 per vertex, so the mix is exact at both ends); a bounce
+// whose first pass is complete (refined, or every vertex gathered) shows the
+// cache's. Once every bounce is complete the cache's own display meshes are
+// shown unchanged. Caustics are the cache's throughout (no method estimates
+// them).
+//
+// Threads. offer() and display() run on the caller's (frame) thread and do
+// no estimating: offer() hands the snapshot's direct meshes to the
+// estimate's thread, which makes the estimator for each new scene (its
+// Embree scene, probe grid or geometry volume) and the estimate, then
+// publishes it; a request made while one is computed replaces the pending
+// one (the newest wins; the one under way finishes). So frames never wait.
+#pragma once
+
+#include "CacheWorker.h"
+#include "IndirectEstimator.h"
+#include "IndirectSolver.h"
+#include "core/Scene.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace ml {
+
+// Bounce 1's base mesh for a scene, as the indirect solver lays it: the
+// geometry (irradiance 0, samples 0) and each vertex's shading point.
+struct RealtimeMesh {
+    IrradianceMeshCopy geometry;
+    std::vector<SampleRequest> points;  // one per vertex of `geometry`, mesh 0
+    RealtimeMesh(const Scene& scene, const IndirectSettings& settings);
+};
+
+// One estimate of every bounce.
+struct RealtimeEstimate {
+    std::string method;            // the estimator's name()
+    uint64_t sceneVersion = 0;     // the scene it is for (as offer() was told)
+    uint64_t snapshotVersion = 0;  // the cache snapshot whose direct light it reflects
+    double directSampled = 0;      // that snapshot's share of direct vertices with a sample
+    // Bounce 1, 2, ... on bounce 1's base mesh (RealtimeMesh::geometry),
+    // samples 0 at every vertex.
+    std::vector<IrradianceMeshCopy> bounces;
+    double seconds = 0;            // making it: estimator (for a new scene), sources, estimates
+    uint64_t serial = 0;           // 1, 2, ... in order of completion
+};
+
+// Bounces 1..settings.bounces on `mesh` from `source` (the cache's direct
+// meshes, and its caustic mesh if any): the first `methodBounces` (0: all)
+// estimated by `estimator` (sources 0.. are replaced and released), the
+// rest a tail.
+// Estimates draw their jitter from (seed, bounce, vertex). Returns nothing
+// when `cancelled` says so between bounces.
+std::optional<std::vector<IrradianceMeshCopy>> estimateBounces(const RealtimeMesh& mesh, IndirectEstimator& estimator,
+                                                               const IndirectSettings& settings, int methodBounces,
+                                                               const std::vector<IrradianceMeshCopy>& source,
+                                                               uint32_t seed,
+                                                               const std::function<bool()>& cancelled = {});
+
+// What an image shows of indirect light.
+struct IndirectShown {
+    // As CacheSnapshot::indirect: bounce meshes, then the caustic mesh if any.
+    std::vector<IrradianceMeshCopy> meshes;
+    // The share of the shown indirect irradiance (luminance summed over the
+    // bounce meshes' vertices) that is the estimate's: 0 the cache alone, 1
+    // the estimate alone.
+    double realtimeShare = 0;
+    uint64_t estimateSerial = 0;  // the estimate shown, 0: none
+    // For the panel and status line: "cache", "volume (real-time)",
+    // "cache 40% + volume 60% (catching up)", ...
+    std::string source;
+};
+
+// The blend above of snapshot `s` (of the scene of version `sceneVersion`)
+// and `estimate` (null: none yet). `live`: the estimate alone whenever there
+// is one for this scene (the viewer's --indirect-display METHOD). An
+// estimate of an earlier scene (the one for this scene still being made)
+// stands in whole while the cache is incomplete: it is newer than the
+// cache's stale bounces.
+IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const RealtimeEstimate* estimate,
+                            bool live = false);
+
+struct RealtimeSettings {
+    // The method ("volume", "vpl" or "lpv", as the factory knows them), or
+    // "off": no stand-in, the cache's own display (its old bounces after a
+    // change, the bounces gathered so far at the start).
+    std::string method = "volume";
+    // Show the method's estimate always, not only while the cache catches
+    // up (the viewer's --indirect-display METHOD); needs a method.
+    bool live = false;
+    // Bounces the method estimates, later ones a tail (0: every bounce).
+    // Each costs an update of the method, weaker ones less; the tail is far
+    // from the bounces' light (bench dynamic: 3 of 8 bounces estimated
+    // leave 1.3-2x the image error of all 8).
+    int methodBounces = 0;
+    uint32_t seed = 1;
+    void validate() const;
+};
+
+class RealtimeIndirect {
+public:
+    // Makes the estimator a method names for a scene, on the estimate's
+    // thread (the scene outlives it).
+    using EstimatorFactory =
+        std::function<std::unique_ptr<IndirectEstimator>(const Scene& scene, const std::string& method)>;
+    // `nice`: the estimate thread's niceness (0: the caller's). The viewer
+    // puts it between its frames (0) and the cache's workers (10): the
+    // estimate is what the next frames show, but it reflects the direct
+    // light the workers sample.
+    RealtimeIndirect(const IndirectSettings& indirect, EstimatorFactory factory, const RealtimeSettings& settings,
+                     int nice = 0);
+    ~RealtimeIndirect();  // lets the bounce under way finish, then joins
+    RealtimeIndirect(const RealtimeIndirect&) = delete;
+    RealtimeIndirect& operator=(const RealtimeIndirect&) = delete;
+
+    const RealtimeSettings& settings() const { return settings_; }
+    // Another method, or live or not: the next offer asks for an estimate
+    // with it; meanwhile the last estimate (of the method before) stays.
+    void configure(const RealtimeSettings& settings);
+
+    // A snapshot of the cache of `scene`, whose version the caller changes
+    // whenever the scene does (the first offer of a version hands over its
+    // scene, kept alive here). Asks for a new estimate when there is a
+    // method and the cache still needs a stand-in (or the display is live),
+    // and: none was asked for this scene (and settings); or direct light has
+    // filled in since the last one asked (its sampled share up by a tenth,
+    // or complete); or its estimated error has halved. Otherwise does
+    // nothing. A request replaces one still waiting.
+    void offer(const CacheSnapshot& s, uint64_t sceneVersion, const std::shared_ptr<const Scene>& scene);
+    // The newest estimate (null before the first).
+    std::shared_ptr<const RealtimeEstimate> latest() const;
+    // blendIndirect of `s` with the newest estimate (none with method off).
+    IndirectShown display(const CacheSnapshot& s, uint64_t sceneVersion) const;
+    // An estimate is being made or waits to be.
+    bool busy() const;
+    // What ended the thread, rethrown here (the estimator's failure).
+    void rethrowIfFailed() const;
+    // Blocks until nothing is pending or under way and the newest estimate
+    // is for `sceneVersion`, or `timeoutSeconds` pass; true if so.
+    bool waitIdle(uint64_t sceneVersion, double timeoutSeconds) const;
+
+private:
+    struct Request {
+        std::shared_ptr<const Scene> scene;
+        uint64_t sceneVersion = 0, snapshotVersion = 0;
+        double directSampled = 0;
+        RealtimeSettings settings;
+        std::vector<IrradianceMeshCopy> source;
+    };
+    void run(int nice);
+
+    IndirectSettings indirect_;
+    EstimatorFactory factory_;
+    RealtimeSettings settings_;  // the caller's thread only
+
+    // What the caller asked last (its thread only).
+    struct Asked {
+        uint64_t sceneVersion = 0;
+        std::shared_ptr<const Scene> scene;
+        double directSampled = 0, directError = 1;
+        bool any = false;
+    } asked_;
+
+    mutable std::mutex mutex_;
+    mutable std::condition_variable wake_;
+    std::optional<Request> pending_;
+    bool working_ = false, stopping_ = false;
+    std::shared_ptr<const RealtimeEstimate> latest_;
+    std::exception_ptr failure_;
+    uint64_t serial_ = 0;
+    std::thread thread_;
+};
+
+}  // namespace ml
