@@ -60,6 +60,18 @@ int runView(const std::vector<std::string>& args) {
     o.value("tonemap", "OP", "aces, reinhard or clamp", std::string("aces"));
     o.value("max-fps", "F", "draw at most F frames per second (0: no limit)", std::string("60"));
     o.flag("direct-only", "direct light only: no indirect bounces");
+    const RealtimeChoice realtime;
+    o.value("realtime", "METHOD",
+            "what stands in for the cache's indirect light while it catches up after a light or an object moves (and "
+            "at the start): volume, vpl or lpv, estimated on a thread of its own from the cache's direct light and "
+            "blended into the cache's bounces as they are gathered; off: the old bounces",
+            realtime.realtime);
+    o.value("indirect-display", "WHAT",
+            "the indirect light shown: cache (with the --realtime stand-in), or volume, vpl or lpv: that method's "
+            "estimate alone, live (the panel switches too)",
+            realtime.display);
+    o.value("realtime-bounces", "N", "bounces the real-time method estimates, later ones following as a tail; 0: all",
+            concat(realtime.methodBounces));
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);
@@ -74,6 +86,10 @@ int runView(const std::vector<std::string>& args) {
         throw InputError("view samples each vertex as often as its noise asks: --passes is for probe");
     s.cache = readCacheSettings(o);
     s.indirect = readIndirectOptions(o);
+    s.realtime.realtime = o.str("realtime");
+    s.realtime.display = o.str("indirect-display");
+    s.realtime.methodBounces = o.integer("realtime-bounces", 0, 256);
+    s.realtime.validate();
     s.worker.seed = s.direct.seed;
     s.worker.publishSeconds = o.number("publish", 0, 3600);
     s.worker.threads = o.integer("sampling-threads", 0, 256);
@@ -111,6 +127,7 @@ int runView(const std::vector<std::string>& args) {
                 s.photometry.describe().c_str());
     s.indirect.decide(scene);
     printPlan(scene, s.direct, s.cache, s.indirect);
+    if (s.indirect.active()) std::printf("  %s\n", s.realtime.describe().c_str());
     if (s.worker.maxSamples)
         std::printf("  the worker stops after %llu samples\n", static_cast<unsigned long long>(s.worker.maxSamples));
 

@@ -172,6 +172,40 @@ bool groupControls(UiModel& m, const LightGroup& g) {
     return changed;
 }
 
+// What is shown of indirect light: the cache (with a real-time method
+// standing in while it catches up after a move) or a method's own light,
+// live, to compare; and which indirect light the image holds now.
+void indirectControls(const UiModel& m, UiRequests& r) {
+    const std::vector<std::string>& methods = realtimeMethodNames();
+    std::vector<std::string> shows = {"cache"};
+    shows.insert(shows.end(), methods.begin(), methods.end());
+    const RealtimeChoice& c = m.realtime;
+    int show = int(std::find(shows.begin(), shows.end(), c.display) - shows.begin());
+    std::vector<const char*> showNames;
+    for (const std::string& n : shows) showNames.push_back(n.c_str());
+    if (ImGui::Combo("indirect light", &show, showNames.data(), int(showNames.size()))) {
+        RealtimeChoice next = c;
+        next.display = shows[size_t(show)];
+        r.realtime = next;
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("cache: the cache's bounces, a real-time method standing in while they are gathered again\n"
+                          "volume, vpl, lpv: that method's estimate alone, live, from the cache's direct light");
+    if (c.display == "cache" && c.realtime != "off") {
+        // The stand-in: off only from the command line (the worker then
+        // starts indirect light at once after a move).
+        int method = int(std::find(methods.begin(), methods.end(), c.realtime) - methods.begin());
+        std::vector<const char*> names;
+        for (const std::string& n : methods) names.push_back(n.c_str());
+        if (ImGui::Combo("stand-in", &method, names.data(), int(names.size()))) {
+            RealtimeChoice next = c;
+            next.realtime = methods[size_t(method)];
+            r.realtime = next;
+        }
+    }
+    ImGui::TextWrapped("indirect shown: %s", m.stats.indirectSource.c_str());
+}
+
 }  // namespace
 
 Ui::Ui(GLFWwindow* window, const std::string& screenshotPath, const std::string& cachePath) {
@@ -272,6 +306,7 @@ UiRequests Ui::build(UiModel& m) {
         }
         if (d.mode == DisplayMode::Indirect && s.indirectMeshes == 0)
             ImGui::TextDisabled("no indirect light cached (yet)");
+        if (!s.indirectSource.empty()) indirectControls(m, r);
         ImGui::Checkbox("cache wireframe", &d.wireframe);
         if (d.wireframe)
             for (const auto& [name, colour] : m.meshColours) {

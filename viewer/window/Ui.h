@@ -13,6 +13,7 @@
 #include "ViewLights.h"
 #include "core/image/Illuminance.h"
 #include "core/image/Photometry.h"
+#include "gpu_sampling/SamplerFactory.h"
 
 #include <optional>
 #include <string>
@@ -33,6 +34,10 @@ struct UiStats {
     bool converged = false, finished = false, paused = false, saving = false;
     double uploadProgress = 1;  // < 1 while a newer snapshot is being copied to the GPU
     double fps = 0, frameMs = 0, composeMs = 0;
+    // What the image's indirect light is (IndirectShown::source: "cache",
+    // "volume (real-time)", a blend while catching up); empty: none.
+    std::string indirectSource;
+    double realtimeShare = 0;
 };
 
 // What a frame of controls reads and changes.
@@ -52,6 +57,7 @@ struct UiModel {
     LengthUnit unit = LengthUnit::Metre;
     Photometry photometry;  // lux and lumens
     int supersample = 1;
+    RealtimeChoice realtime;  // what is shown of indirect light, and what stands in for it
     std::vector<std::pair<std::string, Rgb>> meshColours;  // wireframe legend
     std::optional<double> cursorLux;                      // under the mouse, lux mode
     std::string error;    // refinement failed: shown in red whatever the panel
@@ -68,6 +74,7 @@ struct UiRequests {
     std::optional<std::string> screenshot, saveCache;
     double speedFactor = 1;     // multiply the walking speed
     int supersample = 0;        // > 0: new supersampling
+    std::optional<RealtimeChoice> realtime;  // another indirect display or stand-in
 };
 
 class Ui {

@@ -20,9 +20,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kViewInterval = 0.1;
 // The share of a frame spent copying a newer snapshot to the GPU.
 constexpr double kUploadBudget = 0.004;
-// The worker threads' niceness: below the window's, so a frame never waits
-// for a round; a failure to set it (not permitted) leaves it as it was.
-constexpr int kWorkerNice = 10;
 
 bool sameCamera(const Camera& a, const Camera& b) {
     return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
@@ -30,12 +27,19 @@ bool sameCamera(const Camera& a, const Camera& b) {
 
 }  // namespace
 
+void ViewRefinement::lowerWorkerPriority(ProgressiveSession& session) {
+    session.setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
+}
+
 std::unique_ptr<ProgressiveSession> ViewRefinement::makeSession(const Scene& scene, const ViewSettings& settings) {
     SessionSettings ss;
     ss.cache = settings.cache;
     ss.worker = settings.worker;
     if (settings.indirect.active()) ss.indirect = settings.indirect.solver;
     ss.cachePath = settings.cachePath;
+    // The stand-in shows indirect light meanwhile: it is gathered once
+    // direct light's first pass is complete, not from an incomplete one.
+    ss.worker.indirectStandIn = settings.indirect.active() && settings.realtime.realtime != "off";
     StopRule budget;
     budget.samples = settings.worker.maxSamples;
     auto session = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, settings.direct, settings.indirect),
@@ -45,16 +49,24 @@ std::unique_ptr<ProgressiveSession> ViewRefinement::makeSession(const Scene& sce
     // it and refinement the rest: the frame rate does not depend on
     // refinement even where the two share too few cores (llvmpipe renders
     // both on the CPU).
-    session->setThreadSetup([] { ::setpriority(PRIO_PROCESS, pid_t(::syscall(SYS_gettid)), kWorkerNice); });
+    lowerWorkerPriority(*session);
     if (session->resumed())
         std::printf("cache: resumed from %s: %zu vertices, %llu samples\n", settings.cachePath.c_str(),
                     session->cache().totalVertices(), static_cast<unsigned long long>(session->cache().totalSamples()));
     return session;
 }
 
-ViewRefinement::ViewRefinement(std::unique_ptr<ProgressiveSession> session, const ViewSettings& settings,
-                               CacheMeshUploader& uploader)
-    : settings_(settings), uploader_(uploader), session_(std::move(session)) {}
+ViewRefinement::ViewRefinement(std::unique_ptr<ProgressiveSession> session, const Scene& scene,
+                               const ViewSettings& settings, CacheMeshUploader& uploader)
+    : settings_(settings), uploader_(uploader), session_(std::move(session)),
+      realtimeChoice_(settings.realtime) {
+    if (session_->indirect()) {
+        realtime_ = std::make_unique<RealtimeIndirect>(
+            session_->indirect()->settings(), realtimeEstimatorFactory(settings.indirect),
+            realtimeChoice_.settings(settings.worker.seed), kRealtimeNice);
+        sceneCopy_ = std::make_shared<const Scene>(scene);
+    }
+}
 
 ViewRefinement::~ViewRefinement() {
     // The worker may still be saving (its helper stops it): finish that first.
@@ -70,7 +82,17 @@ void ViewRefinement::start(const Camera& camera, int width, int height) {
     sentSerial_ = session_->start(RefinementCamera{camera, width, height}, paused_);
     noteSent(camera, width, height);
     reader_ = session_->reader();
+    offered_ = 0;  // a new worker numbers its snapshots from 1
     started_ = true;
+}
+
+void ViewRefinement::setRealtime(const RealtimeChoice& choice) {
+    choice.validate();
+    realtimeChoice_ = choice;
+    if (!realtime_) return;
+    realtime_->configure(choice.settings(settings_.worker.seed));
+    offered_ = 0;  // offer the snapshot shown again, and show what it blends to
+    estimateConsidered_ = ~uint64_t(0);
 }
 
 // Ends the worker (joining it); the next start frees it.
@@ -102,6 +124,7 @@ std::optional<std::string> ViewRefinement::newFailure() {
     if (!started_ || !error_.empty()) return std::nullopt;
     try {
         session_->rethrowIfFailed();
+        if (realtime_) realtime_->rethrowIfFailed();
     } catch (const std::exception& e) {
         error_ = e.what();
         return error_;
@@ -115,9 +138,25 @@ bool ViewRefinement::pump(double& uploadMs) {
     const auto start = Clock::now();
     if (!uploader_.busy()) {
         const CacheSnapshot* s = reader_.acquire();
-        if (s && (!shown_.any || shown_.generation != generation_ || s->version != shown_.version)) {
+        // The stand-in is offered every snapshot (it decides whether to
+        // estimate again); a newer estimate is shown as a newer snapshot is.
+        if (s && realtime_ && s->version != offered_) {
+            realtime_->offer(*s, sceneVersion_, sceneCopy_);
+            offered_ = s->version;
+        }
+        const std::shared_ptr<const RealtimeEstimate> estimate = realtime_ ? realtime_->latest() : nullptr;
+        const uint64_t newest = estimate ? estimate->serial : 0;
+        if (s && (!shown_.any || shown_.generation != generation_ || s->version != shown_.version ||
+                  newest != estimateConsidered_)) {
             uploading_ = s;
-            uploader_.start(s->direct, s->indirect);
+            estimateConsidered_ = newest;
+            if (realtime_) {
+                uploadingIndirect_ = realtime_->display(*s, sceneVersion_);
+            } else {
+                uploadingIndirect_ = IndirectShown{};
+                uploadingIndirect_.source = "cache";
+            }
+            uploader_.start(s->direct, realtime_ ? uploadingIndirect_.meshes : s->indirect);
         }
     }
     bool swapped = false;
@@ -138,7 +177,9 @@ bool ViewRefinement::pump(double& uploadMs) {
             shown_.cameraSerial = s.cameraSerial;
             shown_.estimatedError = s.estimatedError;
             shown_.converged = s.converged;
-            if (onShown_) onShown_(s);
+            shown_.indirectSource = uploadingIndirect_.source;
+            shown_.realtimeShare = uploadingIndirect_.realtimeShare;
+            if (onShown_) onShown_(s, realtime_ ? uploadingIndirect_.meshes : s.indirect);
             uploading_ = nullptr;
         }
     }
@@ -157,6 +198,9 @@ bool ViewRefinement::done() const {
     // Nothing newer published since the snapshot shown (safe to acquire: no
     // copy is in progress).
     const CacheSnapshot* latest = reader_.acquire();
+    // The stand-in too: no estimate under way, the newest one shown.
+    if (realtime_ && (realtime_->busy() || (realtime_->latest() ? realtime_->latest()->serial : 0) != estimateConsidered_))
+        return false;
     const bool newest = latest && latest->version == shown_.version;
     if (session_->finished()) return newest;
     return newest && shown_.converged && shown_.cameraSerial >= sentSerial_ && !viewDirty_;
@@ -197,10 +241,12 @@ bool ViewRefinement::beginChange(Scene& scene, const SceneChange& change) {
     change_->outcome.what = change.describe();
     ChangeJob* job = change_.get();
     ProgressiveSession* refining = session_.get();
-    job->thread = std::thread([job, refining, &scene, change] {
+    const bool copy = realtime_ != nullptr;
+    job->thread = std::thread([job, refining, &scene, change, copy] {
         const auto start = Clock::now();
         try {
             job->outcome.report = refining->applyChange(scene, change);  // stops the worker first
+            if (copy) job->changed = std::make_shared<const Scene>(scene);
         } catch (const std::exception& e) {
             job->outcome.error = e.what();
         }
@@ -214,6 +260,11 @@ std::optional<ViewRefinement::ChangeOutcome> ViewRefinement::finishChange(const 
     if (!change_ || !change_->done.load() || uploader_.busy()) return std::nullopt;
     change_->thread.join();
     ChangeOutcome outcome = std::move(change_->outcome);
+    // A new scene for the stand-in: the next snapshots are of it.
+    if (outcome.error.empty() && change_->changed) {
+        ++sceneVersion_;
+        sceneCopy_ = std::move(change_->changed);
+    }
     change_.reset();
     stopWorker();
     if (error_.empty()) start(camera, width, height);

@@ -7,6 +7,7 @@
 
 #include "ViewSession.h"
 #include "cache/ProgressiveSession.h"
+#include "cache/RealtimeIndirect.h"
 #include "viewer/compositor/GpuCacheMeshes.h"
 
 #include <atomic>
@@ -30,6 +31,10 @@ public:
         uint64_t samples = 0, rounds = 0, cameraSerial = 0;
         double estimatedError = 1;
         bool converged = false;
+        // What its indirect light is (RealtimeIndirect: the cache, the
+        // real-time stand-in, or a blend) and the stand-in's share of it.
+        std::string indirectSource = "cache";
+        double realtimeShare = 0;
     };
     // How a save ended, once it has (finishSave).
     struct SaveOutcome {
@@ -41,13 +46,24 @@ public:
         std::optional<std::string> failure;
     };
 
+    // Niceness of the cache's sampling threads and of the real-time
+    // stand-in's thread (RealtimeIndirect): the frames (0) come first, then
+    // the estimate the next frames show, then refinement; a frame never
+    // waits for a round. A failure to set it (not permitted) leaves it as it was.
+    static constexpr int kWorkerNice = 10;
+    static constexpr int kRealtimeNice = 0;
+    // From its next start(), `session`'s sampling threads run at kWorkerNice.
+    static void lowerWorkerPriority(ProgressiveSession& session);
+
     // The session for these settings, resuming settings.cachePath if it
     // exists (a cache that cannot be resumed throws InputError). Made before
     // the window opens, so that such an error comes first.
     static std::unique_ptr<ProgressiveSession> makeSession(const Scene& scene, const ViewSettings& settings);
-    // Drives `session`; the worker starts with start(). `uploader` copies
-    // snapshots to the GPU.
-    ViewRefinement(std::unique_ptr<ProgressiveSession> session, const ViewSettings& settings,
+    // Drives `session` of `scene` (the session's own scene, which changes
+    // with beginChange); the worker starts with start(). `uploader` copies
+    // snapshots to the GPU, with the indirect light settings.realtime says
+    // (RealtimeIndirect, on a thread of its own).
+    ViewRefinement(std::unique_ptr<ProgressiveSession> session, const Scene& scene, const ViewSettings& settings,
                    CacheMeshUploader& uploader);
     ~ViewRefinement();  // finishes a save in progress, then stops the worker
 
@@ -65,9 +81,17 @@ public:
     // (all of the first). True when a newer snapshot became the one shown.
     bool pump(double& uploadMs);
     const Shown& shown() const { return shown_; }
-    // Called with each snapshot as it becomes the one shown (the
-    // compositor's specular pass reads the cache on the CPU).
-    void onShown(std::function<void(const CacheSnapshot&)> f) { onShown_ = std::move(f); }
+    // Called with each snapshot as it becomes the one shown, with the
+    // indirect meshes shown with it (the compositor's specular pass reads
+    // the cache on the CPU).
+    using ShownCallback = std::function<void(const CacheSnapshot&, const std::vector<IrradianceMeshCopy>& indirect)>;
+    void onShown(ShownCallback f) { onShown_ = std::move(f); }
+
+    // What the image shows of indirect light (--realtime, --indirect-display):
+    // the next snapshot or estimate shown follows it. Ignored with direct
+    // light only.
+    void setRealtime(const RealtimeChoice& choice);
+    const RealtimeChoice& realtime() const { return realtimeChoice_; }
 
     void setPaused(bool paused);
     bool paused() const { return paused_; }
@@ -126,6 +150,7 @@ private:
     // A change being applied on this helper thread (beginChange).
     struct ChangeJob {
         ChangeOutcome outcome;
+        std::shared_ptr<const Scene> changed;  // the scene after it, for the stand-in (copied here, not by a frame)
         std::thread thread;
         std::atomic<bool> done{false};
     };
@@ -144,7 +169,18 @@ private:
     const CacheSnapshot* uploading_ = nullptr;  // pinned by reader_ while it is copied
     uint64_t generation_ = 0;                   // workers started so far
     Shown shown_;
-    std::function<void(const CacheSnapshot&)> onShown_;
+    ShownCallback onShown_;
+
+    // The real-time stand-in for indirect light (null with direct light
+    // only), the scene version it is told (one more after each change
+    // applied) and that scene's copy, which it keeps while it estimates.
+    RealtimeChoice realtimeChoice_;
+    std::unique_ptr<RealtimeIndirect> realtime_;
+    uint64_t sceneVersion_ = 1;
+    std::shared_ptr<const Scene> sceneCopy_;
+    uint64_t offered_ = 0;            // the snapshot version offered last (this worker's)
+    uint64_t estimateConsidered_ = 0;  // the newest estimate when the last copy to the GPU began
+    IndirectShown uploadingIndirect_;  // the indirect meshes being copied, kept until swapped in
     bool paused_ = false;
     std::string error_;
     std::unique_ptr<SaveJob> save_;

@@ -19,7 +19,7 @@ using Kind = ScriptAction::Kind;
 
 const char* const kActions =
     "camera, wait, wait-samples, wait-error, wait-done, mode, wireframe, contours, ui, light, group, exposure, tonemap, "
-    "lux-range, pause, resume, screenshot, save-cache, quit, object";
+    "lux-range, pause, resume, screenshot, save-cache, quit, object, indirect";
 
 double parseNumber(const std::string& token, const std::string& what, const SourceLocation& where) {
     errno = 0;
@@ -231,6 +231,12 @@ ScriptAction parseLine(const std::vector<std::string>& t, const SourceLocation& 
             if (!(a.number > 0 && a.number2 > a.number))
                 throwInputError(where, "lux-range ", t[1], " ", t[2], ": needs 0 < MIN < MAX");
         }
+    } else if (name == "indirect") {
+        expectArguments(t, 1, 1, "cache, volume, vpl or lpv", where);
+        if (t[1] != "cache" && t[1] != "volume" && t[1] != "vpl" && t[1] != "lpv")
+            throwInputError(where, "indirect '", t[1], "': expected cache, volume, vpl or lpv");
+        a.kind = Kind::Indirect;
+        a.path = t[1];
     } else if (name == "pause" || name == "resume" || name == "quit") {
         expectArguments(t, 0, 0, "no argument", where);
         a.kind = name == "pause" ? Kind::Pause : name == "resume" ? Kind::Resume : Kind::Quit;
@@ -462,6 +468,7 @@ bool ScriptPlayer::run(const ScriptAction& a, double now, ScriptHost& host, bool
             d.luxAuto = true;
             host.meterLuxRange();
             return true;
+        case Kind::Indirect: host.setIndirectDisplay(a.path); return true;
         case Kind::Pause: host.setPaused(true); return true;
         case Kind::Resume: host.setPaused(false); return true;
         case Kind::Screenshot:

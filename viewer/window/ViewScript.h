@@ -58,6 +58,7 @@ struct ScriptAction {
     enum class Kind {
         Camera, Wait, WaitSamples, WaitError, WaitDone, Mode, Wireframe, Contours, Ui, Light, Group, Exposure,
         ExposureAuto, Tonemap, LuxRange, LuxRangeAuto, Pause, Resume, Screenshot, SaveCache, Quit, Change,
+        Indirect,
     };
     enum class LightChange { On, Off, Intensity, Colour };
 
@@ -84,7 +85,7 @@ struct ScriptAction {
     LightChange change = LightChange::On;
     Rgb colour{1.0};
     ToneOperator op = ToneOperator::Aces;
-    std::string path;      // Screenshot, SaveCache
+    std::string path;      // Screenshot, SaveCache; Indirect: cache, volume, vpl or lpv
     // Change: a light (its index set by resolveViewScript) or an object moves.
     SceneChange sceneChange;
 };
@@ -137,6 +138,11 @@ public:
     // cannot move things refuses with an InputError.
     virtual bool changeScene(const SceneChange& change) {
         throw InputError(change.where, "this viewer cannot move lights or objects");
+    }
+    // What the image shows of indirect light: "cache" (a real-time method
+    // standing in while it catches up), or a method's own light, live.
+    virtual void setIndirectDisplay(const std::string& display) {
+        throw InputError("this viewer cannot show another indirect light than its own (" + display + ")");
     }
 };
 

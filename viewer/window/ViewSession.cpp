@@ -162,9 +162,9 @@ struct ViewSession::Impl : ScriptHost {
         emptyMeshes.resize(scene.lights.size());
         uploader->start(emptyMeshes, {});
         uploader->step(1e9);
-        refinement = std::make_unique<ViewRefinement>(std::move(session), settings, *uploader);
-        refinement->onShown([this](const CacheSnapshot& s) {
-            if (compositor->hasSpecularPass()) compositor->setSpecularCache(s.direct, s.indirect);
+        refinement = std::make_unique<ViewRefinement>(std::move(session), refined, settings, *uploader);
+        refinement->onShown([this](const CacheSnapshot& s, const std::vector<IrradianceMeshCopy>& indirect) {
+            if (compositor->hasSpecularPass()) compositor->setSpecularCache(s.direct, indirect);
         });
         ui = std::make_unique<Ui>(w, settings.screenshotPath,
                                   settings.cachePath.empty() ? "meshlight-view.cache" : settings.cachePath);
@@ -260,6 +260,15 @@ struct ViewSession::Impl : ScriptHost {
         if (!refinement->started() || refinement->saving() || refinement->changing()) return false;
         return refinement->beginChange(refined, change);
     }
+    void setIndirectDisplay(const std::string& display) override {
+        RealtimeChoice c = refinement->realtime();
+        c.display = display;
+        setRealtime(c);
+    }
+    void setRealtime(const RealtimeChoice& c) {
+        refinement->setRealtime(c);
+        showMessage(c.describe());
+    }
 
     void showMessage(const std::string& m) {
         message = m;
@@ -316,6 +325,8 @@ struct ViewSession::Impl : ScriptHost {
         s.rounds = shown.rounds;
         s.estimatedError = shown.estimatedError;
         s.converged = shown.converged;
+        s.indirectSource = settings.indirect.active() ? shown.indirectSource : "";
+        s.realtimeShare = shown.realtimeShare;
         s.finished = refinement->finished();
         s.paused = refinement->paused();
         s.saving = refinement->saving();
@@ -334,6 +345,7 @@ struct ViewSession::Impl : ScriptHost {
                 "Direct light: ", refinement->session().coverage().describe(),
                 ". Changing a light is exact where it has its own mesh; in the shared mesh the lights take their "
                 "power-weighted mean, like indirect light, and 'light N' alone does not show what it gives there.");
+        m.realtime = refinement->realtime();
         m.cursorLux = cursorLux;
         m.error = refinement->error();
         if (now() < messageUntil) m.message = message;
@@ -350,6 +362,7 @@ struct ViewSession::Impl : ScriptHost {
         if (r.saveCache) saveCache(*r.saveCache);
         if (r.speedFactor != 1) walk.setSpeed(walk.speed() * r.speedFactor);
         if (r.supersample > 0) settings.supersample = r.supersample;
+        if (r.realtime) setRealtime(*r.realtime);
     }
 
     CompositorSettings compositeSettings(int fbWidth, int fbHeight, CompositeQuantity q) const {
@@ -381,7 +394,10 @@ struct ViewSession::Impl : ScriptHost {
     void printStatus(bool now = false) {
         const ViewRefinement::Shown& shown = refinement->shown();
         if (settings.printProgress && shown.any)
-            stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError, lightsStatus(), now);
+            stats.printStatus(this->now(), shown.vertices, shown.samples, shown.estimatedError,
+                              settings.indirect.active() ? "indirect: " + shown.indirectSource + "; " + lightsStatus()
+                                                         : lightsStatus(),
+                              now);
     }
 
     // Each luminaire's flux as the scene emits it, once, on stdout: the

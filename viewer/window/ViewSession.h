@@ -42,6 +42,10 @@ struct ViewSettings {
     Camera camera;          // the start camera (R goes back to it)
     DirectChoice direct;    // the worker's sampler
     IndirectChoice indirect;  // decided (IndirectChoice::decide); enabled = false: direct light only
+    // What the image shows of indirect light: the cache with a real-time
+    // method standing in while it catches up, or a method live
+    // (--realtime, --indirect-display; the panel changes it).
+    RealtimeChoice realtime;
     CacheSettings cache;
     WorkerSettings worker;  // maxSamples: the --samples budget
     std::string cachePath;  // resumed from if it exists; saved at the end and by "save cache"
