@@ -7,6 +7,7 @@
 #include "SessionCheckpoints.h"
 
 #include "cache/ProgressiveSession.h"
+#include "cache/RealtimeIndirect.h"
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/SceneChange.h"
@@ -18,6 +19,7 @@
 #include "gpu_sampling/SamplerFactory.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
+#include "viewer/window/ViewRefinement.h"
 
 #include <algorithm>
 #include <atomic>
@@ -85,15 +87,57 @@ std::vector<Motion> motionsFor(const Scene& cornell, int steps) {
 struct Choices {
     DirectChoice direct;
     IndirectChoice indirect;
+    RealtimeChoice realtime;
     uint32_t seed = 1;
 };
 
-std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c) {
+// As the viewer makes them: the sampling threads below the frames and the
+// stand-in (ViewRefinement's niceness).
+std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c, uint32_t seed) {
     SessionSettings ss;
-    ss.worker.seed = c.seed;
+    ss.worker.seed = seed;
+    ss.worker.indirectStandIn = c.realtime.realtime != "off";
     if (c.indirect.active()) ss.indirect = c.indirect.solver;
-    return std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, c.direct, c.indirect));
+    auto session = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, c.direct, c.indirect));
+    ViewRefinement::lowerWorkerPriority(*session);
+    return session;
 }
+
+// The viewer's stand-in for indirect light (none with direct light only).
+std::unique_ptr<RealtimeIndirect> newRealtime(const Choices& c) {
+    if (!c.indirect.active()) return nullptr;
+    return std::make_unique<RealtimeIndirect>(c.indirect.solver, realtimeEstimatorFactory(c.indirect),
+                                              c.realtime.settings(c.seed), ViewRefinement::kRealtimeNice);
+}
+
+// What a frame shows of indirect light: the stand-in's blend, or the cache's.
+IndirectShown shownIndirect(const RealtimeIndirect* realtime, const CacheSnapshot& s, uint64_t sceneVersion) {
+    if (realtime) return realtime->display(s, sceneVersion);
+    IndirectShown shown;
+    shown.meshes = s.indirect;
+    shown.source = "cache";
+    return shown;
+}
+
+// Offers each new snapshot to the stand-in, as the viewer does with every
+// snapshot it shows.
+struct Offers {
+    RealtimeIndirect* realtime = nullptr;
+    uint64_t sceneVersion = 1;
+    std::shared_ptr<const Scene> scene;
+    uint64_t offered = 0;  // the snapshot version offered last
+    void offer(const CacheSnapshot& s) {
+        if (!realtime || s.version == offered) return;
+        realtime->offer(s, sceneVersion, scene);
+        offered = s.version;
+    }
+    // A new scene (a step applied), with a new worker: versions start again.
+    void sceneChanged(const Scene& now) {
+        ++sceneVersion;
+        scene = std::make_shared<const Scene>(now);
+        offered = 0;
+    }
+};
 
 struct TimedImage {
     double seconds = 0;
@@ -101,23 +145,51 @@ struct TimedImage {
     uint64_t samples = 0;         // the snapshot's
     int bouncesFinished = 0;      // of its indirect light
     double estimatedError = 1;    // the cache's own
+    double realtimeShare = 0;     // of the indirect light shown, the stand-in's (IndirectShown)
+    std::string indirectSource;   // IndirectShown::source
+    ImageRgb cacheImage;          // the cache's own indirect light instead (the same image where no stand-in shows)
 };
 
 // The latest snapshot composited at the error size every kEvery seconds
-// from `start` until `limit` seconds after it.
-std::vector<TimedImage> follow(ProgressiveSession& session, CacheWorker::Reader& reader, Compositor& compositor,
-                               const Camera& camera, const Workload& w, Clock::time_point start, double limit) {
+// from `start` until `limit` seconds after it, with the indirect light the
+// viewer would show; meanwhile every new snapshot is offered to the
+// stand-in, as the viewer's frames do.
+std::vector<TimedImage> follow(ProgressiveSession& session, CacheWorker::Reader& reader, Offers& offers,
+                               Compositor& compositor, const Camera& camera, const Workload& w,
+                               Clock::time_point start, double limit) {
     CompositorSettings comp;
     comp.width = w.errorWidth;
     comp.height = w.errorHeight;
     std::vector<TimedImage> images;
     for (double due = kEvery; due <= limit + 1e-9; due += kEvery) {
-        const CacheSnapshot* s = snapshotAt(session, reader, start, due);
-        images.push_back({due, compositor.render(camera, s->direct, s->indirect, comp), s->samples, s->bouncesFinished,
-                          s->estimatedError});
+        for (double left; (left = due - secondsSince(start)) > 0;) {
+            session.rethrowIfFailed();
+            if (offers.realtime) offers.realtime->rethrowIfFailed();
+            if (const CacheSnapshot* s = reader.acquire()) offers.offer(*s);
+            std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.02)));
+        }
+        const CacheSnapshot* s = firstSnapshot(session, reader);
+        offers.offer(*s);
+        const IndirectShown shown = shownIndirect(offers.realtime, *s, offers.sceneVersion);
+        ImageRgb image = compositor.render(camera, s->direct, shown.meshes, comp);
+        ImageRgb cacheImage = shown.realtimeShare > 0 ? compositor.render(camera, s->direct, s->indirect, comp) : image;
+        images.push_back({due, std::move(image), s->samples, s->bouncesFinished, s->estimatedError,
+                          shown.realtimeShare, shown.source, std::move(cacheImage)});
     }
     return images;
 }
+
+// One row of the stand-in's table: a method at one resolution estimating
+// `bounces` bounces from the converged direct light of the final pose.
+struct MethodRow {
+    std::string method;        // "volume"
+    std::string resolution;    // "8 probes"
+    bool isDefault = false;    // the resolution the options default to (--probes, --vpls, --lpv-cells)
+    int bounces = 0;
+    double setupSeconds = 0;   // the estimator and the base mesh for the scene (once per pose)
+    double updateSeconds = 0;  // every bounce estimated, the tail added
+    double error = 0;          // the image with it against the converged image
+};
 
 struct MotionResult {
     std::string name;
@@ -132,13 +204,19 @@ struct MotionResult {
     double warmPt05 = 0, warmPt5 = 0, coldPt05 = 0, coldPt5 = 0;  // against the path tracer
     double convergedPt = 0;           // the converged image against the path tracer
     double referenceNoise = 0;        // the reference's mean relative standard error
+    double coldOwnWithin2 = -1;       // the cold start against its own last image (the old, biased measure; -1: never)
     std::optional<double> warmWithin2, coldWithin2;
+    // The same with the cache's own indirect light, the stand-in left out.
+    std::vector<double> warmCacheCurve, coldCacheCurve;
+    std::optional<double> warmCacheWithin2, coldCacheWithin2;
+    std::vector<MethodRow> methods;   // the stand-in's candidates on the final pose
+    double directOnlyError = 0;       // the converged direct light alone against the converged image
 };
 
-// Relative RMSE of each image against `reference`.
-std::vector<double> curve(const std::vector<TimedImage>& images, const ImageRgb& reference) {
+// Relative RMSE of each image (or, `cacheAlone`, its cache's own) against `reference`.
+std::vector<double> curve(const std::vector<TimedImage>& images, const ImageRgb& reference, bool cacheAlone = false) {
     std::vector<double> e;
-    for (const TimedImage& t : images) e.push_back(relativeRmse(t.image, reference));
+    for (const TimedImage& t : images) e.push_back(relativeRmse(cacheAlone ? t.cacheImage : t.image, reference));
     return e;
 }
 
@@ -158,6 +236,64 @@ std::optional<double> within(const std::vector<double>& errors, double level) {
     return t;
 }
 
+// Each method standing in, on the final pose, from the converged cache's
+// direct light (and caustics), at its default resolution and one coarser
+// and one finer: its time on this thread with nothing else of the bench
+// running, and the image it gives against the converged one.
+std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices, const CacheSnapshot& converged,
+                                      Compositor& compositor, const Camera& camera, const CompositorSettings& comp,
+                                      const ImageRgb& reference, bool quick) {
+    std::vector<IrradianceMeshCopy> source = converged.direct;
+    const size_t caustics = std::min(converged.causticMeshes, converged.indirect.size());
+    const std::vector<IrradianceMeshCopy> causticMeshes(converged.indirect.end() - std::ptrdiff_t(caustics),
+                                                        converged.indirect.end());
+    source.insert(source.end(), causticMeshes.begin(), causticMeshes.end());
+    const IndirectSettings& settings = choices.indirect.solver;
+    std::vector<int> counts;
+    for (int n : quick ? std::vector<int>{1, 3} : std::vector<int>{1, 2, 3, settings.bounces})
+        if (n <= settings.bounces && std::find(counts.begin(), counts.end(), n) == counts.end()) counts.push_back(n);
+    struct Variant {
+        std::string method, resolution;
+        IndirectChoice choice;
+        bool isDefault;
+    };
+    std::vector<Variant> variants;
+    const IndirectChoice& base = choices.indirect;
+    for (int probes : {6, base.volume.probes, 12}) {
+        IndirectChoice c = base;
+        c.volume.probes = probes;
+        variants.push_back({"volume", concat(probes, " probes"), c, probes == base.volume.probes});
+    }
+    for (int lights : {base.vpl.lights, 4 * base.vpl.lights}) {
+        IndirectChoice c = base;
+        c.vpl.lights = lights;
+        variants.push_back({"vpl", concat(lights, " lights"), c, lights == base.vpl.lights});
+    }
+    for (int cells : {base.lpv.cells, 2 * base.lpv.cells}) {
+        IndirectChoice c = base;
+        c.lpv.cells = cells;
+        variants.push_back({"lpv", concat(cells, " cells"), c, cells == base.lpv.cells});
+    }
+    std::vector<MethodRow> rows;
+    for (const Variant& v : variants) {
+        if (quick && !v.isDefault) continue;
+        Clock::time_point t = Clock::now();
+        const RealtimeMesh mesh(scene, settings);
+        std::unique_ptr<IndirectEstimator> estimator = realtimeEstimatorFactory(v.choice)(scene, v.method);
+        const double setup = secondsSince(t);
+        for (int n : counts) {
+            t = Clock::now();
+            std::vector<IrradianceMeshCopy> bounces =
+                *estimateBounces(mesh, *estimator, settings, n, source, choices.seed);
+            const double update = secondsSince(t);
+            bounces.insert(bounces.end(), causticMeshes.begin(), causticMeshes.end());
+            const double error = relativeRmse(compositor.render(camera, converged.direct, bounces, comp), reference);
+            rows.push_back({v.method, v.resolution, v.isDefault, n, setup, update, error});
+        }
+    }
+    return rows;
+}
+
 MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& motion, const Choices& choices,
                        const Workload& w) {
     MotionResult r;
@@ -166,7 +302,9 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     Scene shown = live;             // the compositor's
     const Camera camera = *live.camera;
     auto compositor = std::make_unique<Compositor>(context, shown);
-    std::unique_ptr<ProgressiveSession> session = newSession(live, choices);
+    std::unique_ptr<ProgressiveSession> session = newSession(live, choices, choices.seed);
+    std::unique_ptr<RealtimeIndirect> realtime = newRealtime(choices);
+    Offers offers{realtime.get(), 1, std::make_shared<const Scene>(live), 0};
     session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
     CacheWorker::Reader reader = session->reader();
     run.progress("%s: settling for %.0f s\n", motion.name.c_str(), w.settle);
@@ -177,6 +315,7 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     reader = CacheWorker::Reader();
     session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
     reader = session->reader();
+    offers.offered = 0;
     snapshotAt(*session, reader, Clock::now(), 0);
 
     // The frame loop while moving, each step applied on a helper thread.
@@ -210,14 +349,17 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
             framesThisStep = 0;
             r.reports.push_back(helperReport);
             nextStepAt = secondsSince(loop) + kStepInterval;
-            // The viewer's finishChange: the last snapshot stays on screen
-            // until the new worker's first, the compositor made again.
-            if (const CacheSnapshot* s = reader.acquire()) lastDirect = s->direct, lastIndirect = s->indirect;
+            // The viewer's finishChange: the last frame's image stays on
+            // screen until the new worker's first snapshot, the compositor
+            // made again, the stand-in told of the new scene.
+            if (const CacheSnapshot* s = reader.acquire())
+                lastDirect = s->direct, lastIndirect = shownIndirect(realtime.get(), *s, offers.sceneVersion).meshes;
             fromCopies = true;
             reader = CacheWorker::Reader();
             compositor.reset();
             shown = live;
             compositor = std::make_unique<Compositor>(context, shown);
+            offers.sceneChanged(live);
             session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
             reader = session->reader();
         }
@@ -225,7 +367,9 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
         const CacheSnapshot* s = reader.acquire();
         if (s) fromCopies = false;
         if (s || fromCopies) {
-            compositor->render(camera, s ? s->direct : lastDirect, s ? s->indirect : lastIndirect, frame);
+            if (s) offers.offer(*s);
+            compositor->render(camera, s ? s->direct : lastDirect,
+                               s ? shownIndirect(realtime.get(), *s, offers.sceneVersion).meshes : lastIndirect, frame);
             r.frameMs.push_back(1e3 * secondsSince(f));
             if (helper.joinable()) ++framesThisStep;
         }
@@ -235,19 +379,52 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     // After the motion: the warm cache, then a cold start on the final pose.
     run.progress("%s: %zu steps applied; following the cache for %.0f s\n", motion.name.c_str(), motion.steps.size(),
                  w.limit);
-    const std::vector<TimedImage> warm = follow(*session, reader, *compositor, camera, w, Clock::now(), w.limit);
+    const std::vector<TimedImage> warm =
+        follow(*session, reader, offers, *compositor, camera, w, Clock::now(), w.limit);
     reader = CacheWorker::Reader();
     session.reset();
+    realtime.reset();
     run.progress("%s: cold start for %.0f s\n", motion.name.c_str(), w.cold);
     Scene coldScene = live;
     const Clock::time_point coldStart = Clock::now();  // the cache's construction counts
-    std::unique_ptr<ProgressiveSession> fresh = newSession(coldScene, choices);
+    std::unique_ptr<ProgressiveSession> fresh = newSession(coldScene, choices, choices.seed);
+    std::unique_ptr<RealtimeIndirect> coldRealtime = newRealtime(choices);
+    Offers coldOffers{coldRealtime.get(), 1, std::make_shared<const Scene>(coldScene), 0};
     fresh->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
     CacheWorker::Reader coldReader = fresh->reader();
-    const std::vector<TimedImage> cold = follow(*fresh, coldReader, *compositor, camera, w, coldStart, w.cold);
+    const std::vector<TimedImage> cold =
+        follow(*fresh, coldReader, coldOffers, *compositor, camera, w, coldStart, w.cold);
     coldReader = CacheWorker::Reader();
     fresh.reset();
-    const ImageRgb& converged = cold.back().image;
+    coldRealtime.reset();
+
+    // The converged image: a third session on the final pose with a seed of
+    // its own, refined as long as the cold start. Neither curve is measured
+    // against its own images (a run's last image shares its refinement and
+    // jitter with the images before it, which favoured the cold start when
+    // it was the reference).
+    run.progress("%s: an independent converged image, %.0f s\n", motion.name.c_str(), w.cold);
+    Scene referenceScene = live;
+    std::unique_ptr<ProgressiveSession> independent =
+        newSession(referenceScene, choices, seedFor(choices.seed, 0xc0de5u));
+    independent->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
+    CacheWorker::Reader independentReader = independent->reader();
+    const CacheSnapshot* last = snapshotAt(*independent, independentReader, Clock::now(), w.cold);
+    independent->stop();
+    last = independentReader.acquire();
+    CompositorSettings comp;
+    comp.width = w.errorWidth;
+    comp.height = w.errorHeight;
+    const ImageRgb converged = compositor->render(camera, last->direct, last->indirect, comp);
+    r.coldOwnWithin2 = within(curve(cold, cold.back().image), 0.02).value_or(-1);
+
+    run.progress("%s: the stand-in's methods on the converged direct light\n", motion.name.c_str());
+    if (choices.indirect.active()) {
+        r.methods = measureMethods(live, choices, *last, *compositor, camera, comp, converged, run.options().quick);
+        r.directOnlyError = relativeRmse(compositor->render(camera, last->direct, {}, comp), converged);
+    }
+    independentReader = CacheWorker::Reader();
+    independent.reset();
 
     run.progress("%s: path tracer reference, %d spp at %dx%d\n", motion.name.c_str(), w.spp, w.errorWidth,
                  w.errorHeight);
@@ -267,6 +444,10 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     r.warm = warm;
     r.cold = cold;
     r.coldWithin2 = within(r.coldCurve, 0.02);
+    r.warmCacheCurve = curve(warm, converged, true);
+    r.coldCacheCurve = curve(cold, converged, true);
+    r.warmCacheWithin2 = within(r.warmCacheCurve, 0.02);
+    r.coldCacheWithin2 = within(r.coldCacheCurve, 0.02);
     return r;
 }
 
@@ -274,6 +455,12 @@ double percentile(std::vector<double> v, double q) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
     return v[std::min(v.size() - 1, size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+// A free text as a CSV cell: no commas (BenchTable's cells hold none).
+std::string csvCell(std::string text) {
+    std::replace(text.begin(), text.end(), ',', ';');
+    return text;
 }
 
 std::string cell(const std::optional<double>& t) { return t ? benchNumber(*t) : std::string("never"); }
@@ -307,7 +494,7 @@ std::string gnuplotScript(const std::vector<MotionResult>& results) {
 
 }  // namespace
 
-int runBenchDynamic(const BenchOptions& options) {
+int runBenchDynamic(const BenchDynamicOptions& options) {
     BenchRun run(options);
     const Workload w = workloadFor(options.quick);
     const std::unique_ptr<GlContext> context = run.openContext();
@@ -317,10 +504,12 @@ int runBenchDynamic(const BenchOptions& options) {
     choices.direct.backend = options.backend;
     const Scene cornell = makeCornellBox();
     choices.indirect.decide(cornell);
+    choices.realtime = options.realtime;
+    choices.realtime.validate();
     std::printf("bench dynamic (%s): Cornell box, full GI (%s, %d bounces), frames %dx%d, errors at %dx%d against "
-                "%d spp\n",
+                "%d spp; %s\n",
                 run.mode(), choices.indirect.method.c_str(), choices.indirect.solver.bounces, w.frameWidth,
-                w.frameHeight, w.errorWidth, w.errorHeight, w.spp);
+                w.frameHeight, w.errorWidth, w.errorHeight, w.spp, choices.realtime.describe().c_str());
 
     std::vector<MotionResult> results;
     for (const Motion& m : motionsFor(cornell, w.steps)) results.push_back(runMotion(run, *context, m, choices, w));
@@ -329,10 +518,14 @@ int runBenchDynamic(const BenchOptions& options) {
     BenchTable summary({"motion", "steps", "frames", "frame_median_ms", "frame_p95_ms", "frame_max_ms",
                         "step_median_ms", "step_max_ms", "warm_0.5s_vs_converged_pct", "warm_5s_vs_converged_pct",
                         "warm_0.5s_vs_pt_pct", "warm_5s_vs_pt_pct", "cold_0.5s_vs_pt_pct", "cold_5s_vs_pt_pct",
-                        "converged_vs_pt_pct", "reference_noise_pct", "warm_within_2pct_s", "cold_within_2pct_s"});
+                        "converged_vs_pt_pct", "reference_noise_pct", "warm_within_2pct_s", "cold_within_2pct_s",
+                        "warm_cache_alone_within_2pct_s", "cold_cache_alone_within_2pct_s",
+                        "cold_within_2pct_of_itself_s"});
     BenchTable targets({"motion", "target", "measured", "met"});
-    BenchTable curves({"motion", "start", "seconds", "vs_converged_pct", "samples", "bounces_finished",
-                       "estimated_error_pct"});
+    BenchTable curves({"motion", "start", "seconds", "vs_converged_pct", "cache_alone_vs_converged_pct", "samples",
+                       "bounces_finished", "estimated_error_pct", "realtime_share_pct", "indirect_shown"});
+    BenchTable methods({"motion", "method", "resolution", "bounces_estimated", "setup_s", "update_s",
+                        "vs_converged_pct"});
     for (const MotionResult& r : results) {
         for (size_t i = 0; i < r.frameMs.size(); ++i) frames.addRow({r.name, std::to_string(i), benchNumber(r.frameMs[i])});
         std::vector<double> stepMs;
@@ -344,15 +537,25 @@ int runBenchDynamic(const BenchOptions& options) {
                         benchNumber(percentile(r.frameMs, 1.0)), benchNumber(median(stepMs)),
                         benchNumber(percentile(stepMs, 1.0)), benchPct(at05), benchPct(at5), benchPct(r.warmPt05),
                         benchPct(r.warmPt5), benchPct(r.coldPt05), benchPct(r.coldPt5), benchPct(r.convergedPt),
-                        benchPct(r.referenceNoise), cell(r.warmWithin2), cell(r.coldWithin2)});
+                        benchPct(r.referenceNoise), cell(r.warmWithin2), cell(r.coldWithin2),
+                        cell(r.warmCacheWithin2), cell(r.coldCacheWithin2), r.coldOwnWithin2 >= 0 ? benchNumber(r.coldOwnWithin2) : std::string("never")});
         for (const char* kind : {"warm", "cold"}) {
             const bool isWarm = std::string(kind) == "warm";
             const std::vector<double>& c = isWarm ? r.warmCurve : r.coldCurve;
+            const std::vector<double>& alone = isWarm ? r.warmCacheCurve : r.coldCacheCurve;
             const std::vector<TimedImage>& im = isWarm ? r.warm : r.cold;
             for (size_t k = 0; k < c.size(); ++k)
-                curves.addRow({r.name, kind, benchNumber(im[k].seconds), benchPct(c[k]), std::to_string(im[k].samples),
-                               std::to_string(im[k].bouncesFinished), benchPct(im[k].estimatedError)});
+                curves.addRow({r.name, kind, benchNumber(im[k].seconds), benchPct(c[k]), benchPct(alone[k]),
+                               std::to_string(im[k].samples),
+                               std::to_string(im[k].bouncesFinished), benchPct(im[k].estimatedError),
+                               benchPct(im[k].realtimeShare), csvCell(im[k].indirectSource)});
         }
+        for (const MethodRow& m : r.methods)
+            methods.addRow({r.name, m.method, m.resolution + (m.isDefault ? " (default)" : ""),
+                            std::to_string(m.bounces), benchNumber(m.setupSeconds), benchNumber(m.updateSeconds),
+                            benchPct(m.error)});
+        if (!r.methods.empty())
+            methods.addRow({r.name, "none (direct light alone)", "-", "0", "0", "0", benchPct(r.directOnlyError)});
         std::printf("%s: the direct cache was at refinement level %d with %zu vertices when the motion began\n",
                     r.name.c_str(), r.levelAtMove, r.verticesAtMove);
         // Frames never wait: frames kept coming while every step was being
@@ -367,21 +570,30 @@ int runBenchDynamic(const BenchOptions& options) {
         const bool half = r.warmWithin2 && r.coldWithin2 && *r.warmWithin2 < 0.5 * *r.coldWithin2;
         targets.addRow({r.name, "back within 2% in under half a cold start's time",
                         cell(r.warmWithin2) + " s vs " + cell(r.coldWithin2) + " s", benchYesNo(half)});
+        const bool cacheHalf =
+            r.warmCacheWithin2 && r.coldCacheWithin2 && *r.warmCacheWithin2 < 0.5 * *r.coldCacheWithin2;
+        targets.addRow({r.name, "the same with the cache's own indirect light (no stand-in)",
+                        cell(r.warmCacheWithin2) + " s vs " + cell(r.coldCacheWithin2) + " s", benchYesNo(cacheHalf)});
         for (size_t i = 0; i < r.reports.size(); ++i)
             std::printf("%s step %zu: %s (%.0f ms)\n", r.name.c_str(), i + 1, r.reports[i].c_str(), stepMs[i]);
     }
-    std::printf("\n%s\n%s\n", summary.aligned().c_str(), targets.aligned().c_str());
+    std::printf("\n%s\n%s\n%s\n", summary.aligned().c_str(), targets.aligned().c_str(), methods.aligned().c_str());
     run.writeCsv("dynamic_frames.csv", frames);
     run.writeCsv("dynamic_summary.csv", summary);
     run.writeCsv("dynamic_targets.csv", targets);
     run.writeCsv("dynamic_curves.csv", curves);
+    run.writeCsv("dynamic_realtime.csv", methods);
     run.plot("dynamic_plots.gp", gnuplotScript(results), kPlots);
     const double wall = run.seconds();
     std::ostringstream md;
     md << "# bench dynamic (" << run.mode() << ")\n\nCornell box, full GI; frames " << w.frameWidth << "x"
        << w.frameHeight << ", errors at " << w.errorWidth << "x" << w.errorHeight << " against " << w.spp
        << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
-       << summary.markdown() << "\n" << targets.markdown();
+       << choices.realtime.describe() << ".\n\n"
+       << summary.markdown() << "\n" << targets.markdown()
+       << "\nThe stand-in's methods on the final pose, from the converged direct light (one thread, nothing else "
+          "running), against the converged image:\n\n"
+       << methods.markdown();
     run.write("dynamic_summary.md", md.str());
     run.printWallTime(wall);
     return 0;

@@ -111,6 +111,24 @@ int runDirect(const std::vector<std::string>& args) {
     return runBenchDirect(options);
 }
 
+int runDynamic(const std::vector<std::string>& args) {
+    const BenchDynamicOptions defaults;
+    BenchCommandLine command("dynamic",
+                             {"CI size: 320x180 frames, errors at 64x36 against 64 spp, 3 steps, 8 s after each motion",
+                              "jitter seed of the cache's sampler and the path tracer's streams"},
+                             defaults);
+    command.options().value("realtime", "METHOD",
+                            "what stands in for indirect light while the cache catches up, as in 'view': volume, vpl, "
+                            "lpv or off (the cache's old bounces)",
+                            defaults.realtime.realtime);
+    if (!command.parse(args)) return 0;
+    BenchDynamicOptions options;
+    command.read(options);
+    options.realtime.realtime = command.options().str("realtime");
+    options.realtime.validate();
+    return runBenchDynamic(options);
+}
+
 int runReport(const std::vector<std::string>& args) {
     CommonHelp help{"every bench in its CI size", "seed passed to every bench"};
     help.out = "folder for index.html and one subfolder per bench (made if missing)";
@@ -152,11 +170,7 @@ int runBench(const std::vector<std::string>& args) {
                          {"CI size: 3 and 12 panels at 96x54, 5 s each, a 512-spp reference",
                           "jitter seed of the cache's sampler and the path tracer's streams"},
                          rest, runBenchLights);
-    if (name == "dynamic")
-        return runCommon(name,
-                         {"CI size: 320x180 frames, errors at 64x36 against 64 spp, 3 steps, 8 s after each motion",
-                          "jitter seed of the cache's sampler and the path tracer's streams"},
-                         rest, runBenchDynamic);
+    if (name == "dynamic") return runDynamic(rest);
     if (name == "scenes")
         return runCommon(name,
                          {"CI size: 64 pixels wide, 3 s against 64 spp",
