@@ -48,28 +48,39 @@ MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, doubl
     origin_ = b.lo - tolerance;
     for (int a = 0; a < 3; ++a)
         dims_[size_t(a)] = std::clamp(int(std::ceil((b.hi[a] - b.lo[a] + 2 * tolerance) / cell_)) + 1, 1, 1024);
-    bins_.resize(size_t(dims_[0]) * dims_[1] * dims_[2]);
-    faceNormals_.resize(mesh.triangles.size());
+    const size_t binCount = size_t(dims_[0]) * dims_[1] * dims_[2];
+    faces_.resize(mesh.triangles.size());
+    // Each face's range of bins (its bounding box grown by the tolerance).
+    std::vector<std::array<int, 6>> ranges(mesh.triangles.size());
+    binStart_.assign(binCount + 1, 0);
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
         const glm::uvec3 i = mesh.triangles[t];
         const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
         const Vec3 n = glm::cross(p1 - p0, p2 - p0);
-        faceNormals_[t] = glm::length(n) > 0 ? glm::normalize(n) : Vec3(0.0);
-        std::array<int, 3> lo{}, hi{};
+        const Vec3 unit = glm::length(n) > 0 ? glm::normalize(n) : Vec3(0.0);
+        faces_[t] = {float(unit.x), float(unit.y), float(unit.z), i};
+        std::array<int, 6>& r = ranges[t];
         for (int a = 0; a < 3; ++a) {
             const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance, mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
-            lo[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
-            hi[size_t(a)] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+            r[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+            r[size_t(a) + 3] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
         }
-        for (int z = lo[2]; z <= hi[2]; ++z)
-            for (int y = lo[1]; y <= hi[1]; ++y)
-                for (int x = lo[0]; x <= hi[0]; ++x)
-                    bins_[(size_t(z) * dims_[1] + y) * dims_[0] + x].push_back(uint32_t(t));
     }
+    // Counted, then filled in face order.
+    auto eachBin = [&](const std::array<int, 6>& r, auto&& f) {
+        for (int z = r[2]; z <= r[5]; ++z)
+            for (int y = r[1]; y <= r[4]; ++y)
+                for (int x = r[0]; x <= r[3]; ++x) f((size_t(z) * dims_[1] + y) * dims_[0] + x);
+    };
+    for (const auto& r : ranges) eachBin(r, [&](size_t bin) { ++binStart_[bin + 1]; });
+    for (size_t k = 0; k < binCount; ++k) binStart_[k + 1] += binStart_[k];
+    binFaces_.resize(binStart_[binCount]);
+    std::vector<uint32_t> next(binStart_.begin(), binStart_.end() - 1);
+    for (size_t t = 0; t < ranges.size(); ++t) eachBin(ranges[t], [&](size_t bin) { binFaces_[next[bin]++] = uint32_t(t); });
 }
 
 Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
-    if (bins_.empty()) return Rgb(0.0);
+    if (faces_.empty()) return Rgb(0.0);
     std::array<int, 3> c{};
     for (int a = 0; a < 3; ++a) {
         const int i = int(std::floor((p[a] - origin_[a]) / cell_));
@@ -78,9 +89,12 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
     }
     double best = tolerance_ * tolerance_;
     Rgb result(0.0);
-    for (uint32_t t : bins_[(size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0]]) {
-        if (glm::dot(faceNormals_[t], n) < 0.5) continue;  // the other side, or a crease beyond 60°
-        const glm::uvec3 i = mesh_.triangles[t];
+    const size_t bin = (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
+    for (uint32_t k = binStart_[bin]; k < binStart_[bin + 1]; ++k) {
+        const Face& f = faces_[binFaces_[k]];
+        // The other side, or a crease beyond 60°.
+        if (double(f.nx) * n.x + double(f.ny) * n.y + double(f.nz) * n.z < 0.5) continue;
+        const glm::uvec3 i = f.corners;
         const Vec3 w = closestBarycentric(p, mesh_.positions[i.x], mesh_.positions[i.y], mesh_.positions[i.z]);
         const Vec3 q = w.x * mesh_.positions[i.x] + w.y * mesh_.positions[i.y] + w.z * mesh_.positions[i.z];
         const double d2 = glm::dot(q - p, q - p);
