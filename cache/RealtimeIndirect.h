@@ -122,7 +122,7 @@ struct RealtimeSettings {
     // Bounces the method estimates, later ones a tail (0: every bounce).
     // Each costs an update of the method, weaker ones less; the tail is far
     // from the bounces' light (bench dynamic: 3 of 8 bounces estimated
-    // leave 1.3-2x the image error of all 8).
+    // leave 1.1-1.5x the image error of all 8).
     int methodBounces = 0;
     uint32_t seed = 1;
     void validate() const;
