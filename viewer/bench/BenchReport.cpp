@@ -185,7 +185,8 @@ std::vector<ReportSection> reportSections() {
              {"lights_summary.csv", "Time to each level, Meshlight and the path tracer.", {}},
              {"lights_pairs.csv",
               "Direct-light pairs by how they are answered: below the horizon, nothing in the way (closed form), "
-              "the light behind one occluder polygon (zero), rasterised; share and microseconds each.",
+              "the light behind one occluder polygon (zero), few occluders decided on the CPU, rasterised; share "
+              "and microseconds each.",
               {}},
          }},
         {"scenes", "Public scenes: render against the path tracer",
