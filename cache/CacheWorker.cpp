@@ -100,6 +100,16 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->directError = cache_.estimatedError(view);
     if (indirect_) {
         snap->indirect = indirect_->displayMeshes();
+        // While direct light's first pass is incomplete, bounce 1 reflects
+        // a direct light partly guessed from neighbours (an early start):
+        // its light, and every later bounce's, is assumed off by
+        // kGuessedLightError.
+        if (cache_.unsampledCount() > 0)
+            for (IrradianceMeshCopy& m : snap->indirect) {
+                m.predictedError.resize(m.irradiance.size(), Rgb(0.0));
+                for (size_t i = 0; i < m.irradiance.size(); ++i)
+                    m.predictedError[i] = glm::max(m.predictedError[i], kGuessedLightError * m.irradiance[i]);
+            }
         snap->bounces = indirect_->bounces();
         snap->bouncesFinished = indirect_->finished();
         snap->indirectComplete = indirect_->firstPassDone() && !indirect_->showingStale();

@@ -470,6 +470,10 @@ size_t fillRings(const detail::CacheTriMesh& mesh, IrradianceMeshCopy& out, std:
     return done;
 }
 
+// A luminance `value` (an error, W·m⁻²) as RGB in the colour of `mean`,
+// whose luminance is `lum`; grey where the mean is black.
+Rgb colourOf(const Rgb& mean, double lum, double value) { return lum > 0 ? mean * (value / lum) : Rgb(value); }
+
 }  // namespace
 
 IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
@@ -519,6 +523,13 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     // largest component): a floor's, a ceiling's, a wall's light, rather
     // than black.
     if (unknown > 0 && unknown < n) fillByOrientation(out, known);
+    {
+        std::vector<double> lum(n);
+        for (size_t v = 0; v < n; ++v) lum[v] = luminance(out.irradiance[v]);
+        const std::vector<double> predicted = detail::predictedErrors(impl_->state, l, lum);
+        out.predictedError.reserve(n);
+        for (size_t v = 0; v < n; ++v) out.predictedError.push_back(colourOf(out.irradiance[v], lum[v], predicted[v]));
+    }
     out.triangles.reserve(lm.mesh.n_faces());
     for (auto f : lm.mesh.faces()) {
         glm::uvec3 t;
@@ -529,6 +540,7 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     // Grid-cached objects: their own triangles, irradiance interpolated from
     // the grid's samples; a vertex counts the samples of its heaviest one.
     std::vector<Rgb> sampleMeans, vertexValues;
+    const CacheSettings settings = detail::effectiveSettings(impl_->state);
     for (const detail::GridObject& g : impl_->state.grids) {
         const uint32_t first = uint32_t(out.positions.size());
         sampleMeans.clear();
@@ -542,7 +554,15 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
             size_t heaviest = offsets[v];
             for (size_t k = offsets[v]; k < offsets[v + 1]; ++k)
                 if (g.grid->weights()[k] > g.grid->weights()[heaviest]) heaviest = k;
-            out.samples.push_back(lm.gridStats[g.firstSample + g.grid->weightSamples()[heaviest]].count);
+            const detail::VertexStats& st = lm.gridStats[g.firstSample + g.grid->weightSamples()[heaviest]];
+            out.samples.push_back(st.count);
+            // A grid object's light is its samples' interpolant: its error is
+            // its heaviest sample's noise (the grid is fine where it is
+            // used), or a guess's while that sample has none.
+            const Rgb se = colourOf(vertexValues[v], luminance(vertexValues[v]),
+                                    st.count ? detail::meanNoise(st, settings) : kGuessedLightError * luminance(vertexValues[v]));
+            out.standardError.push_back(st.count >= 2 ? se : Rgb(0.0));
+            out.predictedError.push_back(se);
         }
         for (const glm::uvec3& t : g.triangles) out.triangles.push_back(t + glm::uvec3(first));
     }

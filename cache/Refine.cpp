@@ -140,22 +140,8 @@ double whiteLevel(const CacheState& s, const std::vector<std::vector<double>>& a
 // The relative standard error of a vertex's (or grid sample's) mean, as the
 // scoring uses it; see the top of this file.
 double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, double white) {
-    double rel = 0;
-    if (st.count >= 2) {
-        const double n = st.count, mean = st.sumLum / n;
-        const double var = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
-        rel = std::sqrt(var / n) / (mean + 0.5 * kDarkFloor * white);
-    } else if (st.count == 1 && st.partial) {
-        // A penumbra seen once: its spread is unknown, so assume the
-        // sampler's per-sample error relative to the unoccluded
-        // irradiance (E / visibility).
-        const double mean = st.sumLum, vis = std::max(st.sumVisibility, 0.01);
-        rel = cs.singleSampleNoise * mean / vis / (mean + 0.5 * kDarkFloor * white);
-    } else if (st.count == 1 && cs.sampleNoise > 0) {
-        // A sampler whose every sample is noisy (a jittered gather).
-        rel = cs.sampleNoise * st.sumLum / (st.sumLum + 0.5 * kDarkFloor * white);
-    }
-    return std::min(rel, 1.0);
+    const double mean = st.count ? st.sumLum / st.count : 0.0;
+    return std::min(detail::meanNoise(st, cs) / (mean + 0.5 * kDarkFloor * white), 1.0);
 }
 
 // The value at vertex v of the plane that fits its neighbours' values best
@@ -198,6 +184,42 @@ std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
     return area;
 }
 
+// Each vertex's residual |E − plane fit of its neighbours| (luminance,
+// W·m⁻²); −1 where no plane fits (fewer than three neighbours off one line,
+// even over the two-ring). Neighbours in index order, so the sums are the
+// same however the mesh's halfedges happen to be numbered (a loaded cache).
+void residuals(const CacheTriMesh& mesh, const std::vector<double>& lum, std::vector<double>& out) {
+    out.assign(mesh.n_vertices(), -1.0);
+    std::vector<uint32_t> ring;
+    for (auto v : mesh.vertices()) {
+        ring.clear();
+        for (auto u : mesh.vv_range(v)) ring.push_back(uint32_t(u.idx()));
+        if (ring.empty()) continue;
+        std::sort(ring.begin(), ring.end());
+        const size_t vi = size_t(v.idx());
+        std::optional<double> fit = planeFitAt(mesh, vi, ring, lum);
+        if (!fit) {
+            // Too few neighbours off one line (an object's corner): fit the
+            // two-ring instead; if even that is a line, no estimate.
+            const std::vector<uint32_t> one = ring;
+            for (uint32_t u : one)
+                for (auto w : mesh.vv_range(VH(int(u))))
+                    if (size_t(w.idx()) != vi) ring.push_back(uint32_t(w.idx()));
+            std::sort(ring.begin(), ring.end());
+            ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+            fit = planeFitAt(mesh, vi, ring, lum);
+            if (!fit) continue;
+        }
+        out[vi] = std::abs(lum[vi] - *fit);
+    }
+}
+
+// Whether the light may step between two ends of an edge: the sampler saw a
+// penumbra at either, or their visibilities differ by more than half.
+bool mayStep(const detail::VertexStats& a, const detail::VertexStats& b) {
+    return a.partial > 0 || b.partial > 0 || std::abs(a.meanVisibility() - b.meanVisibility()) > 0.5;
+}
+
 Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, bool collect) {
     const CacheSettings cs = effectiveSettings(s);
     std::vector<std::vector<double>> areas;
@@ -208,8 +230,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
     const ViewMetric metric(view, cs.minEdgeFraction * s.diagonal, cs.minEdgePixels);
 
     double edgeErr = 0, edgeWeight = 0, noiseErr = 0, noiseWeight = 0;
-    std::vector<double> t, lum, lap;
-    std::vector<uint32_t> ring;
+    std::vector<double> t, lum, lap, res;
     for (size_t l = 0; l < s.meshes.size(); ++l) {
         const LightMesh& lm = s.meshes[l];
         const CacheTriMesh& mesh = lm.mesh;
@@ -221,31 +242,13 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             lum[v] = luminance(lm.stats[v].mean());
             t[v] = displayLevel(lum[v], white);
         }
-        for (auto v : mesh.vertices()) {
-            // Neighbours in index order, so the sums are the same however the
-            // mesh's halfedges happen to be numbered (a loaded cache).
-            ring.clear();
-            for (auto u : mesh.vv_range(v)) ring.push_back(uint32_t(u.idx()));
-            if (ring.empty()) continue;
-            std::sort(ring.begin(), ring.end());
+        residuals(mesh, lum, res);
+        for (size_t vi = 0; vi < nv; ++vi) {
+            if (!(res[vi] >= 0)) continue;  // no fit there
             // The residual is an interpolation error in irradiance, where the
             // cache interpolates; it is seen through the tone curve's slope
             // there, dt/dx = 2/(1+x)², relative to the local level.
-            const size_t vi = size_t(v.idx());
-            std::optional<double> fit = planeFitAt(mesh, vi, ring, lum);
-            if (!fit) {
-                // Too few neighbours off one line (an object's corner): fit
-                // the two-ring instead; if even that is a line, no estimate.
-                const std::vector<uint32_t> one = ring;
-                for (uint32_t u : one)
-                    for (auto w : mesh.vv_range(VH(int(u))))
-                        if (size_t(w.idx()) != vi) ring.push_back(uint32_t(w.idx()));
-                std::sort(ring.begin(), ring.end());
-                ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-                fit = planeFitAt(mesh, vi, ring, lum);
-                if (!fit) continue;
-            }
-            const double residual = std::abs(lum[vi] - *fit) / white;
+            const double residual = res[vi] / white;
             const double x = std::max(lum[vi], 0.0) / white;
             lap[vi] = residual * 2 / ((1 + x) * (1 + x)) / (t[vi] + kDarkFloor);
             // With a sampler whose every sample is noisy, a residual within
@@ -262,10 +265,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             const double len = glm::length(pa - pb);
             const Vec3 mid = 0.5 * (pa + pb);
             double predicted = 0.25 * std::max(lap[a], lap[b]);
-            const detail::VertexStats &sa = lm.stats[a], &sb = lm.stats[b];
-            const bool step = sa.partial > 0 || sb.partial > 0 ||
-                              std::abs(sa.meanVisibility() - sb.meanVisibility()) > 0.5;
-            if (step) predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
+            if (mayStep(lm.stats[a], lm.stats[b])) predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
             const bool splittable = len > metric.minLength(mid);
             const double seen = metric.weight(mid);
             edgeWeight += seen * len * len;
@@ -438,5 +438,56 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
     ++s.rounds;
     return report;
 }
+
+
+namespace detail {
+
+double meanNoise(const VertexStats& st, const CacheSettings& cs) {
+    if (st.count >= 2) {
+        const double n = st.count, mean = st.sumLum / n;
+        const double var = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
+        return std::sqrt(var / n);
+    }
+    // A penumbra seen once: its spread is unknown, so assume the sampler's
+    // per-sample error relative to the unoccluded irradiance (E / visibility).
+    if (st.count == 1 && st.partial) return cs.singleSampleNoise * st.sumLum / std::max(st.sumVisibility, 0.01);
+    // A sampler whose every sample is noisy (a jittered gather).
+    if (st.count == 1 && cs.sampleNoise > 0) return cs.sampleNoise * st.sumLum;
+    return 0;
+}
+
+std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum) {
+    const CacheSettings cs = effectiveSettings(s);
+    const LightMesh& lm = s.meshes[l];
+    const CacheTriMesh& mesh = lm.mesh;
+    const size_t nv = mesh.n_vertices();
+    ML_ASSERT(lum.size() == nv, lum.size(), " values for ", nv, " vertices");
+    std::vector<double> res, sumSq(nv, 0.0), edges(nv, 0.0);
+    residuals(mesh, lum, res);
+    // Linear interpolation of a smooth signal errs most at an edge's
+    // midpoint, by a quarter of the larger residual of its ends (see the
+    // top of this file), and by e·4t(1−t) along it: an RMS of e·√(8/15) =
+    // 0.73e. A step interpolated linearly across an edge errs by |t − H| of
+    // the step's size Δ: an RMS of Δ/√12 = 0.29Δ.
+    constexpr double kSmoothRms = 0.7303, kStepRms = 0.2887;
+    for (auto e : mesh.edges()) {
+        const HH h = mesh.halfedge_handle(e, 0);
+        const size_t a = size_t(mesh.from_vertex_handle(h).idx()), b = size_t(mesh.to_vertex_handle(h).idx());
+        double err = kSmoothRms * 0.25 * std::max({res[a], res[b], 0.0});
+        if (mayStep(lm.stats[a], lm.stats[b])) err = std::max(err, kStepRms * std::abs(lum[a] - lum[b]));
+        for (size_t v : {a, b}) sumSq[v] += err * err, edges[v] += 1;
+    }
+    std::vector<double> out(nv, 0.0);
+    for (size_t v = 0; v < nv; ++v) {
+        const double interpolation = edges[v] > 0 ? sumSq[v] / edges[v] : 0.0;
+        // A vertex not sampled yet shows its neighbours' light (copyMesh):
+        // a guess, assumed off by kGuessedLightError of itself.
+        const double noise = lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs);
+        out[v] = std::sqrt(interpolation + noise * noise);
+    }
+    return out;
+}
+
+}  // namespace detail
 
 }  // namespace ml

@@ -265,7 +265,9 @@ TEST_F(Cli, RenderLuxAtTheCornellFloorCentreAgreesWithProbe) {
     // the view makes the cache refine there first.
     const std::string view = "--direct-only --camera-pos 276.4,300,279.6 --camera-target 276.4,0,279.6 "
                              "--camera-up 0,0,1 --fov 10 --width 33 --height 33";
-    CommandResult r = runMeshlight("render cornell --quantity lux --until-error 0.02 --time 12 --every 0.5 " + view +
+    // Refined for a time rather than --until-error, which stops on the
+    // image's estimate: this test judges the cache's own (direct_error).
+    CommandResult r = runMeshlight("render cornell --quantity lux --time 8 --every 0.5 " + view +
                                    " --log " +
                                    path("log.csv") + " --out " + path("lux.exr"));
     ASSERT_EQ(r.status, 0) << r.output;
@@ -288,6 +290,6 @@ TEST_F(Cli, RenderLuxAtTheCornellFloorCentreAgreesWithProbe) {
     for (std::string line; std::getline(log, line);) ++rows;
     const double estimated = csvColumn(path("log.csv"), rows - 1, "direct_error");
     ASSERT_GT(exact, 50);  // about 76 lx
-    ASSERT_LT(estimated, 0.05) << "the cache did not get near enough in 12 s:\n" << r.output;
+    ASSERT_LT(estimated, 0.05) << "the cache did not get near enough in 8 s:\n" << r.output;
     EXPECT_NEAR(rendered, exact, 3 * estimated * exact) << "estimated error " << estimated;
 }

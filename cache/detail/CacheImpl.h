@@ -43,6 +43,17 @@ size_t unsampledCount(const CacheState& s);
 // scene and takes every mesh's sample at a vertex together (a partial first
 // pass then covers every object and every light evenly). Returns how many.
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget);
+// The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:
+// measured from two samples on; assumed from the settings for a single
+// sample that saw a penumbra or came from a sampler whose every sample is
+// noisy; 0 otherwise (the exact sampler outside penumbrae).
+double meanNoise(const VertexStats& st, const CacheSettings& cs);
+// The error each vertex of mesh `l` predicts for the irradiance shown
+// around it, in luminance (W·m⁻²), as an RMS over its faces: its noise and
+// the interpolation error of its edges (Refine.cpp), or a guess's
+// (kGuessedLightError) where not sampled yet; `lum` the luminance
+// the copy shows at each vertex (sampled, or filled from neighbours).
+std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum);
 
 }  // namespace detail
 }  // namespace ml

@@ -22,6 +22,7 @@
 #include "core/io/AtomicFile.h"
 #include "core/io/InterruptGuard.h"
 #include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/ImageErrorEstimate.h"
 #include "viewer/compositor/ImageLayers.h"
 
 #include <unistd.h>
@@ -84,10 +85,24 @@ public:
     ImageRgb radiance(const CacheSnapshot& s, const Camera& camera) {
         return compositor_.render(camera, s.direct, s.indirect, settings_);
     }
+    // The radiance image and its estimated error (ImageErrorEstimate.h);
+    // 1 (unknown) while indirect light is asked for and no bounce is shown
+    // yet: the image then lacks light by an amount nothing has measured.
+    // The stop rule asks with the output's own settings: one pass or
+    // 2×2 sub-pixels read 20% higher than the image written (a 48×48 room),
+    // so a run would not stop where its image says it may.
+    ImageErrorEstimate estimate(const CacheSnapshot& s, const Camera& camera) {
+        const CompositorSettings& settings = settings_;
+        ImageErrorEstimate e = estimateImageError(compositor_, scene_, camera, s.direct, s.indirect, settings);
+        if (expectIndirect && s.indirect.empty()) e.cache = 1;
+        return e;
+    }
+    bool expectIndirect = false;  // the session computes indirect light
     // Composites `s` from `camera` and writes it to `path`; returns the
     // radiance image written (empty for lux).
+    // `made`: the radiance image of `s` from `camera`, when already made.
     ImageRgb write(const std::string& path, const CacheSnapshot& s, const Camera& camera,
-                   ImageRole role = ImageRole::Frame) {
+                   ImageRole role = ImageRole::Frame, const ImageRgb* made = nullptr) {
         const bool frame = role == ImageRole::Frame;
         if (quantity_ == OutputQuantity::Lux) {
             writeLux(path, compositor_.renderIlluminance(camera, s.direct, s.indirect, settings_), frame);
@@ -101,7 +116,7 @@ public:
             writeImageLayers(path, settings_.width, settings_.height, layers.exrLayers(), attributes);
             return std::move(layers.beauty);
         }
-        ImageRgb image = radiance(s, camera);
+        ImageRgb image = made ? *made : radiance(s, camera);
         if (format != ImageFormat::Png) {
             writeImageLinear(path, image, frame ? metadata_(s) : ImageAttributes{});
             return image;
@@ -171,19 +186,27 @@ private:
 // ProgressiveSession::refineUntil in slices of at most 0.1 s, so that an
 // interrupt ends the wait within one; true when one did. `stop` holds for
 // the whole view, as in refineUntil.
+// `good`: whether a fresh snapshot's image is as good as the stop rule's
+// error asks (asked with stop.error set, at most once per snapshot).
 bool refineUntilInterrupted(ProgressiveSession& session, CacheWorker::Reader& reader, const StopRule& stop,
                             uint64_t serial, double every, const std::function<void(const CacheSnapshot&)>& tick,
-                            const InterruptGuard& interrupt) {
+                            const std::function<bool(const CacheSnapshot&)>& good, const InterruptGuard& interrupt) {
     const auto start = Clock::now();
+    uint64_t asked = 0;  // the snapshot version last asked about
     for (;;) {
         const double left = stop.seconds ? *stop.seconds - secondsSince(start) : kInf;
         StopRule slice = stop;
         slice.seconds = std::clamp(left, 0.0, 0.1);
+        slice.error.reset();  // the image's estimate decides, below
         const CacheSnapshot* s = session.refineUntil(reader, slice, serial, every, tick);
         if (interrupt.interrupted()) return true;
         if (left <= 0.1 || session.finished()) return false;
         const bool fresh = s && s->cameraSerial >= serial;
-        if (fresh && (s->converged || (stop.error && s->estimatedError <= *stop.error))) return false;
+        if (fresh && s->converged) return false;
+        if (fresh && stop.error && s->version != asked) {
+            asked = s->version;
+            if (good(*s)) return false;
+        }
     }
 }
 
@@ -192,17 +215,18 @@ class ConvergenceLog {
 public:
     ConvergenceLog(size_t lights, bool shared, bool reference) : reference_(reference) {
         out_ << "seconds,frame,rounds,vertices,samples,estimated_error,direct_error,indirect_error,bounces_done,"
-                "indirect_vertices,indirect_samples";
+                "indirect_vertices,indirect_samples,image_estimated_error,image_sampling_spread";
         if (reference) out_ << ",rmse,relative_rmse";
         for (size_t l = 0; l < lights; ++l) out_ << ",light" << l << "_vertices,light" << l << "_samples";
         if (shared) out_ << ",shared_vertices,shared_samples";
         out_ << "\n";
     }
-    void add(double seconds, size_t frame, const CacheSnapshot& s, const ImageRgb* image, const ImageRgb* ref) {
+    void add(double seconds, size_t frame, const CacheSnapshot& s, const ImageErrorEstimate& estimate,
+             const ImageRgb* ref) {
         out_ << seconds << "," << frame << "," << s.rounds << "," << s.vertices << "," << s.samples << ","
              << s.estimatedError << "," << s.directError << "," << s.indirectError << "," << s.bouncesFinished << ","
-             << s.indirectVertices << "," << s.indirectSamples;
-        if (reference_) out_ << "," << rmse(*image, *ref) << "," << relativeRmse(*image, *ref);
+             << s.indirectVertices << "," << s.indirectSamples << "," << estimate.cache << "," << estimate.sampling;
+        if (reference_) out_ << "," << rmse(estimate.image, *ref) << "," << relativeRmse(estimate.image, *ref);
         for (const IrradianceMeshCopy& m : s.direct) {
             uint64_t samples = 0;
             for (uint32_t c : m.samples) samples += c;
@@ -248,12 +272,13 @@ int runRender(const std::vector<std::string>& args) {
                                    "cache that keeps refining; --time and --until-error apply per image");
     o.flag("direct-only", "direct light only: no indirect bounces");
     o.value("time", "S", "refine for S seconds of wall-clock time, then write the image");
-    o.value("until-error", "E", "stop once the cache's estimated error is below E (default 0.02 when neither "
-                                "--time nor --samples is given)");
+    o.value("until-error", "E", "stop once the image's estimated relative RMSE (the cache's predicted error, "
+                                "composited) is at most E (default 0.02 when neither --time nor --samples is given)");
     o.value("samples", "N", "stop after N irradiance samples in all: a budget that repeats on any machine");
     o.value("snapshots", "DIR", "also write an image every --every seconds into DIR");
     o.value("every", "S", "seconds between snapshots and log rows", std::string("1"));
-    o.value("log", "FILE.csv", "a row per snapshot: seconds, vertices and samples per mesh, estimated error");
+    o.value("log", "FILE.csv", "a row per snapshot: seconds, vertices and samples per mesh, the cache's and the "
+                               "image's estimated errors");
     o.value("reference", "REF.exr", "with --log: add RMSE and relative RMSE against this image");
     o.value("cache", "FILE", "resume from this cache file if it exists, save the cache to it at the end");
     o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
@@ -390,8 +415,9 @@ int runRender(const std::vector<std::string>& args) {
     const std::string indirectDescription = indirect.active() ? indirect.describe()
                                             : indirect.enabled ? std::string("no bounce")
                                                                : std::string("none (--direct-only)");
+    double imageEstimate = -1;  // the final image's estimated error, once known
     auto metadata = [&](const CacheSnapshot& s) -> ImageAttributes {
-        return {{"meshlight:scene", sceneArgument},
+        ImageAttributes a{{"meshlight:scene", sceneArgument},
                 {"meshlight:command", command},
                 {"meshlight:direct", choice.describe()},
                 {"meshlight:cache", cacheDescription},
@@ -404,8 +430,11 @@ int runRender(const std::vector<std::string>& args) {
                 {"meshlight:indirect_error", s.indirectError},
                 {"meshlight:converged", int(s.converged)},
                 {"meshlight:photometry", comp.photometry.describe()}};
+        if (imageEstimate >= 0) a.push_back({"meshlight:image_estimated_error", imageEstimate});
+        return a;
     };
     ImageOutput output(compositor, scene, comp, tone, quantity, layers, walkthrough, metadata);
+    output.expectIndirect = indirect.active();
     ConvergenceLog log(scene.lights.size(), cache.hasSharedMesh(), o.has("reference"));
 
     // From here on, the first Ctrl-C ends refinement and writes what is cached.
@@ -425,10 +454,27 @@ int runRender(const std::vector<std::string>& args) {
             image = output.write((std::filesystem::path(snapshotsDir) / name).string(), s, cameras[frame],
                                  ImageRole::Snapshot);
         }
-        if (o.has("reference") && image.data.empty()) image = output.radiance(s, cameras[frame]);
         ++snapshotIndex;
-        if (!logPath.empty()) log.add(seconds, frame, s, &image, o.has("reference") ? &reference : nullptr);
+        if (!logPath.empty()) log.add(seconds, frame, s, output.estimate(s, cameras[frame]), o.has("reference") ? &reference : nullptr);
         printStatus(s, seconds, walkthrough ? concat("frame ", frame) : std::string("refining"), false);
+    };
+
+    // --until-error: a fresh snapshot is good enough once its image's
+    // estimated error is at most E. The estimate composites the image (and
+    // its errors), on this thread while the worker samples on its own: it
+    // is asked at most once per 0.5 s and never more than a quarter of the
+    // time, so that asking does not slow refinement down much.
+    double lastAsked = -kInf, askCost = 0;
+    ImageErrorEstimate lastEstimate;
+    auto good = [&](size_t frame) {
+        return [&, frame](const CacheSnapshot& s) {
+            const double now = session.seconds();
+            if (now - lastAsked < std::max(0.5, 3 * askCost)) return false;
+            lastEstimate = output.estimate(s, cameras[frame]);
+            lastAsked = session.seconds();
+            askCost = lastAsked - now;
+            return lastEstimate.cache <= *stop.error;
+        };
     };
 
     // The frame refined last: the last one, or the one an interrupt ended.
@@ -440,7 +486,8 @@ int runRender(const std::vector<std::string>& args) {
             frame == 0 ? firstSerial : session.setCamera(RefinementCamera{cameras[frame], comp.width, comp.height});
         const auto frameStart = Clock::now();
         interrupted = refineUntilInterrupted(session, reader, stop, serial, every,
-                                             [&](const CacheSnapshot& s) { tick(s, frame); }, interrupt);
+                                             [&](const CacheSnapshot& s) { tick(s, frame); }, good(frame),
+                                             interrupt);
         if (interrupted) {
             lastFrame = frame;
         } else if (frame + 1 < cameras.size()) {
@@ -459,9 +506,15 @@ int runRender(const std::vector<std::string>& args) {
     ML_ASSERT(final, "the worker published no snapshot");
     const double refineSeconds = session.seconds();
     const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
-    const ImageRgb image = output.write(lastPath, *final, cameras[lastFrame]);
-    if (!logPath.empty())
-        log.add(refineSeconds, lastFrame, *final, &image, o.has("reference") ? &reference : nullptr);
+    const bool radianceOut = quantity == OutputQuantity::Radiance;
+    ImageErrorEstimate finalEstimate;
+    if (radianceOut || !logPath.empty()) {
+        finalEstimate = output.estimate(*final, cameras[lastFrame]);
+        imageEstimate = finalEstimate.cache;
+    }
+    output.write(lastPath, *final, cameras[lastFrame], ImageRole::Frame,
+                 finalEstimate.image.data.empty() ? nullptr : &finalEstimate.image);
+    if (!logPath.empty()) log.add(refineSeconds, lastFrame, *final, finalEstimate, o.has("reference") ? &reference : nullptr);
     printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);
     if (!logPath.empty()) writeTextFileAtomically(logPath, log.text());
     if (!cachePath.empty()) session.save(cachePath);
@@ -473,6 +526,10 @@ int runRender(const std::vector<std::string>& args) {
                 static_cast<unsigned long long>(final->samples),
                 final->samples ? refineSeconds / double(final->samples) * 1e6 : 0.0, p.setup, p.draw, p.readback,
                 p.weighting, 100 * final->estimatedError, final->converged ? " (converged)" : "");
+    if (radianceOut)
+        std::printf("image: estimated error %.3g%% (relative RMSE from the cache's predicted error; the sub-pixel passes' "
+                    "halves differ by %.3g%%)\n",
+                    100 * finalEstimate.cache, 100 * finalEstimate.sampling);
     std::printf("cache: %.1f MB (%zu bytes per vertex)%s\n", cache.memoryBytes() / 1e6, IrradianceCache::bytesPerVertex(),
                 cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());
     if (session.indirect()) {

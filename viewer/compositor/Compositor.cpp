@@ -1089,12 +1089,14 @@ bool Compositor::specularPending() const { return impl_->specularJob.has_value()
 double Compositor::specularSeconds() const { return impl_->specularSeconds; }
 
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
-                               const CompositorSettings& settings) {
+                               const CompositorSettings& settings, ImageRgb* spread) {
     const int passes = std::max(1, settings.passes);
     if (passes == 1) {
         impl_->traceSpecularFor(camera, weights, settings);
         impl_->compose(camera, meshes, weights, settings);
-        return impl_->readImage();
+        ImageRgb image = impl_->readImage();
+        if (spread) *spread = ImageRgb(image.width, image.height);
+        return image;
     }
     // Pass k shifts the grid by ((k + ½)/K − ½, (σ(k) + ½)/K − ½) sub-pixels,
     // σ a permutation spreading the rows (bit reversal for powers of two,
@@ -1111,6 +1113,16 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
         return (k * step) % passes;
     };
     ImageRgb sum;
+    // The spread compares two halves of the passes, by the parity of their
+    // grid shift's column + row: each half then spans the sub-pixel along
+    // both axes (a split by pass number puts one half's rows above the
+    // other's); where that parity does not split them (K = 2), by number.
+    int odds = 0;
+    for (int k = 0; k < passes; ++k) odds += (k + rows(k)) % 2;
+    const bool byParity = odds > 0 && odds < passes;
+    if (!byParity) odds = passes / 2;
+    const auto isOdd = [&](int k) { return (byParity ? k + rows(k) : k) % 2 == 1; };
+    std::vector<double> odd;  // Σ over the odd half
     CompositorSettings s = settings;
     for (int k = 0; k < passes; ++k) {
         s.shiftX = ((k + 0.5) / passes - 0.5) / settings.supersample;
@@ -1121,6 +1133,20 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
         if (k == 0) sum = image;
         else
             for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += image.data[i];
+        if (spread && isOdd(k)) {
+            odd.resize(image.data.size(), 0.0);
+            for (size_t i = 0; i < image.data.size(); ++i) odd[i] += image.data[i];
+        }
+    }
+    if (spread) {
+        // With independent errors of one size, the mean of both halves errs
+        // by half their difference.
+        const int evens = passes - odds;
+        *spread = ImageRgb(sum.width, sum.height);
+        for (size_t i = 0; i < sum.data.size(); ++i) {
+            const double b = odd[i] / odds, a = (double(sum.data[i]) - odd[i]) / evens;
+            spread->data[i] = float(0.5 * std::abs(a - b));
+        }
     }
     for (float& v : sum.data) v /= float(passes);
     return sum;

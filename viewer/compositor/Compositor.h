@@ -187,9 +187,13 @@ public:
     // compose() and readImage() `settings.passes` times, the sub-pixel grid
     // shifted each time, averaged: what render() returns. The specular
     // pass, if any, is traced for each shifted grid from the cache last
-    // given to setSpecularCache (none given: no specular pass).
+    // given to setSpecularCache (none given: no specular pass). With
+    // `spread` and two passes or more, it receives each pixel's standard
+    // error of that average over the passes (their sample standard
+    // deviation over √K): how far the sub-pixel grid's sampling leaves the
+    // pixel from its area's mean (ImageErrorEstimate.h); zero with one pass.
     ImageRgb composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
-                       const CompositorSettings& settings);
+                       const CompositorSettings& settings, ImageRgb* spread = nullptr);
     // Cache triangles the last compose drew: large meshes' cells out of
     // view are skipped (GpuCacheMeshes::Cell).
     size_t drawnTriangles() const;

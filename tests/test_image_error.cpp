@@ -1,0 +1,176 @@
+// The image's error estimate (viewer/compositor/ImageErrorEstimate.h), what
+// `render --until-error` stops on, against the relative RMSE measured
+// against the path tracer, on the Cornell box and the office.
+//
+// Each state is the worker's snapshot after a budget of samples on one
+// thread (the same on any machine). The measured error is the composite's
+// relative RMSE against a path-traced reference with the reference's own
+// noise taken out in quadrature (E[(x − r)²] = (x − R)² + σ²). The issue
+// asks the estimate to be within a factor of 1.5 of the measurement from
+// 10% down to 1%; a state is checked where the measurement is at least
+// twice the reference's noise before it is taken out (below, the
+// subtraction is too uncertain to judge a factor of 1.5). The composite uses 16 sub-pixel passes, so that
+// what the estimate leaves out (the sub-pixel sampling: 0.4% of the Cornell
+// box at 16 passes against 64) stays small beside what is checked.
+#include "GlTestContext.h"
+
+#include "cache/ProgressiveSession.h"
+#include "core/image/ImageMetrics.h"
+#include "core/raytrace/EmbreeScene.h"
+#include "core/raytrace/PathTracer.h"
+#include "core/scenes/CornellBox.h"
+#include "core/scenes/OfficeScene.h"
+#include "gpu_sampling/SamplerFactory.h"
+#include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/ImageErrorEstimate.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace ml {
+namespace {
+
+// The snapshot's meshes after `samples` samples.
+CacheSnapshot refined(const Scene& scene, uint64_t samples) {
+    DirectChoice direct;
+    direct.backend = GlBackend::OsMesa;
+    IndirectChoice indirect;
+    indirect.decide(scene);
+    SessionSettings s;
+    s.worker.threads = 1;
+    s.worker.seed = 3;
+    s.indirect = indirect.solver;
+    StopRule stop;
+    stop.samples = samples;
+    ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect), stop);
+    session.start();
+    CacheWorker::Reader reader = session.reader();
+    session.refineUntil(reader, stop, 0);
+    session.stop();
+    const CacheSnapshot* last = reader.acquire();
+    CacheSnapshot copy;
+    copy.direct = last->direct;
+    copy.indirect = last->indirect;
+    copy.samples = last->samples;
+    return copy;
+}
+
+struct Check {
+    double estimated, measured, raw;
+    bool judged;  // the raw error at least twice the reference's noise
+};
+
+// The estimate against the measurement at each budget.
+std::vector<Check> compare(const Scene& scene, int width, int height, int spp, std::vector<uint64_t> budgets) {
+    const Camera camera = scene.cameraOrDefault(double(width) / height);
+    const EmbreeScene rays(scene);
+    const PathTracer tracer(rays, PathTracerSettings{});
+    const ReferenceImage ref = tracer.render(camera, width, height, spp);
+    const double noise = relativeRmsError(ref.standardError, ref.radiance);
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings cs;
+    cs.width = width;
+    cs.height = height;
+    cs.passes = 16;
+    std::vector<Check> out;
+    for (uint64_t budget : budgets) {
+        const CacheSnapshot snap = refined(scene, budget);
+        // No bounce shown yet: `render` calls the error unknown (the image
+        // lacks light nothing has measured), so there is nothing to judge.
+        if (snap.indirect.empty()) continue;
+        const ImageErrorEstimate e = estimateImageError(compositor, scene, camera, snap.direct, snap.indirect, cs);
+        const double raw = relativeRmse(e.image, ref.radiance);
+        const double measured = std::sqrt(std::max(0.0, raw * raw - noise * noise));
+        std::printf("%s, %llu samples: estimated %.2f%%, measured %.2f%% (raw %.2f%%, reference noise %.2f%%)\n",
+                    scene.name.c_str(), static_cast<unsigned long long>(budget), 100 * e.cache, 100 * measured,
+                    100 * raw, 100 * noise);
+        out.push_back({e.cache, measured, raw, raw >= 2 * noise});
+    }
+    return out;
+}
+
+void expectWithinFactor(const std::vector<Check>& checks, double factor) {
+    int judged = 0;
+    for (const Check& c : checks) {
+        // The truth lies between the measurement with the reference's noise
+        // taken out and the raw one; where the noise is small beside the
+        // error, both are the same.
+        EXPECT_LE(c.estimated, factor * c.raw);
+        EXPECT_GE(c.estimated, c.measured / factor);
+        if (!c.judged) continue;
+        ++judged;
+        EXPECT_LE(c.estimated, factor * c.measured);
+    }
+    EXPECT_GE(judged, 1) << "no state measurable against the reference's noise";
+}
+
+TEST(ImageErrorEstimate, CornellBoxWithinOneAndAHalfOfThePathTracer) {
+    // 64x64 against 1024 spp (1.9% noise, 7 s on 2 cores): bounce 1 shown
+    // early from a partly sampled direct light (12,000 samples: 3.7%
+    // measured), and all eight bounces after the first pass (24,000: 1.0%).
+    expectWithinFactor(compare(makeCornellBox(), 64, 64, 1024, {12000, 24000}), 1.5);
+}
+
+TEST(ImageErrorEstimate, OfficeWithinOneAndAHalfOfThePathTracer) {
+    // A small office (4 x 3 m, two panels, two desks, a cabinet and the
+    // partition) at 64x36 against 1024 spp.
+    OfficeSettings o;
+    o.width = 4;
+    o.depth = 3;
+    o.panelsX = 2;
+    o.panelsZ = 1;
+    o.desks = 2;
+    o.cabinets = 1;
+    expectWithinFactor(compare(makeOfficeScene(o), 64, 36, 1024, {30000, 60000}), 1.5);
+}
+
+TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {
+    // One session of the Cornell box (full GI, one thread), its snapshots
+    // taken as the samples pass 16,000, 32,000 and 64,000: the composite's
+    // relative RMSE against one path-traced reference must not rise from
+    // one to the next. The reference's noise adds the same σ² to every
+    // measurement (the cross term averages out), so raw errors compare; a
+    // rise of up to 0.05% (absolute) is allowed for that cross term.
+    const Scene scene = makeCornellBox();
+    const int size = 48;
+    const Camera camera = scene.cameraOrDefault(1.0);
+    const EmbreeScene rays(scene);
+    const ReferenceImage ref = PathTracer(rays, PathTracerSettings{}).render(camera, size, size, 1024);
+    DirectChoice direct;
+    direct.backend = GlBackend::OsMesa;
+    IndirectChoice indirect;
+    indirect.decide(scene);
+    SessionSettings ss;
+    ss.worker.threads = 1;
+    ss.indirect = indirect.solver;
+    StopRule stop;
+    stop.samples = 64000;
+    ProgressiveSession session(scene, ss, samplerFactory(scene, direct, indirect), stop);
+    session.start();
+    CacheWorker::Reader reader = session.reader();
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings cs;
+    cs.width = cs.height = size;
+    cs.passes = 16;
+    std::vector<double> errors;
+    for (uint64_t budget : {16000, 32000, 64000}) {
+        const CacheSnapshot* s = nullptr;
+        for (;;) {
+            s = reader.acquire();
+            if ((s && s->samples >= budget) || session.finished()) break;
+            session.waitForVersion((s ? s->version : 0) + 1, 0.05);
+        }
+        s = reader.acquire();
+        ASSERT_TRUE(s);
+        errors.push_back(relativeRmse(compositor.render(camera, s->direct, s->indirect, cs), ref.radiance));
+        std::printf("%llu samples (%d of %d bounces done): relative RMSE %.3f%%\n",
+                    static_cast<unsigned long long>(s->samples), s->bouncesFinished, s->bounces, 100 * errors.back());
+    }
+    session.stop();
+    for (size_t k = 1; k < errors.size(); ++k) EXPECT_LE(errors[k], errors[k - 1] + 5e-4) << "snapshot " << k;
+}
+
+}  // namespace
+}  // namespace ml
