@@ -1,7 +1,8 @@
 // The bench report's building blocks, on values known exactly: the power-law
 // fit, the bench table and its number formats, HTML escaping, CSV and
 // Markdown to HTML, the scaling scenes, and the page of a report whose
-// sections are test fixtures.
+// sections are test fixtures; the error against a noisy reference and the
+// switch that turns Blender Cycles off.
 #include "core/Error.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
@@ -9,6 +10,8 @@
 #include "viewer/bench/BenchReport.h"
 #include "viewer/bench/BenchStatistics.h"
 #include "viewer/bench/BenchTable.h"
+#include "viewer/bench/CyclesRunner.h"
+#include "viewer/bench/NoisyReference.h"
 #include "viewer/bench/PowerLawFit.h"
 #include "viewer/bench/ReportHtml.h"
 
@@ -18,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -331,4 +335,76 @@ TEST(BenchReport, RegistryListsTheBenchesThatExist) {
     for (const char* id : {"direct", "scaling"}) EXPECT_EQ(std::count(ids.begin(), ids.end(), id), 1) << id;
     std::sort(ids.begin(), ids.end());
     EXPECT_EQ(std::adjacent_find(ids.begin(), ids.end()), ids.end()) << "section ids must be unique";
+}
+
+// --- Error against a noisy reference (NoisyReference.h), Cycles' discovery ------------------
+
+TEST(NoisyReference, TimeToLevelIsExactOnAPowerLaw) {
+    // error = t^-1/2: log-log interpolation between any two points is exact.
+    const std::vector<double> t = {1, 4, 16, 64};
+    std::vector<double> e;
+    for (double s : t) e.push_back(1 / std::sqrt(s));
+    EXPECT_NEAR(*timeToLevel(t, e, 0.25), 16.0, 1e-12);
+    EXPECT_NEAR(*timeToLevel(t, e, 0.3), 1 / (0.3 * 0.3), 1e-9);
+    EXPECT_DOUBLE_EQ(*timeToLevel(t, e, 2.0), 1.0);  // already there at the first point
+    EXPECT_FALSE(timeToLevel(t, e, 0.1));            // never reached
+    EXPECT_FALSE(timeToLevel({}, {}, 0.1));
+}
+
+TEST(NoisyReference, ErrorAgainstTakesTheReferenceNoiseOut) {
+    Reference ref;
+    ref.radiance = ImageRgb(8, 4, Rgb(0.5));
+    ref.standardError = ImageRgb(8, 4, Rgb(0.0));
+    ImageRgb x(8, 4, Rgb(0.55));
+    // No noise: both are relativeRmse, 0.05 / sqrt(0.25 + 0.01).
+    const double expected = 0.05 / std::sqrt(0.26);
+    ImageError e = errorAgainst(x, ref);
+    EXPECT_NEAR(e.raw, expected, 1e-6);
+    EXPECT_NEAR(e.corrected, expected, 1e-6);
+    // A reference noise of 0.03 per pixel: the raw error stays, the corrected one is sqrt(d² − σ²)/sqrt(r² + 0.01).
+    ref.standardError = ImageRgb(8, 4, Rgb(0.03));
+    e = errorAgainst(x, ref);
+    EXPECT_NEAR(e.raw, expected, 1e-6);
+    EXPECT_NEAR(e.corrected, std::sqrt(0.05 * 0.05 - 0.03 * 0.03) / std::sqrt(0.26), 1e-6);
+    EXPECT_NEAR(relativeNoise(ref.standardError, ref.radiance), 0.03 / std::sqrt(0.26), 1e-6);
+    // More noise than difference: zero, not the root of a negative number.
+    ref.standardError = ImageRgb(8, 4, Rgb(0.08));
+    EXPECT_EQ(errorAgainst(x, ref).corrected, 0.0);
+    EXPECT_THROW(errorAgainst(ImageRgb(4, 4), ref), InputError);
+}
+
+TEST(NoisyReference, AveragedReferencesCombineTheirNoise) {
+    Reference a, b;
+    a.radiance = ImageRgb(2, 2, Rgb(1.0));
+    a.standardError = ImageRgb(2, 2, Rgb(0.4));
+    a.spp = 100;
+    a.seconds = 2;
+    b.radiance = ImageRgb(2, 2, Rgb(2.0));
+    b.standardError = ImageRgb(2, 2, Rgb(0.2));
+    b.spp = 300;
+    b.seconds = 5;
+    const Reference r = averageReferences(a, b);
+    EXPECT_EQ(r.spp, 400);
+    EXPECT_DOUBLE_EQ(r.seconds, 7.0);
+    for (float v : r.radiance.data) EXPECT_NEAR(v, 0.25 * 1.0 + 0.75 * 2.0, 1e-6);
+    for (float v : r.standardError.data) EXPECT_NEAR(v, std::sqrt(0.25 * 0.25 * 0.16 + 0.75 * 0.75 * 0.04), 1e-6);
+}
+
+TEST(CyclesRunner, BlenderCanBeTurnedOff) {
+    const char* saved = std::getenv("MESHLIGHT_BLENDER");
+    const std::string keep = saved ? saved : "";
+    for (const char* off : {"", "none"}) {
+        ::setenv("MESHLIGHT_BLENDER", off, 1);
+        std::string why;
+        EXPECT_FALSE(findCycles(why)) << off;
+        EXPECT_NE(why.find("MESHLIGHT_BLENDER"), std::string::npos) << why;
+    }
+    ::setenv("MESHLIGHT_BLENDER", "/nonexistent/blender", 1);
+    std::string why;
+    EXPECT_FALSE(findCycles(why));
+    EXPECT_NE(why.find("not an executable"), std::string::npos) << why;
+    if (saved)
+        ::setenv("MESHLIGHT_BLENDER", keep.c_str(), 1);
+    else
+        ::unsetenv("MESHLIGHT_BLENDER");
 }

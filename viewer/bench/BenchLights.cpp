@@ -5,6 +5,7 @@
 #include "BenchStatistics.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
+#include "NoisyReference.h"
 #include "PowerLawFit.h"
 
 #include "cache/IrradianceCache.h"
@@ -125,57 +126,6 @@ bool resetPeakResident() {
     return ok;
 }
 
-// --- Error against a noisy reference ------------------------------------------------
-
-// A path-traced reference and its standard error, per pixel and channel.
-struct Reference {
-    ImageRgb radiance, standardError;
-    int spp = 0;
-    double seconds = 0;
-    double noise = 0;  // relativeNoise(standardError, radiance)
-};
-
-// The weight of a squared difference in ml::relativeRmse.
-inline double relativeWeight(double reference) { return 1.0 / (reference * reference + 0.01); }
-
-// sqrt(mean σ²/(r² + 0.01)): a noise image measured as relativeRmse measures
-// an error, σ a standard error per pixel and channel, r the reference.
-double relativeNoise(const ImageRgb& sigma, const ImageRgb& reference) {
-    ML_ASSERT(sigma.data.size() == reference.data.size(), "noise image of ", sigma.width, "x", sigma.height,
-              " for a ", reference.width, "x", reference.height, " reference");
-    double sum = 0;
-    for (size_t i = 0; i < sigma.data.size(); ++i)
-        sum += double(sigma.data[i]) * sigma.data[i] * relativeWeight(reference.data[i]);
-    return sigma.data.empty() ? 0.0 : std::sqrt(sum / double(sigma.data.size()));
-}
-
-struct ImageError {
-    double raw = 0;        // ml::relativeRmse against the reference
-    double corrected = 0;  // the same with the reference's noise taken out
-};
-
-// Against a reference r with noise σ, E[(x − r)²] = (x − R)² + σ² for the
-// true image R (r's noise is independent of x), so mean((x − r)² − σ²)
-// weighted as relativeRmse weighs it estimates the squared error against R.
-// Pooled over every pixel and channel it is precise even where σ is
-// comparable to the error; it may come out below 0 only where the error is
-// far below σ, hence the max.
-ImageError errorAgainst(const ImageRgb& x, const Reference& ref) {
-    const ImageRgb& r = ref.radiance;
-    if (x.width != r.width || x.height != r.height)
-        throw InputError(concat("image sizes differ: ", x.width, "x", x.height, " against a ", r.width, "x",
-                                r.height, " reference"));
-    double squared = 0, noise = 0;
-    for (size_t i = 0; i < r.data.size(); ++i) {
-        const double w = relativeWeight(r.data[i]), d = double(x.data[i]) - r.data[i],
-                     s = ref.standardError.data[i];
-        squared += d * d * w;
-        noise += s * s * w;
-    }
-    const double n = double(std::max<size_t>(1, r.data.size()));
-    return {std::sqrt(squared / n), std::sqrt(std::max(0.0, (squared - noise) / n))};
-}
-
 // --- The path tracer -----------------------------------------------------------------
 
 PathTracerSettings tracerSettings(uint32_t seed) {
@@ -198,59 +148,6 @@ Reference renderReference(const EmbreeScene& rays, const Camera& camera, const W
     r.noise = relativeNoise(r.standardError, r.radiance);
     return r;
 }
-
-// The path tracer's image at doubling samples per pixel. Each step renders
-// as many new samples per pixel as the image already has, from fresh streams
-// (another seed), and averages: the image at N samples costs one N-sample
-// render and is the same estimator. Its variance per pixel and channel is
-// combined from each step's halves, for the tracer's own estimate of its
-// error. (BenchConvergence.cpp has a depth-1 twin; both could move to the
-// bench kit.)
-class DoublingPathTracer {
-public:
-    DoublingPathTracer(const EmbreeScene& rays, const Camera& camera, int width, int height, uint32_t seed)
-        : rays_(rays), camera_(camera), width_(width), height_(height), seed_(seed) {}
-
-    void step() {
-        const Clock::time_point start = Clock::now();
-        const PathTracer tracer(rays_, tracerSettings(seedFor(seed_, uint32_t(steps_++))));
-        const ReferenceImage r = tracer.render(camera_, width_, height_, next_);
-        if (spp_ == 0) {
-            image_ = r.radiance;
-            variance_ = r.standardError;
-            for (float& v : variance_.data) v *= v;
-        } else {
-            const double wOld = double(spp_) / double(spp_ + next_), wNew = double(next_) / double(spp_ + next_);
-            for (size_t i = 0; i < image_.data.size(); ++i) {
-                const double se = r.standardError.data[i];
-                image_.data[i] = float(wOld * image_.data[i] + wNew * r.radiance.data[i]);
-                variance_.data[i] = float(wOld * wOld * variance_.data[i] + wNew * wNew * se * se);
-            }
-        }
-        spp_ += next_;
-        next_ = spp_;
-        seconds_ += secondsSince(start);
-    }
-    int spp() const { return spp_; }
-    double seconds() const { return seconds_; }  // wall time of every step so far
-    const ImageRgb& image() const { return image_; }
-    // Its own relative noise (relativeNoise), weighted by `reference`.
-    double ownNoise(const ImageRgb& reference) const {
-        ImageRgb sigma = variance_;
-        for (float& v : sigma.data) v = std::sqrt(v);
-        return relativeNoise(sigma, reference);
-    }
-
-private:
-    const EmbreeScene& rays_;
-    Camera camera_;
-    int width_, height_;
-    uint32_t seed_;
-    int next_ = kFirstSpp;
-    int spp_ = 0, steps_ = 0;
-    double seconds_ = 0;
-    ImageRgb image_, variance_;
-};
 
 // --- One scene ------------------------------------------------------------------------
 
@@ -473,7 +370,8 @@ SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVari
     const Clock::time_point t = Clock::now();
     const EmbreeScene rays(scene);  // its own, timed as part of its work
     r.pathSetupSeconds = secondsSince(t);
-    DoublingPathTracer tracer(rays, camera, work.width, work.height, seedFor(seed, 0x1d0bu, index));
+    DoublingPathTracer tracer(rays, camera, work.width, work.height, tracerSettings(seedFor(seed, 0x1d0bu, index)),
+                              kFirstSpp);
     do {
         tracer.step();
         CurvePoint p;
@@ -493,23 +391,15 @@ SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVari
 
 // --- Reading the curves ------------------------------------------------------------------
 
-// When a curve first reaches `level`, interpolated in log-log between the
-// image above it and the first at or below it (errors fall as a power of
-// time); the first image's time if it is already there. None: not reached.
+// When a curve first reaches `level` (timeToLevel, NoisyReference.h, on the
+// noise-corrected errors). None: not reached.
 std::optional<double> timeToLevel(const std::vector<CurvePoint>& curve, double level) {
-    for (size_t i = 0; i < curve.size(); ++i) {
-        const CurvePoint& b = curve[i];
-        if (b.error.corrected > level) continue;
-        if (i == 0) return b.seconds;
-        const CurvePoint& a = curve[i - 1];  // a.error > level >= b.error
-        const double ea = a.error.corrected, eb = b.error.corrected;
-        if (eb > 0) {
-            const double f = std::log(ea / level) / std::log(ea / eb);
-            return std::exp(std::log(a.seconds) + f * (std::log(b.seconds) - std::log(a.seconds)));
-        }
-        return a.seconds + (ea - level) / (ea - eb) * (b.seconds - a.seconds);
+    std::vector<double> seconds, errors;
+    for (const CurvePoint& p : curve) {
+        seconds.push_back(p.seconds);
+        errors.push_back(p.error.corrected);
     }
-    return std::nullopt;
+    return ml::timeToLevel(seconds, errors, level);
 }
 
 // One scene at one level.

@@ -2,6 +2,7 @@
 
 #include "BenchConvergence.h"
 #include "BenchDirect.h"
+#include "BenchGi.h"
 #include "BenchIndirect.h"
 #include "BenchLights.h"
 #include "BenchRun.h"
@@ -204,6 +205,28 @@ std::vector<ReportSection> reportSections() {
          {
              {"scenes.csv", "Relative RMSE and mean ratio of each render against its reference, and the commands.",
               {"scene", "width", "height", "render_s", "reference_spp", "relative_rmse_pct", "mean_ratio"}},
+         }},
+        {"gi", "Full global illumination: Meshlight, its path tracer and Blender Cycles",
+         "Issue 14 (converge to the right answer): the Cornell box at 256x256 with full global illumination (depth "
+         "8, Cycles 7 bounces), relative RMSE against a path-traced reference (its noise taken out) over wall-clock "
+         "time for Meshlight's progressive render (composited as `render` composites), its path tracer and Blender "
+         "Cycles at doubling samples per pixel; the time to 5, 2, 1 and 0.5%; and a walkthrough of 30 views, one "
+         "Meshlight cache refined as the views are shown, against Cycles' time to the same error per view. Cycles "
+         "is skipped, with a line saying so, where Blender is not installed.",
+         runBenchGi, "gi_summary.md",
+         {
+             {"gi_error_vs_time.png",
+              "Relative RMSE (the reference's noise taken out) against wall-clock time: Meshlight (solid), its path "
+              "tracer and Cycles (labels: samples per pixel), with the issue's targets.",
+              {"gi_curves.csv", "gi_levels.csv"}},
+             {"gi_walkthrough.png",
+              "Walkthrough: seconds per view for Meshlight and for Cycles at the same error, and Meshlight's error "
+              "per view.",
+              {"gi_walkthrough.csv"}},
+         },
+         {
+             {"gi_targets.csv", "Targets of issue 14.", {}},
+             {"gi_levels.csv", "Seconds to each error level (~: extrapolated).", {}},
          }},
     };
 }

@@ -5,12 +5,14 @@
 #include "gpu_sampling/gl/GlContext.h"
 
 #include <sys/utsname.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <stdexcept>
 #include <thread>
 
 namespace ml {
@@ -79,6 +81,14 @@ std::string loadAverage() {
     std::string one;
     in >> one;
     return one;
+}
+
+void runSelf(const std::string& args, const std::filesystem::path& log) {
+    const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+    const std::string command = shellQuoted(self) + " " + args + " > " + shellQuoted(log.string()) + " 2>&1";
+    const int status = std::system(command.c_str());
+    if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        throw std::runtime_error(concat("'meshlight ", args, "' failed; its output is in ", log.string()));
 }
 
 std::string softwareRasteriserNote(const std::string& glDescription) {

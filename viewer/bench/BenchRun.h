@@ -65,6 +65,11 @@ double secondsSince(std::chrono::steady_clock::time_point start);
 // processes on the machine slow every timing, so summaries state it.
 std::string loadAverage();
 
+// Runs this binary (/proc/self/exe) with `args` (already shell-quoted where
+// needed) as a user types it, its output into `log`; throws
+// std::runtime_error naming the log unless it exits 0.
+void runSelf(const std::string& args, const std::filesystem::path& log);
+
 // A summary bullet, "- timings come from Mesa's software rasteriser on the
 // CPU, not from a GPU" and a line break, when `glDescription` names llvmpipe
 // or softpipe; "" otherwise.

@@ -7,8 +7,6 @@
 #include "core/image/ImageMetrics.h"
 #include "core/image/ToneMap.h"
 
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -36,15 +34,6 @@ const SceneCase kCases[] = {
 fs::path scenesFolder() {
     const char* dir = std::getenv("MESHLIGHT_SCENES_DIR");
     return dir && *dir ? fs::path(dir) : fs::path("../shared/scenes");
-}
-
-// Runs this binary with `args`, its output into `log`; throws unless it exits 0.
-void runSelf(const std::string& args, const fs::path& log) {
-    const std::string self = fs::read_symlink("/proc/self/exe").string();
-    const std::string command = shellQuoted(self) + " " + args + " > " + shellQuoted(log.string()) + " 2>&1";
-    const int status = std::system(command.c_str());
-    if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        throw std::runtime_error(concat("'meshlight ", args, "' failed; its output is in ", log.string()));
 }
 
 double meanOf(const ImageRgb& image) {

@@ -7,6 +7,7 @@
 #include "viewer/bench/BenchConvergence.h"
 #include "viewer/bench/BenchDirect.h"
 #include "viewer/bench/BenchDynamic.h"
+#include "viewer/bench/BenchGi.h"
 #include "viewer/bench/BenchScenes.h"
 #include "viewer/bench/BenchIndirect.h"
 #include "viewer/bench/BenchLights.h"
@@ -22,7 +23,7 @@ namespace ml {
 namespace {
 
 // More benches arrive with later issues; each adds itself here.
-const char* const kBenches = "direct, scaling, convergence, view, indirect, lights, dynamic, scenes, report";
+const char* const kBenches = "direct, scaling, convergence, view, indirect, lights, dynamic, scenes, gi, report";
 
 // What a bench's --help says of the options every bench takes: the same
 // options, in each bench's own words.
@@ -176,6 +177,11 @@ int runBench(const std::vector<std::string>& args) {
                          {"CI size: 64 pixels wide, 3 s against 64 spp",
                           "the render's and the reference's seed"},
                          rest, runBenchScenes);
+    if (name == "gi")
+        return runCommon(name,
+                         {"CI size: 64x64 for 3 s against 2x128 spp, Cycles to 64 spp, 3 views of 32x32",
+                          "jitter seed of the cache's sampler and the path tracer's streams"},
+                         rest, runBenchGi);
     if (name == "view") {
         CommonHelp help{"CI size: 4 s per scenario, 8 light changes", "the worker's jitter seed"};
         help.headless = false;  // it opens a GLFW window, as `view` does

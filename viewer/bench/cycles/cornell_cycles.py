@@ -46,6 +46,12 @@ def parse_args():
                         "radiance does not depend on it, but Cycles' choice of light sampling does, see README.md)")
     p.add_argument("--repeat", type=int, default=1,
                    help="render R times in this process (timings of warm renders, without Blender start-up)")
+    p.add_argument("--serve", action="store_true",
+                   help="render jobs read from standard input, one per line, in this one process (for `meshlight "
+                        "bench gi`): 'render OUT.exr SPP WIDTH HEIGHT px,py,pz,tx,ty,tz,ux,uy,uz,fov SEED', or "
+                        "'quit'; answers '@@cycles ready' once the scene is built and '@@cycles done OUT wall=S "
+                        "cpu=S path=S save=S' per job (wall: bpy.ops.render.render, scene sync included; path: "
+                        "Cycles' own path-tracing time; save: the EXR write, not in wall)")
     p.add_argument("--reference", help="print the relative RMSE of the image against this EXR (e.g. from "
                    "`meshlight reference`), and that of REF.noise.exr's standard error if it lies beside it")
     a = p.parse_args(argv)
@@ -127,6 +133,31 @@ def make_material(name, kd, ke):
     return m
 
 
+def place_camera(cam, camera, scale, verts):
+    """Sets the camera object from "px,py,pz,tx,ty,tz,ux,uy,uz,fov" (the scene's units, times `scale`; vertical
+    field of view in degrees) and its clipping planes from the scene's vertices (already scaled)."""
+    # Looks along its local -Z, up +Y.
+    c = [float(x) for x in camera.split(",")]
+    if len(c) != 10:
+        sys.exit(f"camera '{camera}': px,py,pz,tx,ty,tz,ux,uy,uz,fov expected")
+    pos, target, up, fov = scale * Vector(c[0:3]), scale * Vector(c[3:6]), Vector(c[6:9]), c[9]
+    fwd = (target - pos).normalized()
+    right = fwd.cross(up).normalized()
+    upv = right.cross(fwd)
+    rot = Matrix((right, upv, -fwd)).transposed()
+    cam_data = cam.data
+    cam_data.type = "PERSP"
+    cam_data.sensor_fit = "VERTICAL"
+    cam_data.sensor_height = 24.0
+    cam_data.lens = 0.5 * cam_data.sensor_height / math.tan(math.radians(fov) / 2)
+    diag = (Vector([max(v[i] for v in verts) for i in range(3)]) -
+            Vector([min(v[i] for v in verts) for i in range(3)])).length
+    far = (pos - Vector([sum(v[i] for v in verts) / len(verts) for i in range(3)])).length + diag
+    cam_data.clip_start = 1e-6 * far
+    cam_data.clip_end = 10 * far
+    cam.matrix_world = Matrix.Translation(pos) @ rot.to_4x4()
+
+
 def build_scene(a):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -141,27 +172,12 @@ def build_scene(a):
     obj = bpy.data.objects.new("scene", mesh)
     scene.collection.objects.link(obj)
 
-    # Camera: looks along its local -Z, up +Y.
-    c = [float(x) for x in a.camera.split(",")]
-    pos, target, up, fov = a.scale * Vector(c[0:3]), a.scale * Vector(c[3:6]), Vector(c[6:9]), c[9]
-    fwd = (target - pos).normalized()
-    right = fwd.cross(up).normalized()
-    upv = right.cross(fwd)
-    rot = Matrix((right, upv, -fwd)).transposed()
     cam_data = bpy.data.cameras.new("camera")
-    cam_data.type = "PERSP"
-    cam_data.sensor_fit = "VERTICAL"
-    cam_data.sensor_height = 24.0
-    cam_data.lens = 0.5 * cam_data.sensor_height / math.tan(math.radians(fov) / 2)
-    diag = (Vector([max(v[i] for v in verts) for i in range(3)]) -
-            Vector([min(v[i] for v in verts) for i in range(3)])).length
-    far = (pos - Vector([sum(v[i] for v in verts) / len(verts) for i in range(3)])).length + diag
-    cam_data.clip_start = 1e-6 * far
-    cam_data.clip_end = 10 * far
     cam = bpy.data.objects.new("camera", cam_data)
-    cam.matrix_world = Matrix.Translation(pos) @ rot.to_4x4()
     scene.collection.objects.link(cam)
     scene.camera = cam
+    place_camera(cam, a.camera, a.scale, verts)
+    a.scene_vertices = verts  # --serve places the camera again per job
 
     world = bpy.data.worlds.new("black")
     world.use_nodes = False
@@ -278,10 +294,38 @@ def compare(out, ref):
               f"Cycles' error alone is about {100 * own:.3f} %")
 
 
+def serve(a, scene):
+    """--serve: renders the jobs read from standard input in this process (no Blender start-up per image)."""
+    print(f"@@cycles ready blender={bpy.app.version_string} threads={a.threads or 'auto'}", flush=True)
+    for line in sys.stdin:
+        t = line.split()
+        if not t:
+            continue
+        if t[0] == "quit":
+            break
+        if t[0] != "render" or len(t) != 7:
+            print(f"@@cycles error bad job: {line.strip()}", flush=True)
+            continue
+        out, spp, width, height, camera, seed = t[1], int(t[2]), int(t[3]), int(t[4]), t[5], int(t[6])
+        place_camera(scene.camera, camera, a.scale, a.scene_vertices)
+        scene.render.resolution_x, scene.render.resolution_y = width, height
+        scene.cycles.samples = spp
+        scene.cycles.seed = seed
+        wall, cpu, t_first, t_done, _ = render_capturing_stats()
+        path = t_done - t_first if t_first is not None and t_done is not None else -1.0
+        t0 = time.perf_counter()
+        bpy.data.images["Render Result"].save_render(filepath=os.path.abspath(out), scene=scene)
+        save = time.perf_counter() - t0
+        print(f"@@cycles done {out} wall={wall:.6f} cpu={cpu:.6f} path={path:.6f} save={save:.6f}", flush=True)
+
+
 def main():
     t_start = time.perf_counter()
     a = parse_args()
     scene = build_scene(a)
+    if a.serve:
+        serve(a, scene)
+        return
     print(f"cycles: Blender {bpy.app.version_string}, sampling pattern {scene.cycles.sampling_pattern}, "
           f"{a.width}x{a.height}, {a.spp} spp, max bounces {a.bounces}, threads "
           f"{a.threads or 'auto'}, setup {time.perf_counter() - t_start:.3f} s, load average {loadavg()}")
