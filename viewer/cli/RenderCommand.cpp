@@ -88,16 +88,24 @@ public:
     // The radiance image and its estimated error (ImageErrorEstimate.h);
     // 1 (unknown) while indirect light is asked for and no bounce is shown
     // yet: the image then lacks light by an amount nothing has measured.
-    // The stop rule asks with the output's own settings: one pass or
-    // 2×2 sub-pixels read 20% higher than the image written (a 48×48 room),
-    // so a run would not stop where its image says it may.
-    ImageErrorEstimate estimate(const CacheSnapshot& s, const Camera& camera) {
-        const CompositorSettings& settings = settings_;
+    // `check`: for the stop rule, while the worker refines on the same
+    // cores: an image of more than 256×256 pixels is estimated at half its
+    // size with one pass (an eighth of the compositing; the cache's error
+    // varies slowly over the image). Smaller images, cheap anyway, keep
+    // their settings: with one pass, the dark side of each edge weighs
+    // more, and a 48×48 room read 20% high.
+    ImageErrorEstimate estimate(const CacheSnapshot& s, const Camera& camera, bool check = false) {
+        CompositorSettings settings = settings_;
+        if (check && settings.width * settings.height > 256 * 256)
+            settings.width = std::max(1, settings.width / 2), settings.height = std::max(1, settings.height / 2),
+            settings.passes = 1;
         ImageErrorEstimate e = estimateImageError(compositor_, scene_, camera, s.direct, s.indirect, settings);
         if (expectIndirect && s.indirect.empty()) e.cache = 1;
         return e;
     }
     bool expectIndirect = false;  // the session computes indirect light
+    int passes() const { return settings_.passes; }
+    void setPasses(int passes) { settings_.passes = passes; }
     // Composites `s` from `camera` and writes it to `path`; returns the
     // radiance image written (empty for lux).
     // `made`: the radiance image of `s` from `camera`, when already made.
@@ -289,10 +297,11 @@ int runRender(const std::vector<std::string>& args) {
     declareCacheOptions(o);
     declareIndirectOptions(o);
     o.value("supersample", "S", "S×S sub-pixels per pixel (box filter)", std::string("4"));
-    o.value("subpixel-passes", "K",
-            "average K images, the sub-pixel grid shifted in a rook pattern: edges (an emitter's outline) get S·K "
-            "levels of coverage each way",
-            std::string("4"));
+    o.value("subpixel-passes", "K|auto",
+            "average K images (1..64), the sub-pixel grid shifted in a rook pattern: edges (an emitter's outline) get "
+            "S·K levels of coverage each way; auto: 4 for snapshots and walkthrough frames, and for the last image "
+            "the most (a power of two up to 64) whose composite takes at most a tenth of the refinement's time",
+            std::string("auto"));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure (a walkthrough's is metered once, "
                               "from its first frame)",
             std::string("0"));
@@ -311,7 +320,8 @@ int runRender(const std::vector<std::string>& args) {
     comp.width = o.integer("width", 1, 16384);
     comp.height = o.integer("height", 1, 16384);
     comp.supersample = o.integer("supersample", 1, 16);
-    comp.passes = o.integer("subpixel-passes", 1, 64);
+    const bool autoPasses = o.str("subpixel-passes") == "auto";
+    comp.passes = autoPasses ? 4 : o.integer("subpixel-passes", 1, 64);
     comp.photometry = readPhotometryOption(o);
     comp.validate();
     const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));
@@ -462,17 +472,21 @@ int runRender(const std::vector<std::string>& args) {
     // --until-error: a fresh snapshot is good enough once its image's
     // estimated error is at most E. The estimate composites the image (and
     // its errors), on this thread while the worker samples on its own: it
-    // is asked at most once per 0.5 s and never more than a quarter of the
+    // is asked at most once per 0.5 s and never more than a third of the
     // time, so that asking does not slow refinement down much.
     double lastAsked = -kInf, askCost = 0;
     ImageErrorEstimate lastEstimate;
     auto good = [&](size_t frame) {
         return [&, frame](const CacheSnapshot& s) {
             const double now = session.seconds();
-            if (now - lastAsked < std::max(0.5, 3 * askCost)) return false;
-            lastEstimate = output.estimate(s, cameras[frame]);
+            // Nothing to ask before a bounce is shown (the estimate is then
+            // unknown: ImageOutput::estimate), and at most a third of the time.
+            if (output.expectIndirect && s.indirect.empty()) return false;
+            if (now - lastAsked < std::max(0.5, 2 * askCost)) return false;
+            lastEstimate = output.estimate(s, cameras[frame], true);
             lastAsked = session.seconds();
             askCost = lastAsked - now;
+
             return lastEstimate.cache <= *stop.error;
         };
     };
@@ -507,6 +521,24 @@ int runRender(const std::vector<std::string>& args) {
     const double refineSeconds = session.seconds();
     const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
     const bool radianceOut = quantity == OutputQuantity::Radiance;
+    if (autoPasses && !walkthrough && radianceOut) {
+        // What refinement cannot remove is the sub-pixel grid's sampling of
+        // edges (the Cornell box's light: 0.46% of a 256x256 image with 4
+        // passes, 0.2% with 16): the last image takes as many passes as a
+        // tenth of the refinement's time pays for, timed on one pass.
+        CompositorSettings one = comp;
+        one.passes = 1;
+        const GpuCacheMeshes meshes = compositor.upload(final->direct, final->indirect);
+        compositor.setSpecularCache(final->direct, final->indirect);
+        const auto t0 = Clock::now();
+        compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
+        const double pass = secondsSince(t0);
+        int k = output.passes();
+        while (k < 64 && 2 * k * pass <= 0.1 * refineSeconds) k *= 2;
+        output.setPasses(k);
+        std::printf("sub-pixel passes: %d for the last image (one pass %.3f s; a tenth of %.1f s refined)\n", k, pass,
+                    refineSeconds);
+    }
     ImageErrorEstimate finalEstimate;
     if (radianceOut || !logPath.empty()) {
         finalEstimate = output.estimate(*final, cameras[lastFrame]);
