@@ -28,12 +28,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 namespace ml {
 namespace {
 
-// The snapshot's meshes after `samples` samples.
-CacheSnapshot refined(const Scene& scene, uint64_t samples) {
+// A session of `scene` with its plan's indirect light, on one thread (the
+// same cache on any machine), ending after `samples` samples; started.
+std::unique_ptr<ProgressiveSession> startSession(const Scene& scene, uint64_t samples) {
     DirectChoice direct;
     direct.backend = GlBackend::OsMesa;
     IndirectChoice indirect;
@@ -44,11 +46,19 @@ CacheSnapshot refined(const Scene& scene, uint64_t samples) {
     s.indirect = indirect.solver;
     StopRule stop;
     stop.samples = samples;
-    ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect), stop);
-    session.start();
-    CacheWorker::Reader reader = session.reader();
-    session.refineUntil(reader, stop, 0);
-    session.stop();
+    auto session = std::make_unique<ProgressiveSession>(scene, s, samplerFactory(scene, direct, indirect), stop);
+    session->start();
+    return session;
+}
+
+// The snapshot's meshes after `samples` samples.
+CacheSnapshot refined(const Scene& scene, uint64_t samples) {
+    const std::unique_ptr<ProgressiveSession> session = startSession(scene, samples);
+    CacheWorker::Reader reader = session->reader();
+    StopRule stop;
+    stop.samples = samples;
+    session->refineUntil(reader, stop, 0);
+    session->stop();
     const CacheSnapshot* last = reader.acquire();
     CacheSnapshot copy;
     copy.direct = last->direct;
@@ -138,18 +148,8 @@ TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {
     const Camera camera = scene.cameraOrDefault(1.0);
     const EmbreeScene rays(scene);
     const ReferenceImage ref = PathTracer(rays, PathTracerSettings{}).render(camera, size, size, 1024);
-    DirectChoice direct;
-    direct.backend = GlBackend::OsMesa;
-    IndirectChoice indirect;
-    indirect.decide(scene);
-    SessionSettings ss;
-    ss.worker.threads = 1;
-    ss.indirect = indirect.solver;
-    StopRule stop;
-    stop.samples = 64000;
-    ProgressiveSession session(scene, ss, samplerFactory(scene, direct, indirect), stop);
-    session.start();
-    CacheWorker::Reader reader = session.reader();
+    const std::unique_ptr<ProgressiveSession> session = startSession(scene, 64000);
+    CacheWorker::Reader reader = session->reader();
     Compositor compositor(test::glContext(), scene);
     CompositorSettings cs;
     cs.width = cs.height = size;
@@ -159,8 +159,8 @@ TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {
         const CacheSnapshot* s = nullptr;
         for (;;) {
             s = reader.acquire();
-            if ((s && s->samples >= budget) || session.finished()) break;
-            session.waitForVersion((s ? s->version : 0) + 1, 0.05);
+            if ((s && s->samples >= budget) || session->finished()) break;
+            session->waitForVersion((s ? s->version : 0) + 1, 0.05);
         }
         s = reader.acquire();
         ASSERT_TRUE(s);
@@ -168,7 +168,7 @@ TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {
         std::printf("%llu samples (%d of %d bounces done): relative RMSE %.3f%%\n",
                     static_cast<unsigned long long>(s->samples), s->bouncesFinished, s->bounces, 100 * errors.back());
     }
-    session.stop();
+    session->stop();
     for (size_t k = 1; k < errors.size(); ++k) EXPECT_LE(errors[k], errors[k - 1] + 5e-4) << "snapshot " << k;
 }
 
