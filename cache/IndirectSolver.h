@@ -102,11 +102,11 @@ public:
     RefineReport step(IndirectEstimator& estimator, const std::function<std::vector<IrradianceMeshCopy>()>& direct,
                       size_t budget, uint32_t seed, const std::optional<RefinementCamera>& view);
 
-    // Gathers bounce 1 again, first pass and all, from direct light as it is
-    // now: for when it started from an incomplete first pass of direct
-    // light. Later bounces, a fraction ā of its light each, are refined from
-    // it as usual (pass 2). Until a vertex is gathered again, copies show its
-    // old value.
+    // Gathers every started bounce again, first pass and all, bounce 1 from
+    // direct light as it is now and each later one from its predecessor
+    // gathered anew: for when bounce 1 started from an incomplete first pass
+    // of direct light. Until a vertex is gathered again, copies show its old
+    // value.
     void restart(IndirectEstimator& estimator);
 
     // The scene changed (CacheInvalidation.h): every bounce is stale. They
@@ -179,6 +179,7 @@ private:
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
     bool regathering_ = false;       // bounce 1 gathered again since restart()
+    bool restarted_ = false;         // first passes gathered again since restart(), not done yet
     std::vector<IrradianceMeshCopy> stale_;  // shown after sceneChanged() until bounce 1 is
 };
 
