@@ -696,10 +696,6 @@ BenchTable walkTable(const WalkResult& w) {
     return t;
 }
 
-struct TargetRow {
-    std::string target, value, status;
-};
-
 // `s` as a table cell: no comma, quote or line break (a message from Blender may hold them).
 std::string tableCell(std::string s) {
     for (char& c : s)
@@ -708,8 +704,8 @@ std::string tableCell(std::string s) {
     return s;
 }
 
-std::vector<TargetRow> targetRows(const StillResult& r, const WalkResult& w, const Workload& work, bool quick) {
-    std::vector<TargetRow> rows;
+std::vector<BenchTarget> targetRows(const StillResult& r, const WalkResult& w, const Workload& work, bool quick) {
+    std::vector<BenchTarget> rows;
     // Quick runs are another size and budget: they run the bench, they do not judge it.
     auto status = [&](const std::string& s) { return quick ? std::string("quick run: not judged") : s; };
     const std::string size = concat(work.size, "x", work.size);
@@ -770,12 +766,6 @@ std::vector<TargetRow> targetRows(const StillResult& r, const WalkResult& w, con
                         concat("not a target (", atTarget >= kWalkSpeedup ? ">=" : "<", " ", kWalkSpeedup, "x)")});
     }
     return rows;
-}
-
-BenchTable targetsTable(const std::vector<TargetRow>& rows) {
-    BenchTable t({"target", "value", "status"});
-    for (const TargetRow& r : rows) t.addRow({r.target, r.value, r.status});
-    return t;
 }
 
 // --- Plots ------------------------------------------------------------------------------
@@ -866,7 +856,7 @@ std::string gnuplotScript(const StillResult& r, const WalkResult& w, const Workl
 // --- Summary ------------------------------------------------------------------------------
 
 std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work, const StillResult& r,
-                            const WalkResult& w, const CyclesState& cycles, const std::vector<TargetRow>& targets,
+                            const WalkResult& w, const CyclesState& cycles, const std::vector<BenchTarget>& targets,
                             const std::vector<std::string>& loads) {
     const unsigned threads = std::thread::hardware_concurrency();
     std::ostringstream md;
@@ -988,7 +978,7 @@ int runBenchGi(const BenchOptions& options) {
     const WalkResult walk = runWalkthrough(run, work, scene, compositor, cycles);
     cycles.runner.reset();  // Blender quits
 
-    const std::vector<TargetRow> targets = targetRows(still, walk, work, options.quick);
+    const std::vector<BenchTarget> targets = targetRows(still, walk, work, options.quick);
     const BenchTable curvesT = curvesTable(still), levelsT = levelsTable(still), walkT = walkTable(walk),
                      targetsT = targetsTable(targets);
     std::printf("\nTime to each level, seconds (relative RMSE against the %d-spp reference, its %.3f%% noise taken "

@@ -482,18 +482,14 @@ const FitRow* headlineFit(const std::vector<FitRow>& fits) {
 
 // --- Targets -----------------------------------------------------------------------------
 
-struct TargetRow {
-    std::string target, value, status;
-};
-
 const SceneResult* withLights(const std::vector<SceneResult>& scenes, size_t lights) {
     for (const SceneResult& s : scenes)
         if (s.office.lights() == lights) return &s;
     return nullptr;
 }
 
-std::vector<TargetRow> targetRows(const std::vector<SceneResult>& scenes, const Workload& work) {
-    std::vector<TargetRow> rows;
+std::vector<BenchTarget> targetRows(const std::vector<SceneResult>& scenes, const Workload& work) {
+    std::vector<BenchTarget> rows;
     const SceneResult* base = withLights(scenes, kTargetLights);
     ML_ASSERT(base, "every workload has the 12-panel office");
     for (const TimeTarget& target : kTimeTargets) {
@@ -651,12 +647,6 @@ BenchTable fitsTable(const std::vector<FitRow>& fits) {
     return t;
 }
 
-BenchTable targetsTable(const std::vector<TargetRow>& rows) {
-    BenchTable t({"target", "value", "status"});
-    for (const TargetRow& r : rows) t.addRow({r.target, r.value, r.status});
-    return t;
-}
-
 // --- Plots ------------------------------------------------------------------------------
 
 const std::vector<GnuplotOutput> kPlots = {
@@ -772,7 +762,7 @@ std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload
 
 std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work,
                             const std::vector<SceneResult>& scenes, const std::vector<FitRow>& fits,
-                            const std::vector<TargetRow>& targets) {
+                            const std::vector<BenchTarget>& targets) {
     const unsigned threads = std::thread::hardware_concurrency();
     double noiseMax = 0;
     for (const SceneResult& s : scenes) noiseMax = std::max(noiseMax, s.reference.noise);
@@ -889,7 +879,7 @@ int runBenchLights(const BenchOptions& options) {
     for (size_t i = 0; i < work.offices.size(); ++i)
         scenes.push_back(runScene(run, work, work.offices[i], uint32_t(i), *context));
     const std::vector<FitRow> fits = fitRows(scenes);
-    const std::vector<TargetRow> targets = targetRows(scenes, work);
+    const std::vector<BenchTarget> targets = targetRows(scenes, work);
 
     const BenchTable checkpointsT = checkpointsTable(scenes), summaryT = summaryTable(scenes, work),
                      scenesT = scenesTable(scenes), fitsT = fitsTable(fits), targetsT = targetsTable(targets);

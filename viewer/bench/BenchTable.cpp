@@ -85,4 +85,10 @@ std::string benchMs(double seconds) { return benchNumber(1e3 * seconds); }
 
 std::string benchYesNo(bool b) { return b ? "yes" : "no"; }
 
+BenchTable targetsTable(const std::vector<BenchTarget>& rows) {
+    BenchTable t({"target", "value", "status"});
+    for (const BenchTarget& r : rows) t.addRow({r.target, r.value, r.status});
+    return t;
+}
+
 }  // namespace ml

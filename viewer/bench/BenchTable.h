@@ -39,4 +39,12 @@ std::string benchMs(double seconds);
 // "yes" or "no": a table's answer to a target or a condition.
 std::string benchYesNo(bool b);
 
+// One row of a bench's targets table: the target, what was
+// measured, and whether it is met (or why not judged).
+struct BenchTarget {
+    std::string target, value, status;
+};
+// The table of `rows`: columns target, value, status.
+BenchTable targetsTable(const std::vector<BenchTarget>& rows);
+
 }  // namespace ml
