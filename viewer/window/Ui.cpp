@@ -240,6 +240,44 @@ void Ui::render() {
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
 
+// A light or an object nudged along x, y or z by a step: the same change
+// as the script's `light N move` and `object NAME move` (SceneChange), so
+// the cache keeps what stays valid and the real-time stand-in shows while
+// it catches up.
+void Ui::moveControls(const UiModel& m, UiRequests& r) {
+    const size_t lights = m.lightPlaces.size(), targets = lights + m.objects.size();
+    if (targets == 0 || !ImGui::CollapsingHeader("Move")) return;
+    moveTarget_ = std::clamp(moveTarget_, 0, int(targets) - 1);
+    const auto label = [&](size_t t) {
+        return t < lights ? concat("light ", t, " '", m.lightInfo[t].name, "'")
+                          : concat("object '", m.objects[t - lights], "'");
+    };
+    if (ImGui::BeginCombo("what", label(size_t(moveTarget_)).c_str())) {
+        for (size_t t = 0; t < targets; ++t)
+            if (ImGui::Selectable(label(t).c_str(), int(t) == moveTarget_)) moveTarget_ = int(t);
+        ImGui::EndCombo();
+    }
+    const double mpu = metresPerUnit(m.unit);
+    ImGui::SliderFloat("step (m)", &moveStep_, 0.001f, 10.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
+    const size_t t = size_t(moveTarget_);
+    if (t < lights)
+        ImGui::Text("at %.4g, %.4g, %.4g %s", m.lightPlaces[t].x, m.lightPlaces[t].y, m.lightPlaces[t].z,
+                    lengthUnitName(m.unit));
+    ImGui::BeginDisabled(m.changing);
+    const char* names[] = {"x", "y", "z"};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int sign : {-1, 1}) {
+            if (axis || sign > 0) ImGui::SameLine();
+            if (!ImGui::Button(concat(sign < 0 ? "-" : "+", names[axis]).c_str())) continue;
+            Vec3 by(0.0);
+            by[axis] = sign * double(moveStep_) / mpu;
+            r.sceneChange = t < lights ? SceneChange::moveLight(t, m.lightPlaces[t] + by)
+                                       : SceneChange::moveObject(m.objects[t - lights], by);
+        }
+    ImGui::EndDisabled();
+    if (m.changing) ImGui::TextDisabled("applying the last move...");
+}
+
 UiRequests Ui::build(UiModel& m) {
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
@@ -350,6 +388,8 @@ UiRequests Ui::build(UiModel& m) {
                            m.indirectWeight.r, m.indirectWeight.g, m.indirectWeight.b);
         if (!m.sharedLights.empty()) ImGui::TextWrapped("%s", m.sharedLights.c_str());
     }
+
+    moveControls(m, r);
 
     // --- Walking --------------------------------------------------------------
     if (ImGui::CollapsingHeader("Camera")) {

@@ -12,6 +12,7 @@
 #include "DisplayState.h"
 #include "ViewLights.h"
 #include "core/image/Illuminance.h"
+#include "core/SceneChange.h"
 #include "core/image/Photometry.h"
 #include "gpu_sampling/SamplerFactory.h"
 
@@ -62,6 +63,12 @@ struct UiModel {
     std::optional<double> cursorLux;                      // under the mouse, lux mode
     std::string error;    // refinement failed: shown in red whatever the panel
     std::string message;  // the last save, for a few seconds
+    // What the "Move" section moves: each light's place (a punctual light's
+    // position, an area light's centroid) and the scene's named objects, in
+    // the scene as drawn; `changing` while a move is being applied.
+    std::vector<Vec3> lightPlaces;
+    std::vector<std::string> objects;
+    bool changing = false;
 };
 
 // What the user asked for in this frame.
@@ -75,6 +82,7 @@ struct UiRequests {
     double speedFactor = 1;     // multiply the walking speed
     int supersample = 0;        // > 0: new supersampling
     std::optional<RealtimeChoice> realtime;  // another indirect display or stand-in
+    std::optional<SceneChange> sceneChange;  // a light or an object moved from the panel
 };
 
 class Ui {
@@ -97,8 +105,13 @@ public:
     std::string screenshotPath() const { return screenshotPath_; }
 
 private:
+    // The "Move" section: nudges the chosen light or object along an axis.
+    void moveControls(const UiModel& m, UiRequests& r);
+
     char screenshotPath_[512];
     char cachePath_[512];
+    int moveTarget_ = 0;       // lights first, then objects
+    float moveStep_ = 0.25f;   // metres
 };
 
 }  // namespace ml

@@ -311,6 +311,11 @@ struct ViewSession::Impl : ScriptHost {
         m.lights = &lightControls;
         m.lightInfo = lightInfo;
         m.groups = groups;
+        for (const Light& l : scene.lights) m.lightPlaces.push_back(l.punctual() ? l.emission.position : l.centroid);
+        for (const Mesh& mesh : scene.meshes)
+            if (!mesh.name.empty() && std::find(m.objects.begin(), m.objects.end(), mesh.name) == m.objects.end())
+                m.objects.push_back(mesh.name);
+        m.changing = refinement->changing();
         m.indirectWeight = indirectWeight(lightControls, lightPowers);
         UiStats& s = m.stats;
         const ViewRefinement::Shown& shown = refinement->shown();
@@ -363,6 +368,7 @@ struct ViewSession::Impl : ScriptHost {
         if (r.speedFactor != 1) walk.setSpeed(walk.speed() * r.speedFactor);
         if (r.supersample > 0) settings.supersample = r.supersample;
         if (r.realtime) setRealtime(*r.realtime);
+        if (r.sceneChange && !changeScene(*r.sceneChange)) showMessage("busy: the last move, a save or start-up");
     }
 
     CompositorSettings compositeSettings(int fbWidth, int fbHeight, CompositeQuantity q) const {
