@@ -559,8 +559,9 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
             // A grid object's light is its samples' interpolant: its error is
             // its heaviest sample's noise (the grid is fine where it is
             // used), or a guess's while that sample has none.
-            const Rgb se = colourOf(vertexValues[v], luminance(vertexValues[v]),
-                                    st.count ? detail::meanNoise(st, settings) : kGuessedLightError * luminance(vertexValues[v]));
+            const double lum = luminance(vertexValues[v]);
+            const Rgb se =
+                colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, settings) : kGuessedLightError * lum);
             out.standardError.push_back(st.count >= 2 ? se : Rgb(0.0));
             out.predictedError.push_back(se);
         }

@@ -265,7 +265,8 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             const double len = glm::length(pa - pb);
             const Vec3 mid = 0.5 * (pa + pb);
             double predicted = 0.25 * std::max(lap[a], lap[b]);
-            if (mayStep(lm.stats[a], lm.stats[b])) predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
+            if (mayStep(lm.stats[a], lm.stats[b]))
+                predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
             const bool splittable = len > metric.minLength(mid);
             const double seen = metric.weight(mid);
             edgeWeight += seen * len * len;
@@ -482,7 +483,8 @@ std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::ve
         const double interpolation = edges[v] > 0 ? sumSq[v] / edges[v] : 0.0;
         // A vertex not sampled yet shows its neighbours' light (copyMesh):
         // a guess, assumed off by kGuessedLightError of itself.
-        const double noise = lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs);
+        const double noise =
+            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs);
         out[v] = std::sqrt(interpolation + noise * noise);
     }
     return out;

@@ -466,7 +466,8 @@ int runRender(const std::vector<std::string>& args) {
                                  ImageRole::Snapshot);
         }
         ++snapshotIndex;
-        if (!logPath.empty()) log.add(seconds, frame, s, output.estimate(s, cameras[frame]), o.has("reference") ? &reference : nullptr);
+        if (!logPath.empty())
+            log.add(seconds, frame, s, output.estimate(s, cameras[frame]), o.has("reference") ? &reference : nullptr);
         printStatus(s, seconds, walkthrough ? concat("frame ", frame) : std::string("refining"), false);
     };
 
@@ -547,7 +548,8 @@ int runRender(const std::vector<std::string>& args) {
     }
     output.write(lastPath, *final, cameras[lastFrame], ImageRole::Frame,
                  finalEstimate.image.data.empty() ? nullptr : &finalEstimate.image);
-    if (!logPath.empty()) log.add(refineSeconds, lastFrame, *final, finalEstimate, o.has("reference") ? &reference : nullptr);
+    if (!logPath.empty())
+        log.add(refineSeconds, lastFrame, *final, finalEstimate, o.has("reference") ? &reference : nullptr);
     printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);
     if (!logPath.empty()) writeTextFileAtomically(logPath, log.text());
     if (!cachePath.empty()) session.save(cachePath);
@@ -560,8 +562,8 @@ int runRender(const std::vector<std::string>& args) {
                 final->samples ? refineSeconds / double(final->samples) * 1e6 : 0.0, p.setup, p.draw, p.readback,
                 p.weighting, 100 * final->estimatedError, final->converged ? " (converged)" : "");
     if (radianceOut)
-        std::printf("image: estimated error %.3g%% (relative RMSE from the cache's predicted error; the sub-pixel passes' "
-                    "halves differ by %.3g%%)\n",
+        std::printf("image: estimated error %.3g%% (relative RMSE from the cache's predicted error; the sub-pixel "
+                    "passes' halves differ by %.3g%%)\n",
                     100 * finalEstimate.cache, 100 * finalEstimate.sampling);
     std::printf("cache: %.1f MB (%zu bytes per vertex)%s\n", cache.memoryBytes() / 1e6, IrradianceCache::bytesPerVertex(),
                 cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());

@@ -60,8 +60,8 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
     w.light.assign(lights, Rgb(0.0));
     w.shared = Rgb(0.0);
     w.indirect = Rgb(1.0);
-    const ImageRgb indirectError =
-        indirect.empty() ? ImageRgb(out.image.width, out.image.height) : compositor.composite(camera, errors, w, errorSettings);
+    const ImageRgb indirectError = indirect.empty() ? ImageRgb(out.image.width, out.image.height)
+                                                    : compositor.composite(camera, errors, w, errorSettings);
 
     ImageRgb cache(out.image.width, out.image.height);
     for (size_t i = 0; i < cache.data.size(); ++i) {
