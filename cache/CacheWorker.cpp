@@ -258,14 +258,22 @@ void CacheWorker::run() {
                                   ++causticWaits % 4 == 0;
                 if (cache_.unsampledCount() == 0 && turn) caustics_->round(seedFor(settings_.seed, 0xca057u));
             }
+            // A part converged at its level is tightened one level and goes
+            // on, whatever the others do: the rounds are shared by the
+            // parts' errors (above), so a part whose tolerances were met
+            // early (indirect light in a room lit mostly indirectly, whose
+            // direct light needs many more rounds at the same tolerance)
+            // keeps getting closer instead of idling until the others
+            // converge while its error is what the image shows.
+            if (directConverged && cache_.level() < settings_.refinementLevels && cache_.tighten())
+                directConverged = false;
+            if (indirect_ && indirectConverged && estimator && indirect_->level() < settings_.refinementLevels &&
+                indirect_->tighten(*estimator))
+                indirectConverged = false;
+            if (caustics_ && causticConverged && caustics_->level() < settings_.refinementLevels &&
+                caustics_->tighten())
+                causticConverged = false;
             converged = directConverged && indirectConverged && causticConverged;
-            // Converged at this level: tighten every cache one level and go on.
-            if (converged && cache_.level() < settings_.refinementLevels) {
-                const bool direct = cache_.tighten();
-                const bool indirect = indirect_ && estimator && indirect_->tighten(*estimator);
-                const bool caustic = caustics_ && caustics_->tighten();
-                if (direct || indirect || caustic) converged = directConverged = false;
-            }
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
                 publish(seconds(), converged, view, serial, pool);
                 lastPublish = seconds();

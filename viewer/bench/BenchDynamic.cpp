@@ -96,6 +96,7 @@ struct Choices {
 std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c, uint32_t seed) {
     SessionSettings ss;
     ss.worker.seed = seed;
+    ss.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;  // as `view` refines
     ss.worker.indirectStandIn = c.realtime.realtime != "off";
     if (c.indirect.active()) ss.indirect = c.indirect.solver;
     auto session = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, c.direct, c.indirect));

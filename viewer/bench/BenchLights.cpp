@@ -238,6 +238,7 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
     r.bounces = indirect.active() ? indirect.solver.bounces : 0;
     SessionSettings settings;
     settings.worker.seed = run.options().seed;
+    settings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;  // as `render` refines
     if (indirect.active()) settings.indirect = indirect.solver;
 
     struct Taken {
