@@ -68,6 +68,10 @@ struct IndirectChoice {
     // are gathered by bounce 1 rather than sampled (GatheredLights.h), with
     // the ray gather only; 0: none (--glow-ratio).
     double glowRatio = 0.02;
+    // The bounce meshes' base edges, at most this fraction of the scene's
+    // diagonal; 0: the gather's own (1/16 for the ray gather, 1/8 for the
+    // voxel gathers) (--indirect-edge).
+    double baseEdge = 0;
     std::string gatheredReason;        // filled by decide(): which lights are gathered and why, or why none
     IndirectSettings solver;           // bounces, albedo and gathered lights come from decide()
     BounceCount bounceCount;            // filled by decide()

@@ -167,6 +167,25 @@ TEST_F(Cli, PlanPrintsWhatWouldBeSimulated) {
     EXPECT_NE(r.output.find("grid cache"), std::string::npos) << r.output;
 }
 
+// --indirect-edge sets the bounce meshes' base (the ray gather's 1/16 by
+// default) and refuses what is not a fraction, with no output.
+TEST_F(Cli, IndirectEdgeSetsTheBounceMeshesBase) {
+    const CommandResult plain = runMeshlight("plan cornell");
+    ASSERT_EQ(0, plain.status) << plain.output;
+    EXPECT_NE(plain.output.find("indirect caches: one mesh per bounce, edges at most 1/16 of the scene"),
+              std::string::npos) << plain.output;
+    const CommandResult fine = runMeshlight("plan cornell --indirect-edge 0.03125");
+    ASSERT_EQ(0, fine.status) << fine.output;
+    EXPECT_NE(fine.output.find("indirect caches: one mesh per bounce, edges at most 1/32 of the scene"),
+              std::string::npos) << fine.output;
+    for (const char* bad : {"0", "2", "x"}) {
+        const CommandResult r = runMeshlight(concat("render cornell --indirect-edge ", bad, " --out ", path("e.png")));
+        EXPECT_EQ(2, r.status) << r.output;
+        EXPECT_NE(r.output.find("--indirect-edge"), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(path("e.png")));
+    }
+}
+
 // --- Lux: probe's RADIANCE-style input and lux columns, render --quantity lux ---
 
 namespace {

@@ -57,6 +57,9 @@ void declareIndirectOptions(Options& o) {
     o.value("voxels", "N", "voxel slices: N voxels along the scene's longest side (32..128 typical)",
             concat(g.resolution));
     o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
+    o.value("indirect-edge", "F",
+            "the bounce meshes' base edges at most F x the scene diagonal (default: 1/16 for raytrace, 1/8 for "
+            "the voxel gathers); a large room's indirect light needs finer ones (cache/README.md)");
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
     o.value("glow-ratio", "F",
@@ -96,6 +99,7 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.vpl.lights = o.integer("vpls", 1, 65536);
     c.vpl.validate();
     c.glowRatio = o.number("glow-ratio", 0, 0.999);
+    if (o.has("indirect-edge")) c.baseEdge = o.number("indirect-edge", 1e-4, 1.0);
     c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
     c.bounces.maxBounces = o.integer("max-bounces", 1, 256);
     if (o.has("bounces")) c.bounces.forced = o.integer("bounces", 0, 256);
