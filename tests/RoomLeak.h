@@ -57,7 +57,7 @@ struct RoomLeak {
 // partition at x = 0; `bounces` are the solver's indirect meshes.
 inline RoomLeak roomLeak(const std::vector<IrradianceMeshCopy>& bounces) {
     std::vector<MeshIrradianceLookup> lookups;
-    for (const IrradianceMeshCopy& b : bounces) lookups.emplace_back(b, 1e-4);
+    for (const IrradianceMeshCopy& b : bounces) lookups.emplace_back(b, 0.1, 1e-4);
     auto indirect = [&](const Vec3& x, const Vec3& n) {
         double e = 0;
         for (const MeshIrradianceLookup& l : lookups) e += luminance(l.at(x, n));

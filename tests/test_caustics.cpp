@@ -265,7 +265,7 @@ TEST(Caustics, RayGatherFollowsAMirror) {
     source.triangles = floor.triangles;
     source.irradiance.assign(floor.positions.size(), Rgb(e0));
     source.samples.assign(floor.positions.size(), 1);
-    const MeshIrradianceLookup lookup(source, 1e-6);
+    const MeshIrradianceLookup lookup(source, 0.1, 1e-6);
     const EmbreeScene rays(scene);
     const std::vector<char> closed = closedMeshesOf(scene);
     const std::vector<Vec3> image = {Vec3(-1.5, 2, -1.5), Vec3(1.5, 2, -1.5), Vec3(1.5, 2, 1.5), Vec3(-1.5, 2, 1.5)};

@@ -302,7 +302,7 @@ struct ExactGather {
     std::vector<char> closed = closedMeshesOf(scene);
     ExactGather(const Scene& s, const std::vector<IrradianceMeshCopy>& source) : scene(s) {
         const double diagonal = scene.bounds.diagonal();
-        for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, 1e-5 * diagonal);
+        for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, diagonal / 64, 1e-5 * diagonal);
         for (const MeshIrradianceLookup& l : lookups) pointers.push_back(&l);
     }
     // 48×48 stratified rays: noise under 0.5%.

@@ -141,7 +141,7 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
     std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
     for (const IrradianceMeshCopy& m : irradiance)
-        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, 1e-5 * diagonal));
+        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
     source->fields.resize(grid_.count());
     source->residual.assign(grid_.count(), {});
     source->inside.assign(grid_.count(), 0);

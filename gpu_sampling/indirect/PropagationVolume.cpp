@@ -336,7 +336,7 @@ std::vector<ShRgb> PropagationVolume::inject(const std::vector<IrradianceMeshCop
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
     std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
     for (const IrradianceMeshCopy& m : irradiance)
-        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, 1e-5 * diagonal));
+        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
     std::vector<ShRgb> injected(grid_.count());
     auto inject = [&](const SurfaceSample& s, const Vec3& n) {
         Rgb e(0.0);

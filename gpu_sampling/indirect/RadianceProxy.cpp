@@ -8,15 +8,101 @@
 
 namespace ml {
 
-MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double tolerance)
-    : mesh_(mesh), locator_(mesh.positions, mesh.triangles, tolerance) {}
+// Ericson, Real-Time Collision Detection §5.1.5.
+Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+    const Vec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        const double v = d1 / (d1 - d3);
+        return {1 - v, v, 0};
+    }
+    const Vec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        const double w = d2 / (d2 - d6);
+        return {1 - w, 0, w};
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return {0, 1 - w, w};
+    }
+    const double denom = va + vb + vc;
+    if (!(std::abs(denom) > 0)) return {1, 0, 0};
+    const double v = vb / denom, w = vc / denom;
+    return {1 - v - w, v, w};
+}
+
+MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance)
+    : mesh_(mesh), cell_(cellSize), tolerance_(tolerance) {
+    Bounds3 b;
+    for (const Vec3& p : mesh.positions) b.extend(p);
+    if (b.empty()) return;
+    origin_ = b.lo - tolerance;
+    for (int a = 0; a < 3; ++a)
+        dims_[size_t(a)] = std::clamp(int(std::ceil((b.hi[a] - b.lo[a] + 2 * tolerance) / cell_)) + 1, 1, 1024);
+    const size_t binCount = size_t(dims_[0]) * dims_[1] * dims_[2];
+    faces_.resize(mesh.triangles.size());
+    // Each face's range of bins (its bounding box grown by the tolerance).
+    std::vector<std::array<int, 6>> ranges(mesh.triangles.size());
+    binStart_.assign(binCount + 1, 0);
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::uvec3 i = mesh.triangles[t];
+        const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
+        const Vec3 n = glm::cross(p1 - p0, p2 - p0);
+        const Vec3 unit = glm::length(n) > 0 ? glm::normalize(n) : Vec3(0.0);
+        faces_[t] = {float(unit.x), float(unit.y), float(unit.z), i};
+        std::array<int, 6>& r = ranges[t];
+        for (int a = 0; a < 3; ++a) {
+            const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance, mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
+            r[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+            r[size_t(a) + 3] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+        }
+    }
+    // Counted, then filled in face order.
+    auto eachBin = [&](const std::array<int, 6>& r, auto&& f) {
+        for (int z = r[2]; z <= r[5]; ++z)
+            for (int y = r[1]; y <= r[4]; ++y)
+                for (int x = r[0]; x <= r[3]; ++x) f((size_t(z) * dims_[1] + y) * dims_[0] + x);
+    };
+    for (const auto& r : ranges) eachBin(r, [&](size_t bin) { ++binStart_[bin + 1]; });
+    for (size_t k = 0; k < binCount; ++k) binStart_[k + 1] += binStart_[k];
+    binFaces_.resize(binStart_[binCount]);
+    std::vector<uint32_t> next(binStart_.begin(), binStart_.end() - 1);
+    for (size_t t = 0; t < ranges.size(); ++t) eachBin(ranges[t], [&](size_t bin) { binFaces_[next[bin]++] = uint32_t(t); });
+}
 
 Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
-    const std::optional<TriangleLocator::Location> l = locator_.locate(p, n);
-    if (!l) return Rgb(0.0);
-    const glm::uvec3 i = mesh_.triangles[l->triangle];
-    const Vec3& w = l->barycentric;
-    return w.x * mesh_.irradiance[i.x] + w.y * mesh_.irradiance[i.y] + w.z * mesh_.irradiance[i.z];
+    if (faces_.empty()) return Rgb(0.0);
+    std::array<int, 3> c{};
+    for (int a = 0; a < 3; ++a) {
+        const int i = int(std::floor((p[a] - origin_[a]) / cell_));
+        if (i < 0 || i >= dims_[size_t(a)]) return Rgb(0.0);
+        c[size_t(a)] = i;
+    }
+    double best = tolerance_ * tolerance_;
+    Rgb result(0.0);
+    const size_t bin = (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
+    for (uint32_t k = binStart_[bin]; k < binStart_[bin + 1]; ++k) {
+        const Face& f = faces_[binFaces_[k]];
+        // The other side, or a crease beyond 60°.
+        if (double(f.nx) * n.x + double(f.ny) * n.y + double(f.nz) * n.z < 0.5) continue;
+        const glm::uvec3 i = f.corners;
+        const Vec3 w = closestBarycentric(p, mesh_.positions[i.x], mesh_.positions[i.y], mesh_.positions[i.z]);
+        const Vec3 q = w.x * mesh_.positions[i.x] + w.y * mesh_.positions[i.y] + w.z * mesh_.positions[i.z];
+        const double d2 = glm::dot(q - p, q - p);
+        if (d2 > best) continue;
+        best = d2;
+        result = w.x * mesh_.irradiance[i.x] + w.y * mesh_.irradiance[i.y] + w.z * mesh_.irradiance[i.z];
+    }
+    return result;
 }
 
 RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(grid) {
@@ -84,7 +170,7 @@ std::vector<Rgb> RadianceProxy::radianceFrom(const std::vector<IrradianceMeshCop
     const double tolerance = 1e-5 * diagonal_;
     std::vector<MeshIrradianceLookup> lookups;
     lookups.reserve(meshes.size());
-    for (const IrradianceMeshCopy& m : meshes) lookups.emplace_back(m, tolerance);
+    for (const IrradianceMeshCopy& m : meshes) lookups.emplace_back(m, grid_.voxel, tolerance);
     for (size_t v = 0; v < positions_.size(); ++v) {
         const ProxyTriangle& t = triangles_[vertexTriangle_[v]];
         Rgb e(0.0);

@@ -12,7 +12,6 @@
 #include "VoxelGrid.h"
 #include "cache/IrradianceCache.h"
 #include "core/Scene.h"
-#include "core/raytrace/TriangleLocator.h"
 
 #include <array>
 
@@ -55,23 +54,38 @@ private:
     std::vector<std::vector<uint32_t>> bins_;
 };
 
+// The point of triangle (a, b, c) closest to p, as barycentrics.
+Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 // Point location in a cache mesh: the irradiance a mesh holds at a point of
 // the scene's surfaces, from the mesh triangle nearest to it among those
 // facing the same side (normals within 60°), linearly interpolated; zero
 // where no such triangle lies within `tolerance` (the mesh does not cover
-// that side, e.g. the back of a wall no light reaches). A bounce-1 gather
-// looks up every light's mesh at each ray's end (13 in the office, 5,200
-// lookups a gather): the search is an Embree BVH's (TriangleLocator).
+// that side, e.g. the back of a wall no light reaches).
 class MeshIrradianceLookup {
 public:
-    // `mesh` must outlive the lookup.
-    MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double tolerance);
+    MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance);
     Rgb at(const Vec3& p, const Vec3& n) const;
-    size_t memoryBytes() const { return locator_.memoryBytes(); }
 
 private:
+    // What a lookup reads of a face before its closest point: its unit
+    // normal (float: only compared with 0.5) and its corners, in one
+    // record. A bounce-1 gather looks up every light's mesh at each ray's
+    // end (13 in the office, 5,200 lookups a gather) and was bound by
+    // memory: a bin's vector, then the face's normal, then its corners,
+    // each a cache miss.
+    struct Face {
+        float nx, ny, nz;
+        glm::uvec3 corners;
+    };
     const IrradianceMeshCopy& mesh_;
-    TriangleLocator locator_;
+    std::vector<Face> faces_;
+    Vec3 origin_{0.0};
+    double cell_ = 1, tolerance_ = 0;
+    std::array<int, 3> dims_{1, 1, 1};
+    // The faces of bin b: binFaces_[binStart_[b], binStart_[b + 1]), in
+    // face order (one array, not a vector per bin).
+    std::vector<uint32_t> binStart_, binFaces_;
 };
 
 }  // namespace ml

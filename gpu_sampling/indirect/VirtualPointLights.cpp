@@ -290,7 +290,7 @@ void VirtualPointLights::setSource(size_t slot, const std::vector<IrradianceMesh
         const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
         source->meshes = irradiance;
         for (const IrradianceMeshCopy& m : source->meshes)
-            source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, 1e-5 * diagonal));
+            source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
     }
     if (settings_.visibility) {
         const int negatives = int(std::lround(settings_.negativeShare * count));

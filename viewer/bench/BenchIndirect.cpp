@@ -1141,7 +1141,7 @@ int runBenchIndirect(const BenchOptions& options) {
         // each taking Kd/π × the cache's irradiance where it lands), side ×
         // side stratified.
         std::vector<MeshIrradianceLookup> lookups;
-        for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, 1e-5 * diagonal);
+        for (const IrradianceMeshCopy& m : source) lookups.emplace_back(m, diagonal / 64, 1e-5 * diagonal);
         std::vector<const MeshIrradianceLookup*> pointers;
         for (const MeshIrradianceLookup& l : lookups) pointers.push_back(&l);
         const std::vector<char> closed = closedMeshesOf(scene);

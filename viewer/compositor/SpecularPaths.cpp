@@ -126,9 +126,9 @@ void SpecularPaths::setCache(const std::vector<IrradianceMeshCopy>& direct,
     // same meshes as the indirect gather's.
     const double diagonal = d.scene.bounds.diagonal() > 0 ? d.scene.bounds.diagonal() : 1.0;
     for (const IrradianceMeshCopy& m : state->direct)
-        state->directLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, 1e-5 * diagonal));
+        state->directLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
     for (const IrradianceMeshCopy& m : state->indirect)
-        state->indirectLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, 1e-5 * diagonal));
+        state->indirectLookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
     std::lock_guard<std::mutex> lock(d.cacheMutex);
     d.cache = std::move(state);
 }
