@@ -93,8 +93,8 @@ void IndirectChoice::decide(const Scene& scene) {
     // A finer base resolves a large room's indirect light, which falls
     // towards its corners and which noisy gathers never split for (the
     // office of bench lights: 1/32 with 196 rays, 2.4% against 3.8% at 60 s;
-    // cache/README.md); refinement still goes no finer than the gather's
-    // least edge, nor than an eighth of the base.
+    // cache/README.md); refinement may then split down to the finer of the
+    // gather's least edge and an eighth of the base.
     if (baseEdge > 0) {
         solver.cache.maxEdgeFraction = baseEdge;
         solver.cache.minEdgeFraction = std::min(solver.cache.minEdgeFraction, baseEdge / 8);
