@@ -90,8 +90,9 @@ struct WorkerSettings {
     // Sampling threads, each with samplers of its own (SamplerPool); 0: one
     // per core. The cache a sample budget makes does not depend on it.
     int threads = 0;
-    // Progressive refinement: once everything has converged, tighten the
-    // caches (IrradianceCache::tighten: tolerances halved) up to this
+    // Progressive refinement: once a part has converged at its level (direct
+    // light, the bounces, the caustics), tighten that part's caches
+    // (IrradianceCache::tighten: tolerances halved), each on its own, up to this
     // level and go on refining, so that waiting longer keeps getting closer
     // to the exact answer; 0: stop at the settings' tolerances (idle once
     // converged). The commands use IrradianceCache::kMaxRefinementLevel.

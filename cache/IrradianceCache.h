@@ -155,8 +155,8 @@ public:
     // Progressive refinement beyond them: one more level halves the split
     // and noise tolerances and doubles the samples a vertex may take, so a cache that
     // has converged at one level refines on toward the exact irradiance
-    // (ProgressiveSession tightens when every mesh has converged and the
-    // stop rule wants more). Returns false, changing nothing, at
+    // (CacheWorker tightens direct light's meshes once they have all
+    // converged at their level, whatever indirect light does). Returns false, changing nothing, at
     // kMaxRefinementLevel. The level is saved with the cache.
     bool tighten();
     int level() const;
