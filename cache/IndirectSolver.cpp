@@ -289,12 +289,25 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     while (complete > 0 && complete < started() &&
            (restarted_ || caches_[size_t(complete)]->unsampledCount() == 0))
         ++complete;
+    // The bounce being gathered after them, once a quarter of its base is
+    // (as bounce 1 is shown): its first pass visits vertices in a scattered
+    // order and its copies fill the rest from gathered neighbours, whose
+    // predicted error (kGuessedLightError) the estimate carries.
+    const std::optional<double> ratio = measuredBounceRatio(complete);
+    if (ratio) ++complete;
     std::vector<IrradianceMeshCopy> v;
     for (int b = 1; b <= complete; ++b) v.push_back(copyMesh(b));
     if (complete == 0 || complete >= settings_.bounces) return v;
     // The bounces still to come, each r times the one before: Σ_{j=1..N−k} r^j
-    // times the last complete bounce k.
-    const double a = std::clamp(settings_.tailAlbedo, 0.0, 0.999);
+    // times the last bounce shown, k. r is measured once bounce k is shown
+    // while gathered: its mean over the gathered vertices against bounce
+    // k − 1's over its base. Until then, BounceCount::bounceRatio (by rays:
+    // the area-weighted albedo overrates a room that light leaves). The
+    // Cornell box (open in front), 64x64 after 12,000 samples of one
+    // thread, bounce 1 complete and bounce 2 half gathered, measured 15%
+    // with bounce 1 and an area-albedo tail, 9% with r measured, 2.5% with
+    // bounce 2 shown as well (test_image_error).
+    const double a = std::clamp(ratio.value_or(settings_.tailAlbedo), 0.0, 0.999);
     double tail = 0, term = 1;
     for (int j = 1; j <= settings_.bounces - complete; ++j) tail += term *= a;
     IrradianceMeshCopy rest = v.back();
@@ -306,6 +319,23 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     for (size_t i = 0; i < rest.irradiance.size(); ++i) rest.predictedError[i] = kGuessedLightError * rest.irradiance[i];
     v.push_back(std::move(rest));
     return v;
+}
+
+std::optional<double> IndirectSolver::measuredBounceRatio(int bounce) const {
+    if (bounce < 1 || bounce >= started()) return std::nullopt;
+    const IrradianceCache& last = *caches_[size_t(bounce - 1)];
+    const IrradianceCache& next = *caches_[size_t(bounce)];
+    const size_t gathered = next.totalVertices() - next.unsampledCount();
+    // A quarter of the base, as for showing bounce 1 (firstBounceShown).
+    if (last.level() > 0 || 4 * gathered < next.totalVertices() || last.totalVertices() == 0) return std::nullopt;
+    const IrradianceMeshCopy k = last.copyMesh(0), n = next.copyMesh(0);
+    double sumK = 0, sumN = 0;
+    for (const Rgb& e : k.irradiance) sumK += luminance(e);
+    size_t count = 0;
+    for (size_t v = 0; v < n.irradiance.size(); ++v)
+        if (v < n.samples.size() && n.samples[v] > 0) sumN += luminance(n.irradiance[v]), ++count;
+    if (sumK <= 0 || count == 0) return std::nullopt;
+    return (sumN / double(count)) / (sumK / double(k.irradiance.size()));
 }
 
 size_t IndirectSolver::totalVertices() const {

@@ -219,6 +219,15 @@ size_t Scene::triangleCount() const {
     return n;
 }
 
+double Scene::meanFreePath() const {
+    double area = 0;
+    for (const Mesh& m : meshes)
+        for (size_t t = 0; t < m.triangles.size(); ++t) area += m.area(t);
+    const Vec3 e = bounds.extent();
+    const double volume = e.x * e.y * e.z;
+    return area > 0 && volume > 0 ? 4 * volume / area : 0.0;
+}
+
 Camera Scene::cameraOrDefault(double aspect) const {
     return camera ? *camera : Camera::framing(bounds, aspect);
 }

@@ -195,6 +195,11 @@ struct Scene {
     void finalize();
 
     size_t triangleCount() const;
+    // The mean chord length 4V/S (Cauchy's formula for a convex enclosure):
+    // V the bounds' volume, S the triangles' one-sided area; how far a ray
+    // leaving a surface goes before it meets another, on average, in a room
+    // the bounds enclose. 0 when the bounds are flat or there is no area.
+    double meanFreePath() const;
     // The file's camera or, failing that, one framing the whole scene.
     Camera cameraOrDefault(double aspect) const;
     // True when any material has Ks > 0 (a specular pass is needed).

@@ -95,14 +95,39 @@ void IndirectChoice::decide(const Scene& scene) {
     // office of bench lights: 1/32 with 196 rays, 2.4% against 3.8% at 60 s;
     // cache/README.md); refinement may then split down to the finer of the
     // gather's least edge and an eighth of the base.
-    if (baseEdge > 0) {
-        solver.cache.maxEdgeFraction = baseEdge;
-        solver.cache.minEdgeFraction = std::min(solver.cache.minEdgeFraction, baseEdge / 8);
+    double base = baseEdge;
+    baseReason = base > 0 ? "as asked (--indirect-edge)" : "the gather's own";
+    if (base == 0 && method == "raytrace") {
+        const double diagonal = scene.bounds.diagonal(), path = scene.meanFreePath();
+        const double ratio = diagonal > 0 ? path / diagonal : 0;
+        // Indirect light curves over the distance between surfaces: the
+        // mean free path 4V/S, 0.23 of the diagonal in the office, 0.37 in
+        // the Cornell box. The base is that over kFreePathsPerBase, within
+        // 1/16..1/32 (the ray gather's least edge is 1/128); the rays
+        // shrink as the vertices grow, so that a bounce's first pass costs
+        // what it does at 1/16 with 400 rays (at least 100 rays).
+        base = std::clamp(ratio / kFreePathsPerBase, 1.0 / 32, 1.0 / 16);
+        baseReason = concat("the mean free path 4V/S over ", kFreePathsPerBase, ", 4V/S being ",
+                            std::lround(ratio * 1000) / 1000.0, " of the diagonal; within 1/16..1/32");
+        if (!gatherSizeSet && base < 1.0 / 16) {
+            const double shrink = base * 16;
+            // From the default, not the current size: decide() may run twice.
+            gather.imageSize = std::max(20, int(std::lround(GatherSettings().imageSize * shrink)));
+            baseReason += concat("; ", rayGatherSettings(*this).rays,
+                                 " rays per gather, fewer as the vertices are more (--gather-size keeps them)");
+        }
+    }
+    if (base > 0) {
+        solver.cache.maxEdgeFraction = base;
+        solver.cache.minEdgeFraction = std::min(solver.cache.minEdgeFraction, base / 8);
     }
     bounceCount = countBounces(scene, bounces);
     solver.bounces = enabled ? bounceCount.bounces : 0;
     solver.albedo = bounceCount.meanAlbedo;
-    solver.tailAlbedo = bounceCount.areaAlbedo;
+    // The bounces not gathered yet, in the image, each this times the one
+    // before: the ratio measured by rays where some surface is lit (it sees
+    // light leave an open room), else the area-weighted albedo.
+    solver.tailAlbedo = bounceCount.bounceRatio > 0 ? bounceCount.bounceRatio : bounceCount.areaAlbedo;
     // Dim, broad emitters come through bounce 1's rays, which read emission
     // where they land (GatheredLights.h); the proxy gathers read none.
     solver.gatheredLights.clear();

@@ -69,9 +69,20 @@ struct IndirectChoice {
     // the ray gather only; 0: none (--glow-ratio).
     double glowRatio = 0.02;
     // The bounce meshes' base edges, at most this fraction of the scene's
-    // diagonal; 0: the gather's own (1/16 for the ray gather, 1/8 for the
-    // voxel gathers) (--indirect-edge).
+    // diagonal; 0: chosen by decide() (the ray gather: the mean free path
+    // over kFreePathsPerBase; the voxel gathers: 1/8) (--indirect-edge).
     double baseEdge = 0;
+    // --gather-size was given: decide() keeps its rays (else the ray gather's
+    // rays follow the base edge it chooses).
+    bool gatherSizeSet = false;
+    // The ray gather's base edge, when not asked, is the mean free path
+    // (Scene::meanFreePath) over this, within 1/16..1/32 of the diagonal:
+    // 1/32 with 100 rays in the office of bench lights (2.8% at 60 s,
+    // against 3.3% at 1/22 with 225 rays and 3.9% at 1/16 with 400), 1/20
+    // with 240 rays in the Cornell box (0.80% at 30 s against 0.83% at 1/16
+    // with 400); cache/README.md.
+    static constexpr double kFreePathsPerBase = 7.5;
+    std::string baseReason;            // filled by decide(): how the bounce meshes' base edge was chosen
     std::string gatheredReason;        // filled by decide(): which lights are gathered and why, or why none
     IndirectSettings solver;           // bounces, albedo and gathered lights come from decide()
     BounceCount bounceCount;            // filled by decide()

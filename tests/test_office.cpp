@@ -3,6 +3,7 @@
 #include "core/Error.h"
 #include "core/reference/Lambert.h"
 #include "core/scenes/OfficeScene.h"
+#include "TestScenes.h"
 
 #include <gtest/gtest.h>
 
@@ -318,4 +319,34 @@ TEST(OfficeSettings, RefusesBadValuesNamingTheField) {
     refuses([](OfficeSettings& s) { s.partitions = 3; }, "partitions");
     refuses([](OfficeSettings& s) { s.panelsX = 14; }, "panels");
     EXPECT_NO_THROW(OfficeSettings{}.validate());
+}
+
+// Scene::meanFreePath, which sets the bounce meshes' base (plan): 4V/S, the
+// mean chord of a convex room. A closed 4 x 2 x 1 box: V = 8, S = 2(8 + 4 +
+// 2) = 28, so 32/28 exactly (up to rounding); a lone flat quad has no
+// volume, so 0; the default office (V = 8 x 6 x 2.8 = 134.4 m³ and its
+// furniture's area on top of the room's 174.4 m²) lies below the bare
+// room's 4V/S = 3.08 m.
+TEST(Office, MeanFreePathIsFourVolumesOverTheArea) {
+    using test::addQuad;
+    using test::kX;
+    using test::kY;
+    using test::kZ;
+    Mesh box;
+    box.name = "box";
+    const Vec3 o(0.0), a = 4.0 * kX, b = 2.0 * kY, c = kZ;
+    addQuad(box, 0, o, b, a);
+    addQuad(box, 0, o + c, a, b);
+    addQuad(box, 0, o, a, c);
+    addQuad(box, 0, o + b, c, a);
+    addQuad(box, 0, o, c, b);
+    addQuad(box, 0, o + a, b, c);
+    const Scene closed = test::sceneOf("box", {Material::diffuse("grey", Rgb(0.5))}, {box});
+    EXPECT_NEAR(32.0 / 28.0, closed.meanFreePath(), 1e-12);
+    const Scene flat = test::sceneOf("quad", {Material::diffuse("grey", Rgb(0.5))},
+                                     {test::quadMesh("quad", 0, o, a, c)});
+    EXPECT_EQ(0.0, flat.meanFreePath());
+    const double office = makeOfficeScene().meanFreePath();
+    EXPECT_GT(office, 1.0);
+    EXPECT_LT(office, 4 * 134.4 / 174.4);
 }

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -65,8 +66,8 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
         const Rgb r = areaWeighted / total;
         plan.areaAlbedo = std::clamp(std::max({r.r, r.g, r.b}), 0.0, 1.0);
     }
-    Rgb weighted(0.0);
-    double weight = 0;
+    Rgb weighted(0.0), landed(0.0);
+    double weight = 0, leaving = 0;
     if (!tris.empty() && !scene.lights.empty()) {
         const EmbreeScene rt(scene);
         for (int i = 0; i < settings.points; ++i) {
@@ -114,9 +115,24 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             const Rgb kd = scene.albedo(tris[k].mesh, tris[k].tri);
             weighted += e * kd;
             weight += e;
+            // Where the light it reflects lands: one cosine-distributed ray
+            // on its front side, the albedo there.
+            const double reflected = e * luminance(kd);
+            if (reflected > 0) {
+                const Vec3 t = glm::normalize(std::abs(n.x) > 0.5 ? glm::cross(n, Vec3(0, 1, 0)) : glm::cross(n, Vec3(1, 0, 0)));
+                const Vec3 b = glm::cross(n, t);
+                const double u1 = uniform(settings.seed, uint32_t(i), 6), u2 = uniform(settings.seed, uint32_t(i), 7);
+                const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+                const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+                RayHit hit;
+                if (rt.intersect(rt.spawnPoint(x, n, w), w, 0, std::numeric_limits<double>::infinity(), hit))
+                    landed += reflected * scene.albedo(hit.mesh, hit.triangle);
+                leaving += reflected;
+            }
         }
     }
     if (weight > 0) plan.albedo = weighted / weight;
+    if (leaving > 0) plan.bounceRatio = std::clamp(std::max({landed.r, landed.g, landed.b}) / leaving, 0.0, 1.0);
     plan.meanAlbedo = std::clamp(std::max({plan.albedo.r, plan.albedo.g, plan.albedo.b}), 0.0, 1.0);
     const double a = plan.meanAlbedo;
     auto missingAfter = [&](int n) { return std::pow(a, n + 1); };

@@ -36,6 +36,13 @@ struct BounceCount {
     // later bounce to the one before. Larger than ā where direct light
     // lands on a dark floor in a light room (the office: 0.63 against 0.54).
     double areaAlbedo = 0;
+    // The ratio of bounce 2's reflected power to bounce 1's, by rays: from
+    // the points (weighted by the light they reflect, direct irradiance ×
+    // Kd), one cosine-distributed ray each, the albedo where it lands (0
+    // where it leaves the scene), largest channel. Below areaAlbedo where
+    // light escapes (the Cornell box's open front), near it in a closed
+    // room; 0 when no point is lit.
+    double bounceRatio = 0;
     int bounces = 0;
     double missing = 0;     // fraction of the reflected light left out: ā^(bounces+1)
     bool capped = false;    // the cap, not the fraction, set the count

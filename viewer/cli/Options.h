@@ -31,7 +31,10 @@ public:
     // returns false: the command has nothing more to do.
     bool parseOrPrintHelp(const std::vector<std::string>& args);
 
+    // A value was given or has a default.
     bool has(const std::string& name) const;
+    // The command line gave it (not its default).
+    bool given(const std::string& name) const { return values_.count(name) > 0; }
     bool isSet(const std::string& flagName) const { return has(flagName); }
     std::string str(const std::string& name) const;
     std::string positionalValue(const std::string& name) const;

@@ -238,8 +238,9 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
     if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare, indirect.solver.gatheredLights).describe().c_str());
     const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
-                "largest channel\n",
-                b.albedo.r, b.albedo.g, b.albedo.b, b.meanAlbedo);
+                "largest channel; bounce 2 carries %.3f of bounce 1's light (by rays; area-weighted albedo %.3f): "
+                "the ratio of the bounces not yet gathered in an early image\n",
+                b.albedo.r, b.albedo.g, b.albedo.b, b.meanAlbedo, b.bounceRatio, b.areaAlbedo);
     if (!indirect.enabled) {
         std::printf("  indirect light: not simulated (--direct-only); about %.3g%% of the reflected light is left out\n",
                     100 * b.meanAlbedo);
@@ -263,10 +264,10 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                         20.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
         }
         const CacheSettings& ic = indirect.solver.cache;
-        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene, split tolerance "
+        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene (%s), split tolerance "
                     "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
                     "starts %s\n",
-                    1 / ic.maxEdgeFraction, ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
+                    1 / ic.maxEdgeFraction, indirect.baseReason.c_str(), ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
                     concat("once direct light's first pass is complete, or once ", 100 * indirect.solver.startFraction,
                            "% of it is done if the rest would take over ", indirect.solver.startSeconds,
                            " s (a coarse first bounce is then in the first complete image, and bounce 1 is gathered "

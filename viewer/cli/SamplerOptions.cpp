@@ -58,8 +58,9 @@ void declareIndirectOptions(Options& o) {
             concat(g.resolution));
     o.value("gather-size", "N", "fish-eye gather image N x N pixels", concat(g.imageSize));
     o.value("indirect-edge", "F",
-            "the bounce meshes' base edges at most F x the scene diagonal (default: 1/16 for raytrace, 1/8 for "
-            "the voxel gathers); a large room's indirect light needs finer ones (cache/README.md)");
+            "the bounce meshes' base edges at most F x the scene diagonal (default: for raytrace the scene's mean "
+            "free path 4V/S over 7.5, within 1/16..1/32, with fewer rays as it is finer; 1/8 for the voxel "
+            "gathers); plan says which (cache/README.md)");
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
     o.value("glow-ratio", "F",
@@ -88,6 +89,7 @@ IndirectChoice readIndirectOptions(const Options& o) {
     }
     c.gather.resolution = o.integer("voxels", 4, 512);
     c.gather.imageSize = o.integer("gather-size", 4, 1024);
+    c.gatherSizeSet = o.given("gather-size");
     c.gather.nearVoxels = o.integer("near-voxels", 0, 8);
     c.gather.sliceSupersample = o.integer("slice-supersample", 1, 8);
     c.gather.validate();
