@@ -1,5 +1,9 @@
 #include "CameraOptions.h"
 
+#include "core/raytrace/DefaultCamera.h"
+
+#include <cstdio>
+
 namespace ml {
 
 void declareViewOptions(Options& o) {
@@ -9,7 +13,7 @@ void declareViewOptions(Options& o) {
 }
 
 void declareCameraOptions(Options& o) {
-    o.value("camera-pos", "X,Y,Z", "camera position (default: the scene's camera or a framing one)");
+    o.value("camera-pos", "X,Y,Z", "camera position (default: the scene's camera, else one framing it from outside or, for a closed interior, one inside under a light)");
     o.value("camera-target", "X,Y,Z", "point the camera looks at");
     o.value("camera-up", "X,Y,Z", "camera up vector");
     o.value("fov", "DEG", "vertical field of view, degrees");
@@ -17,6 +21,13 @@ void declareCameraOptions(Options& o) {
 
 Camera cameraFromOptions(const Options& o, const Scene& scene, double aspect) {
     Camera c = scene.cameraOrDefault(aspect);
+    // No camera in the file and none asked: outside, unless that view is of
+    // a closed interior's outer walls (core/raytrace/DefaultCamera.h).
+    if (!scene.camera && !o.has("camera-pos")) {
+        const CameraChoice choice = chooseDefaultCamera(scene, aspect);
+        if (choice.camera.position != c.position) std::printf("camera: %s\n", choice.reason.c_str());
+        c = choice.camera;
+    }
     if (o.has("camera-pos")) c.position = o.vec3("camera-pos");
     if (o.has("camera-target")) c.target = o.vec3("camera-target");
     if (o.has("camera-up")) c.up = o.vec3("camera-up");
