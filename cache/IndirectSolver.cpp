@@ -278,6 +278,19 @@ bool IndirectSolver::firstBounceGathered() const {
     return !caches_.empty() && caches_.front()->unsampledCount() == 0;
 }
 
+// Bounce k + 1's mean irradiance (luminance) over its gathered vertices
+// against bounce k's over all of its (the same base mesh; copies as the
+// caches hold them); nullopt where either has nothing.
+static std::optional<double> meanRatio(const IrradianceMeshCopy& k, const IrradianceMeshCopy& n) {
+    double sumK = 0, sumN = 0;
+    for (const Rgb& e : k.irradiance) sumK += luminance(e);
+    size_t count = 0;
+    for (size_t v = 0; v < n.irradiance.size(); ++v)
+        if (v < n.samples.size() && n.samples[v] > 0) sumN += luminance(n.irradiance[v]), ++count;
+    if (sumK <= 0 || count == 0) return std::nullopt;
+    return (sumN / double(count)) / (sumK / double(k.irradiance.size()));
+}
+
 std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     if (!stale_.empty() && !firstBounceShown()) return stale_;
     // The bounces whose first pass is complete, bounce 1 from a quarter of
@@ -293,10 +306,20 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     // (as bounce 1 is shown): its first pass visits vertices in a scattered
     // order and its copies fill the rest from gathered neighbours, whose
     // predicted error (kGuessedLightError) the estimate carries.
-    const std::optional<double> ratio = measuredBounceRatio(complete);
-    if (ratio) ++complete;
+    // Each copy is made once: the ratio reads them before their hidden
+    // vertices are filled (copyMesh).
     std::vector<IrradianceMeshCopy> v;
-    for (int b = 1; b <= complete; ++b) v.push_back(copyMesh(b));
+    for (int b = 1; b <= complete; ++b) v.push_back(caches_[size_t(b - 1)]->copyMesh(0));
+    std::optional<double> ratio;
+    if (gatheredEnoughToShow(complete)) {
+        IrradianceMeshCopy next = caches_[size_t(complete)]->copyMesh(0);
+        ratio = meanRatio(v.back(), next);
+        if (ratio) {
+            v.push_back(std::move(next));
+            ++complete;
+        }
+    }
+    for (IrradianceMeshCopy& m : v) fillHiddenVertices(m);
     if (complete == 0 || complete >= settings_.bounces) return v;
     // The bounces still to come, each r times the one before: Σ_{j=1..N−k} r^j
     // times the last bounce shown, k. r is measured once bounce k is shown
@@ -321,22 +344,15 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     return v;
 }
 
-std::optional<double> IndirectSolver::measuredBounceRatio(int bounce) const {
-    if (bounce < 1 || bounce >= started()) return std::nullopt;
+bool IndirectSolver::gatheredEnoughToShow(int bounce) const {
+    if (bounce < 1 || bounce >= started()) return false;
     const IrradianceCache& last = *caches_[size_t(bounce - 1)];
     const IrradianceCache& next = *caches_[size_t(bounce)];
     const size_t gathered = next.totalVertices() - next.unsampledCount();
     // A quarter of the base, as for showing bounce 1 (firstBounceShown).
-    if (last.level() > 0 || 4 * gathered < next.totalVertices() || last.totalVertices() == 0) return std::nullopt;
-    const IrradianceMeshCopy k = last.copyMesh(0), n = next.copyMesh(0);
-    double sumK = 0, sumN = 0;
-    for (const Rgb& e : k.irradiance) sumK += luminance(e);
-    size_t count = 0;
-    for (size_t v = 0; v < n.irradiance.size(); ++v)
-        if (v < n.samples.size() && n.samples[v] > 0) sumN += luminance(n.irradiance[v]), ++count;
-    if (sumK <= 0 || count == 0) return std::nullopt;
-    return (sumN / double(count)) / (sumK / double(k.irradiance.size()));
+    return last.level() == 0 && 4 * gathered >= next.totalVertices() && last.totalVertices() > 0;
 }
+
 
 size_t IndirectSolver::totalVertices() const {
     size_t n = 0;

@@ -168,10 +168,10 @@ private:
     CacheSettings settingsFor(int bounce) const;
     // The first bounce whose cache has vertices without a sample (0: none).
     int firstPassBounce() const;
-    // Bounce `bounce + 1`'s mean irradiance over bounce `bounce`'s, from
-    // the vertices bounce + 1 has gathered, once they are a quarter of its
-    // base and bounce `bounce` is still its base; nullopt before.
-    std::optional<double> measuredBounceRatio(int bounce) const;
+    // Bounce `bounce + 1` has gathered a quarter of its base and bounce
+    // `bounce` is still that base (not refined): it may be shown, and its
+    // mean over bounce `bounce`'s measures their ratio (displayMeshes).
+    bool gatheredEnoughToShow(int bounce) const;
     // Makes sure source `bounce − 1` holds what bounce `bounce` gathers from.
     void prepareSource(IndirectEstimator& estimator, int bounce,
                        const std::function<std::vector<IrradianceMeshCopy>()>& direct);

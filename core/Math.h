@@ -48,6 +48,14 @@ inline void orthonormalBasis(const Vec3& n, Vec3& t, Vec3& b) {
     b = Vec3(c, sign + n.y * n.y * a, -n.y);
 }
 
+// A cosine-distributed direction about unit n, (t, b, n) orthonormal, from
+// two uniforms in [0, 1) by Malley's method: the disk point (√u1, 2π·u2)
+// lifted onto the hemisphere.
+inline Vec3 cosineDirection(const Vec3& n, const Vec3& t, const Vec3& b, double u1, double u2) {
+    const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+    return r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+}
+
 // Luminance of linear Rec.709 RGB: how bright a value looks on screen (tone
 // mapping, exposure, noise measures). Lux and lumens take the photometry's
 // weights instead (core/image/Photometry.h).

@@ -122,8 +122,7 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
                 const Vec3 t = glm::normalize(std::abs(n.x) > 0.5 ? glm::cross(n, Vec3(0, 1, 0)) : glm::cross(n, Vec3(1, 0, 0)));
                 const Vec3 b = glm::cross(n, t);
                 const double u1 = uniform(settings.seed, uint32_t(i), 6), u2 = uniform(settings.seed, uint32_t(i), 7);
-                const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-                const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+                const Vec3 w = cosineDirection(n, t, b, u1, u2);
                 RayHit hit;
                 if (rt.intersect(rt.spawnPoint(x, n, w), w, 0, std::numeric_limits<double>::infinity(), hit))
                     landed += reflected * scene.albedo(hit.mesh, hit.triangle);

@@ -113,8 +113,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         for (int j = 0; j < s; ++j) {
             // Cosine-weighted by Malley's method over a jittered stratum.
             const double u1 = (i + next()) / s, u2 = (j + next()) / s;
-            const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-            const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+            const Vec3 w = cosineDirection(n, t, b, u1, u2);
             // Through mirrors and glass to the diffuse surface behind, each
             // surface on the way read on the side the ray arrives on (a
             // closed object's inside is black); a smooth layer's own Kd too.

@@ -347,8 +347,7 @@ Rgb VirtualPointLights::nearCompensation(const Source& source, const Vec3& x, co
         for (int j = 0; j < strata; ++j) {
             // Cosine-weighted (Malley) over a jittered stratum: E = π/M Σ L·w.
             const double u1 = (i + next()) / strata, u2 = (j + next()) / strata;
-            const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-            const Vec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n;
+            const Vec3 w = cosineDirection(n, t, b, u1, u2);
             RayHit hit;
             if (!rays_->intersect(origin, w, 0.0, kInf, hit)) continue;
             const SurfacePoint y = rays_->surface(hit);
