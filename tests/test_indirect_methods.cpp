@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -392,3 +393,92 @@ TEST(IndirectConsistency, RayGatherMatchesThePathTracerInCornersAndContacts) {
 }
 
 }  // namespace
+
+// --- Point location ------------------------------------------------------------------
+
+// MeshIrradianceLookup against the definition it implements, by brute
+// force: the irradiance interpolated on the nearest face among those facing
+// the point's side (normals within 60°), zero beyond the tolerance. Two
+// jittered grids meeting in a corner (a floor and a wall: the side test
+// must keep them apart), at three scales and far from the origin (the
+// records hold corners as floats relative to their bin). Points on the faces
+// (a ray's end), off them and beyond the mesh's border by half the
+// tolerance (found), by twice the tolerance (zero), and seen from the wrong
+// side (zero). Equal within 1e-6 of the largest irradiance (10): the
+// records' float edge vectors place a point on its face to about 1e-7 of
+// the face; where two faces are equally near (an edge) both interpolate the
+// same two corners.
+TEST(MeshIrradianceLookup, AgreesWithTheNearestFaceByBruteForce) {
+    for (const double scale : {1e-3, 1.0, 1e4}) {
+        const Vec3 offset = scale * Vec3(1000, -500, 250);
+        IrradianceMeshCopy mesh;
+        std::mt19937 engine(7);
+        std::uniform_real_distribution<double> uniform(0.0, 1.0);
+        struct {
+            std::function<double()> next;
+        } jitter{[&] { return uniform(engine); }};
+        constexpr int kN = 12;
+        // Plane 0: the floor z = 0, up; plane 1: the wall x = 0, facing +x.
+        const auto at = [&](int plane, double s, double t) {
+            return offset + scale * (plane == 0 ? Vec3(s, t, 0) : Vec3(0, s, t));
+        };
+        for (int plane = 0; plane < 2; ++plane) {
+            const uint32_t base = uint32_t(mesh.positions.size());
+            for (int i = 0; i <= kN; ++i)
+                for (int j = 0; j <= kN; ++j) {
+                    // Interior corners jittered, the border kept straight.
+                    const bool inside = i > 0 && j > 0 && i < kN && j < kN;
+                    const double s = (i + (inside ? 0.6 * (jitter.next() - 0.5) : 0.0)) / kN;
+                    const double t = (j + (inside ? 0.6 * (jitter.next() - 0.5) : 0.0)) / kN;
+                    mesh.positions.push_back(at(plane, s, t));
+                    mesh.normals.push_back(plane == 0 ? Vec3(0, 0, 1) : Vec3(1, 0, 0));
+                    mesh.irradiance.push_back(Rgb(1 + 9 * jitter.next(), 1 + 9 * jitter.next(), 1 + 9 * jitter.next()));
+                }
+            const auto index = [&](int i, int j) { return base + uint32_t(i * (kN + 1) + j); };
+            for (int i = 0; i < kN; ++i)
+                for (int j = 0; j < kN; ++j) {
+                    // Counter-clockwise about +z on the floor, +x on the wall.
+                    mesh.triangles.emplace_back(index(i, j), index(i + 1, j), index(i + 1, j + 1));
+                    mesh.triangles.emplace_back(index(i, j), index(i + 1, j + 1), index(i, j + 1));
+                }
+        }
+        const double diagonal = scale * std::sqrt(3.0);
+        const double tolerance = 1e-5 * diagonal;
+        const MeshIrradianceLookup lookup(mesh, diagonal / 64, tolerance);
+        const auto bruteForce = [&](const Vec3& p, const Vec3& n) {
+            double best = tolerance * tolerance;
+            Rgb result(0.0);
+            for (const glm::uvec3& f : mesh.triangles) {
+                const Vec3 &a = mesh.positions[f.x], &b = mesh.positions[f.y], &c = mesh.positions[f.z];
+                if (glm::dot(glm::normalize(glm::cross(b - a, c - a)), n) < 0.5) continue;
+                const Vec3 w = closestBarycentric(p, a, b, c);
+                const Vec3 q = w.x * a + w.y * b + w.z * c;
+                if (glm::dot(q - p, q - p) > best) continue;
+                best = glm::dot(q - p, q - p);
+                result = w.x * mesh.irradiance[f.x] + w.y * mesh.irradiance[f.y] + w.z * mesh.irradiance[f.z];
+            }
+            return result;
+        };
+        int found = 0, empty = 0;
+        for (int k = 0; k < 4000; ++k) {
+            const int plane = k % 2;
+            const Vec3 n = plane == 0 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
+            const double s = jitter.next(), t = jitter.next();
+            Vec3 p = at(plane, s, t);
+            Vec3 side = n;
+            switch ((k / 2) % 5) {
+                case 0: break;                                                            // on the face
+                case 1: p += 0.5 * tolerance * n * (jitter.next() < 0.5 ? 1.0 : -1.0); break;  // off it
+                case 2: p = at(plane, 1 + 0.5 * tolerance / scale, t); break;               // past the border
+                case 3: p += 2 * tolerance * n; break;                                    // too far: zero
+                case 4: side = -n; break;                                                 // the wrong side: zero
+            }
+            const Rgb expected = bruteForce(p, side), got = lookup.at(p, side);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[c], expected[c], 1e-5) << "scale " << scale << ", point " << k;
+            (luminance(expected) > 0 ? found : empty) += 1;
+        }
+        // Cases 0-2 are found, 3 and 4 are not.
+        EXPECT_EQ(found, 2400) << "scale " << scale;
+        EXPECT_EQ(empty, 1600) << "scale " << scale;
+    }
+}

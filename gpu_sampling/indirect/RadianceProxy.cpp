@@ -49,16 +49,12 @@ MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, doubl
     for (int a = 0; a < 3; ++a)
         dims_[size_t(a)] = std::clamp(int(std::ceil((b.hi[a] - b.lo[a] + 2 * tolerance) / cell_)) + 1, 1, 1024);
     const size_t binCount = size_t(dims_[0]) * dims_[1] * dims_[2];
-    faces_.resize(mesh.triangles.size());
     // Each face's range of bins (its bounding box grown by the tolerance).
     std::vector<std::array<int, 6>> ranges(mesh.triangles.size());
     binStart_.assign(binCount + 1, 0);
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
         const glm::uvec3 i = mesh.triangles[t];
         const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
-        const Vec3 n = glm::cross(p1 - p0, p2 - p0);
-        const Vec3 unit = glm::length(n) > 0 ? glm::normalize(n) : Vec3(0.0);
-        faces_[t] = {float(unit.x), float(unit.y), float(unit.z), i};
         std::array<int, 6>& r = ranges[t];
         for (int a = 0; a < 3; ++a) {
             const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance, mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
@@ -77,6 +73,24 @@ MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, doubl
     binFaces_.resize(binStart_[binCount]);
     std::vector<uint32_t> next(binStart_.begin(), binStart_.end() - 1);
     for (size_t t = 0; t < ranges.size(); ++t) eachBin(ranges[t], [&](size_t bin) { binFaces_[next[bin]++] = uint32_t(t); });
+    faces_.resize(mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::uvec3 i = mesh.triangles[t];
+        const Vec3& p0 = mesh.positions[i.x];
+        const Vec3 e1 = mesh.positions[i.y] - p0, e2 = mesh.positions[i.z] - p0, n = glm::cross(e1, e2);
+        const double nn = glm::dot(n, n);
+        // A degenerate face gets a zero normal: the side test skips it.
+        const Vec3 unit = nn > 0 ? n / std::sqrt(nn) : Vec3(0.0);
+        const Vec3 u = nn > 0 ? glm::cross(e2, n) / nn : Vec3(0.0), v = nn > 0 ? glm::cross(n, e1) / nn : Vec3(0.0);
+        Face& f = faces_[t];
+        f.a = p0;
+        for (int k = 0; k < 3; ++k) {
+            f.n[k] = float(unit[k]);
+            f.u[k] = float(u[k]);
+            f.t[k] = float(v[k]);
+            f.corners[k] = i[k];
+        }
+    }
 }
 
 Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
@@ -88,13 +102,38 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         c[size_t(a)] = i;
     }
     double best = tolerance_ * tolerance_;
+    // A face this near p's plane holds p: the float normal's rounding is
+    // about 1e-7 of a bin, so nothing else is nearer by more than that.
+    const double onFace = std::min(1e-4 * best, 1e-10 * cell_ * cell_);
     Rgb result(0.0);
     const size_t bin = (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
+    const auto dot = [](const float* f, const Vec3& v) { return double(f[0]) * v.x + double(f[1]) * v.y + double(f[2]) * v.z; };
     for (uint32_t k = binStart_[bin]; k < binStart_[bin + 1]; ++k) {
         const Face& f = faces_[binFaces_[k]];
         // The other side, or a crease beyond 60°.
-        if (double(f.nx) * n.x + double(f.ny) * n.y + double(f.nz) * n.z < 0.5) continue;
-        const glm::uvec3 i = f.corners;
+        if (dot(f.n, n) < 0.5) continue;
+        const Vec3 ap = p - f.a;
+        const double plane = dot(f.n, ap);
+        if (plane * plane > best) continue;  // no point of the face is nearer than its plane
+        const glm::uvec3 i(f.corners[0], f.corners[1], f.corners[2]);
+        // p's projection inside the face (within rounding): the plane's
+        // distance is the face's.
+        const double bv = dot(f.u, ap), bw = dot(f.t, ap);
+        constexpr double kSlack = 1e-6;
+        if (bv >= -kSlack && bw >= -kSlack && bv + bw <= 1 + kSlack) {
+            best = plane * plane;
+            result = (1 - bv - bw) * mesh_.irradiance[i.x] + bv * mesh_.irradiance[i.y] + bw * mesh_.irradiance[i.z];
+            if (best <= onFace) break;
+            continue;
+        }
+        // Outside it: at least the violated barycentric over its gradient's
+        // length (1/height) from it within the plane; so nearly every face
+        // of the bin but the one holding p is passed over here.
+        const auto outside = [](double b, double g2) { return b < 0 ? b * b / g2 : 0.0; };
+        const Vec3 gu(f.u[0], f.u[1], f.u[2]), gt(f.t[0], f.t[1], f.t[2]);
+        const double inPlane = std::max({outside(bv, glm::dot(gu, gu)), outside(bw, glm::dot(gt, gt)),
+                                         outside(1 - bv - bw, glm::dot(gu + gt, gu + gt))});
+        if (plane * plane + inPlane > best) continue;
         const Vec3 w = closestBarycentric(p, mesh_.positions[i.x], mesh_.positions[i.y], mesh_.positions[i.z]);
         const Vec3 q = w.x * mesh_.positions[i.x] + w.y * mesh_.positions[i.y] + w.z * mesh_.positions[i.z];
         const double d2 = glm::dot(q - p, q - p);

@@ -66,17 +66,24 @@ class MeshIrradianceLookup {
 public:
     MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance);
     Rgb at(const Vec3& p, const Vec3& n) const;
+    // The records and bins (not the mesh, which the caller keeps).
+    size_t memoryBytes() const {
+        return faces_.size() * sizeof(Face) + (binStart_.size() + binFaces_.size()) * sizeof(uint32_t);
+    }
 
 private:
-    // What a lookup reads of a face before its closest point: its unit
-    // normal (float: only compared with 0.5) and its corners, in one
-    // record. A bounce-1 gather looks up every light's mesh at each ray's
-    // end (13 in the office, 5,200 lookups a gather) and was bound by
-    // memory: a bin's vector, then the face's normal, then its corners,
-    // each a cache miss.
+    // What a lookup reads of a face: a bounce-1 gather looks up every
+    // light's mesh at each ray's end (13 in the office, 5,200 lookups a
+    // gather) and is bound by memory, so each face is one record: its first
+    // corner a, unit normal and dual edge vectors u and t. The barycentrics
+    // (v, w) of a point's projection are (u·(p − a), t·(p − a)): a point on
+    // the face (a ray's end, nearly always) is placed by three dot products,
+    // and the faces beside it are passed over by the bound those give on
+    // their distance, without a closest-point search.
     struct Face {
-        float nx, ny, nz;
-        glm::uvec3 corners;
+        Vec3 a;
+        float n[3], u[3], t[3];
+        uint32_t corners[3];
     };
     const IrradianceMeshCopy& mesh_;
     std::vector<Face> faces_;
