@@ -97,7 +97,13 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->vertices = cache_.totalVertices();
     snap->samples = cache_.totalSamples();
     snap->rounds = cache_.rounds();
-    snap->directError = cache_.estimatedError(view);
+    // Only this thread changes the cache while the worker lives, and each
+    // change adds a round, a level, a sample or a vertex: an unchanged cache
+    // seen from the same camera keeps its score.
+    const std::array<uint64_t, 5> state{cache_.rounds(), uint64_t(cache_.level()), cache_.totalSamples(),
+                                        uint64_t(cache_.totalVertices()), cameraSerial};
+    if (!lastDirectError_ || lastDirectError_->first != state) lastDirectError_ = {state, cache_.estimatedError(view)};
+    snap->directError = lastDirectError_->second;
     if (indirect_) {
         snap->indirect = indirect_->displayMeshes();
         // While direct light's first pass is incomplete, bounce 1 reflects
