@@ -227,7 +227,11 @@ void CacheWorker::run() {
                 // direct light as far as it is (gathered again when complete).
                 // With a stand-in for it in the image, it waits for direct
                 // light's first pass instead (WorkerSettings::indirectStandIn).
-                const bool early = indirect_->showingStale() || (firstPass >= is.startFraction && left > is.startSeconds);
+                // A sample budget makes the same cache on any machine, loaded
+                // or not: the rate, a wall-clock measure, does not decide the
+                // start then, and indirect light waits for the first pass.
+                const bool slow = !settings_.maxSamples && left > is.startSeconds;
+                const bool early = indirect_->showingStale() || (firstPass >= is.startFraction && slow);
                 if (!indirectStarted && (directConverged || unsampled == 0 || (early && !settings_.indirectStandIn))) {
                     indirectStarted = true;
                     sourceIncomplete = unsampled > 0;

@@ -53,7 +53,10 @@ struct IndirectSettings {
     // rest from sampled neighbours), so that a coarse first bounce is in the
     // first complete image; bounce 1 is then gathered again when direct
     // light's first pass completes (restart). Early starts cost that second
-    // gather, so short first passes are waited for.
+    // gather, so short first passes are waited for. Under a sample budget
+    // (WorkerSettings::maxSamples) the start never depends on a rate, so
+    // that the budget makes the same cache on any machine: indirect light
+    // waits for the first pass.
     double startFraction = 0.1;
     double startSeconds = 2.0;
     // Per scene light, 1 when bounce 1's gather reads its emission where its

@@ -163,11 +163,12 @@ TEST(SamplerPool, ThreadsGiveTheSameCacheAsOneForASampleBudget) {
     IndirectChoice indirect;
     indirect.bounces.forced = 2;
     indirect.decide(scene);
-    auto run = [&](int threads) {
+    auto run = [&](int threads, double startSeconds = IndirectSettings{}.startSeconds) {
         SessionSettings s;
         s.worker.threads = threads;
         s.worker.seed = 5;
         s.indirect = indirect.solver;
+        s.indirect->startSeconds = startSeconds;
         StopRule stop;
         stop.samples = 12000;
         ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect), stop);
@@ -180,13 +181,23 @@ TEST(SamplerPool, ThreadsGiveTheSameCacheAsOneForASampleBudget) {
         return meshes;
     };
     const std::vector<IrradianceMeshCopy> one = run(1), two = run(2), three = run(3);
+    // Nor on the machine's speed: indirect light starts early when direct
+    // light's first pass would take longer than startSeconds at the measured
+    // rate; at 0 s every rate would start it early, at 1e9 s none, and a
+    // loaded machine lies between. Under a budget it waits either way.
+    const std::vector<IrradianceMeshCopy> fast = run(1, 1e9), slow = run(1, 0.0);
     ASSERT_EQ(one.size(), two.size());
     ASSERT_EQ(one.size(), three.size());
+    ASSERT_EQ(fast.size(), slow.size());
     for (size_t m = 0; m < one.size(); ++m) {
         ASSERT_EQ(one[m].positions, two[m].positions) << "mesh " << m;
         EXPECT_EQ(one[m].irradiance, two[m].irradiance) << "mesh " << m;
         EXPECT_EQ(one[m].irradiance, three[m].irradiance) << "mesh " << m;
         EXPECT_EQ(one[m].samples, two[m].samples) << "mesh " << m;
+    }
+    for (size_t m = 0; m < fast.size(); ++m) {
+        ASSERT_EQ(fast[m].positions, slow[m].positions) << "mesh " << m;
+        EXPECT_EQ(fast[m].irradiance, slow[m].irradiance) << "mesh " << m;
     }
 }
 

@@ -271,8 +271,8 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                     concat("once direct light's first pass is complete, or once ", 100 * indirect.solver.startFraction,
                            "% of it is done if the rest would take over ", indirect.solver.startSeconds,
                            " s (a coarse first bounce is then in the first complete image, and bounce 1 is gathered "
-                           "again when direct light is complete), and shares the worker with direct light by their "
-                           "errors").c_str());
+                           "again when direct light is complete; not under --samples, whose cache must not depend on "
+                           "the machine's speed), and shares the worker with direct light by their errors").c_str());
     }
     printSpecularPass(scene);
     printSpecularMaterials(scene);
