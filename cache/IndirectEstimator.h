@@ -39,9 +39,12 @@ public:
     // reflecting the sum of these meshes' irradiance (meshes laid over the
     // scene as IrradianceCache::view makes them: every light's direct mesh,
     // or one bounce's indirect mesh). Bounce n gathers from slot n−1.
-    // `importance` (0, 1] is the share of light this source gives relative
-    // to bounce 1's (about ā^(n−1) for bounce n): an estimator may spend
-    // less per estimate on a weak bounce (a smaller image, fewer rays).
+    // `importance` (0, 1] is what an estimate from this source is worth
+    // against one of bounce 1's pass 2: the share of light the source gives
+    // relative to bounce 1's (about ā^(n−1) for bounce n), times the first
+    // pass's share (IndirectSettings::firstPassGathers) while that is
+    // gathered. An estimator may spend less per estimate on a weak bounce or
+    // a first pass (a smaller image, fewer rays).
     virtual void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance,
                            double importance = 1.0) = 0;
     // Frees a slot's memory; estimating from it again needs setSource.

@@ -59,6 +59,22 @@ struct IndirectSettings {
     // waits for the first pass.
     double startFraction = 0.1;
     double startSeconds = 2.0;
+    // A bounce's first pass (its base mesh gathered once: the first
+    // complete image) spends at most this many full gathers: with more base
+    // vertices than that, each first-pass gather spends this over their
+    // number (the estimator's `importance` is scaled by it,
+    // IndirectEstimator::setSource: the ray gather casts that share of its
+    // rays); later passes spend the full amount. On this machine the
+    // office's base (9,941 vertices, 100 rays, 13 meshes looked up per ray)
+    // took 2.6 s to gather once. Measured with render office --width 320
+    // --height 180 against the 2,048-spp reference (raw relative RMSE): at
+    // 5 s, 8.0% and 18.9% (two runs, the second before bounce 2 was shown)
+    // at full effort, 6.0% and 6.7% at half (49 rays); at 15 s the same
+    // (4.4-4.5%); at 60 s 2.52% and 2.81% net of the reference's noise (the
+    // first pass's samples stay in the vertices' means). Every gather at 49
+    // rays gave 2.87% at 60 s. The Cornell box's base (fewer vertices) is
+    // gathered at full effort: half cost it 0.05% at 3 and 10 s.
+    double firstPassGathers = 5000;
     // Per scene light, 1 when bounce 1's gather reads its emission where its
     // rays land instead of the direct sampler sampling it (GatheredLights.h;
     // empty: none). The direct meshes then leave it out (LightCoverage), so
@@ -149,12 +165,12 @@ public:
     // gathered. A bounce being gathered is not shown until it is complete,
     // except bounce 1 (see firstBounceShown).
     std::vector<IrradianceMeshCopy> displayMeshes() const;
-    // Bounce 1 is shown once a quarter of its base is gathered (its first
+    // Bounce 1 is shown once a sixteenth of its base is gathered (its first
     // pass visits vertices in a scattered order and copies fill the rest
-    // from gathered neighbours, so no vertex is more than a ring or two
-    // from a gathered one) or while it is gathered again after restart():
-    // a rough first bounce is much nearer the truth than none, which leaves
-    // a room's ceiling black.
+    // from gathered neighbours, ring after ring; shownOnceGathered in
+    // IndirectSolver.cpp says what was measured) or while it is gathered
+    // again after restart(): a rough first bounce is much nearer the truth
+    // than none, which leaves a room's ceiling black.
     bool firstBounceShown() const;
     // Bounce 1's first pass (or its regathering after restart()) is done.
     bool firstBounceGathered() const;
@@ -171,19 +187,22 @@ private:
     CacheSettings settingsFor(int bounce) const;
     // The first bounce whose cache has vertices without a sample (0: none).
     int firstPassBounce() const;
-    // Bounce `bounce + 1` has gathered a quarter of its base and bounce
+    // Bounce `bounce + 1` has gathered a sixteenth of its base and bounce
     // `bounce` is still that base (not refined): it may be shown, and its
     // mean over bounce `bounce`'s measures their ratio (displayMeshes).
     bool gatheredEnoughToShow(int bounce) const;
     // Makes sure source `bounce − 1` holds what bounce `bounce` gathers from.
+    // A source built for a first pass (firstPassGathers) is built again for
+    // the second.
     void prepareSource(IndirectEstimator& estimator, int bounce,
-                       const std::function<std::vector<IrradianceMeshCopy>()>& direct);
+                       const std::function<std::vector<IrradianceMeshCopy>()>& direct, bool firstPass);
 
     const Scene& scene_;
     IndirectSettings settings_;
     std::vector<std::unique_ptr<IrradianceCache>> caches_;
     int finished_ = 0;
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
+    std::vector<bool> sourceForFirstPass_;  // by slot: built for a first pass
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
     bool regathering_ = false;       // bounce 1 gathered again since restart()
     bool restarted_ = false;         // first passes gathered again since restart(), not done yet

@@ -366,7 +366,9 @@ TEST(CacheWorker, ReadersSeeWholeSnapshotsInOrderWhileRefinementRuns) {
         ASSERT_EQ(m.positions.size(), s->vertices);
         for (const glm::uvec3& t : m.triangles) ASSERT_LT(std::max({t.x, t.y, t.z}), m.positions.size());
         for (size_t v = 0; v < m.positions.size(); ++v)
-            if (m.samples[v]) ASSERT_EQ(step(0, m.positions[v], m.normals[v], 0).irradiance, m.irradiance[v]);
+            if (m.samples[v]) {
+                ASSERT_EQ(step(0, m.positions[v], m.normals[v], 0).irradiance, m.irradiance[v]);
+            }
     }
     worker.stop();
     worker.rethrowIfFailed();

@@ -121,8 +121,8 @@ TEST(ImageErrorEstimate, CornellBoxWithinOneAndAHalfOfThePathTracer) {
     // and bounce 2 half gathered, shown with the later bounces as a tail
     // of the ratio bounce 2 measures (12,000 samples: 2.5% measured), and
     // the bounces' first passes further on (24,000: under 1%, within the
-    // reference's noise). Not judged here: the state before bounce 2 has
-    // gathered a quarter of its base (9,000 samples), whose tail is bounce
+    // reference's noise). Not judged here: the state before bounce 2 is
+    // shown (it is from a sixteenth of its base on), whose tail is bounce
     // 1 times the ray-measured ratio: 9.8% measured against 5.4% estimated
     // (cache/README.md).
     expectWithinFactor(compare(makeCornellBox(), 64, 64, 2048, {12000, 24000}), 1.5);

@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -457,6 +458,60 @@ TEST(UniformBox, OneGatherIsPiTimesTheRadiance) {
         EXPECT_NEAR(s.g / 4 / (kPi * 0.5), 1.0, 0.005) << "point " << i;
     }
 }
+
+// --- The first pass's effort ------------------------------------------------------
+
+// Records what each setSource was asked to spend; every estimate is 1.
+struct EffortRecorder : IndirectEstimator {
+    std::vector<std::pair<size_t, double>> built;  // (slot, importance) per setSource
+    std::string name() const override { return "recorder"; }
+    void setSource(size_t slot, const std::vector<IrradianceMeshCopy>&, double importance) override {
+        built.push_back({slot, importance});
+    }
+    void releaseSource(size_t) override {}
+    Rgb estimate(size_t, const Vec3&, const Vec3&, uint32_t) override { return Rgb(1.0); }
+    IndirectStats stats() const override { return {}; }
+};
+
+// Each source built while the first passes run, and only those, spends
+// firstPassGathers over the base's vertices (times ā^(n−1) for bounce n);
+// a base no larger than firstPassGathers is gathered at full effort.
+void expectFirstPassEffort(double firstPassGathers) {
+    const Scene scene = test::furnaceBox(0.5, 0.0);
+    IndirectSettings is;
+    is.bounces = 2;
+    is.albedo = 0.5;
+    is.firstPassGathers = firstPassGathers;
+    IndirectSolver solver(scene, is);
+    EffortRecorder recorder;
+    const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, 1.0);
+    size_t firstPassBuilds = 0, laterBuilds = 0;
+    for (int r = 0; r < 400 && !solver.allFinished(); ++r) {
+        const bool first = !solver.firstPassDone();
+        const size_t before = recorder.built.size();
+        solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+        const double base = double(solver.cache(1).level() == 0 ? solver.cache(1).totalVertices() : 0);
+        for (size_t k = before; k < recorder.built.size(); ++k) {
+            const auto [slot, importance] = recorder.built[k];
+            const double share = std::pow(0.5, double(slot));
+            if (first) {
+                ASSERT_GT(base, 0.0) << "the base is refined during the first pass";
+                const double effort = std::min(1.0, firstPassGathers / base);
+                EXPECT_DOUBLE_EQ(importance, effort * share) << "first pass, slot " << slot;
+                ++firstPassBuilds;
+            } else {
+                EXPECT_DOUBLE_EQ(importance, share) << "pass 2, slot " << slot;
+                ++laterBuilds;
+            }
+        }
+    }
+    ASSERT_TRUE(solver.allFinished());
+    EXPECT_EQ(firstPassBuilds, 2u);  // one source per bounce
+    EXPECT_GE(laterBuilds, 1u);      // bounce 1's source is rebuilt for pass 2
+}
+
+TEST(FirstPassEffort, ALargeBaseIsGatheredFirstAtItsShare) { expectFirstPassEffort(10); }
+TEST(FirstPassEffort, ASmallBaseIsGatheredAtFullEffort) { expectFirstPassEffort(1e9); }
 
 }  // namespace
 }  // namespace ml

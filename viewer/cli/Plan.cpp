@@ -272,7 +272,10 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                            "% of it is done if the rest would take over ", indirect.solver.startSeconds,
                            " s (a coarse first bounce is then in the first complete image, and bounce 1 is gathered "
                            "again when direct light is complete; not under --samples, whose cache must not depend on "
-                           "the machine's speed), and shares the worker with direct light by their errors").c_str());
+                           "the machine's speed), and shares the worker with direct light by their errors; a "
+                           "bounce's first pass (its base gathered once) spends at most ",
+                           indirect.solver.firstPassGathers, " full gathers: a larger base is gathered first with "
+                           "that share of a gather's effort each, then refined at full effort").c_str());
     }
     printSpecularPass(scene);
     printSpecularMaterials(scene);
