@@ -6,12 +6,16 @@
 #include "core/Error.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
+#include "core/scenes/OfficeScene.h"
+#include "core/raytrace/EmbreeScene.h"
 #include "core/scenes/ScalingScene.h"
 #include "viewer/bench/BenchReport.h"
 #include "viewer/bench/BenchStatistics.h"
 #include "viewer/bench/BenchTable.h"
 #include "viewer/bench/CyclesRunner.h"
 #include "viewer/bench/NoisyReference.h"
+#include "viewer/bench/OfficeWalkthrough.h"
+#include "viewer/bench/WalkthroughViews.h"
 #include "viewer/bench/PowerLawFit.h"
 #include "viewer/bench/ReportHtml.h"
 
@@ -407,4 +411,41 @@ TEST(CyclesRunner, BlenderCanBeTurnedOff) {
         ::setenv("MESHLIGHT_BLENDER", keep.c_str(), 1);
     else
         ::unsetenv("MESHLIGHT_BLENDER");
+}
+
+// bench lights' walkthrough in three rooms: it starts at the office's own
+// view, keeps its eye at the camera's height (above every piece of
+// furniture, so it crosses none) and at least 0.5 m inside the walls, sees
+// only the room (checkViewsInside), and walks: from one of 30 views to the
+// next at most 1.5 (W + D) / 29 m and 20° of heading (the path is shorter
+// than W + D, 10.4 m in the default room of 14 m, and turns about 180°;
+// smoothstep timing peaks at 1.5× the mean pace).
+TEST(OfficeWalkthrough, StartsAtTheOfficeViewAndWalksInsideAboveTheFurniture) {
+    for (const char* spec : {"office", "office:size=16x10x3,panels=8x5", "office:size=4x3x2.8,desks=2,cabinets=2"}) {
+        SCOPED_TRACE(spec);
+        const OfficeSettings settings = parseOfficeSpec(spec);
+        const Scene scene = makeOfficeScene(settings);
+        const std::vector<Camera> cameras = officeWalkthroughCameras(scene, settings, 30);
+        ASSERT_EQ(cameras.size(), 30u);
+        const Camera& office = *scene.camera;
+        EXPECT_NEAR(glm::length(cameras[0].position - office.position), 0.0, 1e-12);
+        EXPECT_NEAR(glm::dot(glm::normalize(cameras[0].target - cameras[0].position),
+                             glm::normalize(office.target - office.position)),
+                    1.0, 1e-12);
+        for (size_t v = 0; v < cameras.size(); ++v) {
+            const Vec3& p = cameras[v].position;
+            EXPECT_DOUBLE_EQ(p.y, office.position.y) << v;
+            EXPECT_LE(std::abs(p.x), 0.5 * settings.width - 0.5 + 1e-9) << v;
+            EXPECT_LE(std::abs(p.z), 0.5 * settings.depth - 0.5 + 1e-9) << v;
+            EXPECT_DOUBLE_EQ(cameras[v].fovYDegrees, office.fovYDegrees);
+            if (v == 0) continue;
+            const Camera& before = cameras[v - 1];
+            EXPECT_LE(glm::length(p - before.position), 1.5 * (settings.width + settings.depth) / 29) << v;
+            const Vec3 a = cameras[v].target - p, b = before.target - before.position;
+            const double turn = std::abs(std::remainder(std::atan2(a.z, a.x) - std::atan2(b.z, b.x), 2 * M_PI));
+            EXPECT_LE(turn, glm::radians(20.0)) << v;
+        }
+        const EmbreeScene rays(scene);
+        EXPECT_NO_THROW(checkViewsInside(rays, cameras, 32, 18));
+    }
 }

@@ -4,6 +4,7 @@
 #include "SessionCheckpoints.h"
 #include "BenchTable.h"
 #include "CornellWalkthrough.h"
+#include "WalkthroughViews.h"
 #include "ExactDirectImage.h"
 #include "Gnuplot.h"
 
@@ -454,7 +455,7 @@ WalkthroughResult runWalkthrough(const Scene& scene, const Workload& work, const
     Clock::time_point t = Clock::now();
     const EmbreeScene rays(scene);
     r.pathSetupSeconds = secondsSince(t);
-    checkViewsInside(rays, cameras, size);
+    checkViewsInside(rays, cameras, size, size);
     r.views.resize(cameras.size());
 
     // The references first, so that nothing else runs while Meshlight and the path tracer are timed.

@@ -3,9 +3,11 @@
 #include "BenchRun.h"
 #include "BenchTable.h"
 #include "CornellWalkthrough.h"
+#include "WalkthroughViews.h"
 #include "CyclesRunner.h"
 #include "Gnuplot.h"
 #include "NoisyReference.h"
+#include "RenderLikeSession.h"
 #include "SessionCheckpoints.h"
 
 #include "cache/IrradianceCache.h"
@@ -180,14 +182,8 @@ void renderReferences(const BenchRun& run, const Workload& work, const Scene& sc
         run.progress("reference B: %d spp at %dx%d (load %s)\n", work.referenceSpp, work.size, work.size,
                      loadAverage().c_str());
         const EmbreeScene rays(scene);
-        const Clock::time_point t = Clock::now();
-        const PathTracer tracer(rays, tracerSettings(seedFor(seed, 0x6e1bu)));
-        ReferenceImage image = tracer.render(camera, work.size, work.size, work.referenceSpp);
-        r.referenceB.radiance = std::move(image.radiance);
-        r.referenceB.standardError = std::move(image.standardError);
-        r.referenceB.spp = work.referenceSpp;
-        r.referenceB.seconds = secondsSince(t);
-        r.referenceB.noise = relativeNoise(r.referenceB.standardError, r.referenceB.radiance);
+        r.referenceB = renderReference(rays, camera, work.size, work.size, work.referenceSpp,
+                                       tracerSettings(seedFor(seed, 0x6e1bu)));
     }
     std::printf("reference B: %d spp in %.1f s, relative noise %.3f%%\n", r.referenceB.spp, r.referenceB.seconds,
                 100 * r.referenceB.noise);
@@ -218,27 +214,7 @@ void renderReferences(const BenchRun& run, const Workload& work, const Scene& sc
     writeImageLinear((run.dir() / "gi_reference.noise.exr").string(), r.reference.standardError);
 }
 
-// --- Meshlight as `render` runs it --------------------------------------------------------
-
-// The session `meshlight render SCENE` makes with its defaults: the
-// production direct sampler, the plan's gather and bounces, the cache's
-// default tolerances tightened progressively.
-struct RenderLikeSession {
-    DirectChoice direct;
-    IndirectChoice indirect;
-    SessionSettings settings;
-};
-
-RenderLikeSession renderLikeSession(const BenchRun& run, const Scene& scene) {
-    RenderLikeSession s;
-    s.direct.seed = run.options().seed;
-    s.direct.backend = run.options().backend;
-    s.indirect.decide(scene);
-    s.settings.worker.seed = s.direct.seed;
-    s.settings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;
-    if (s.indirect.active()) s.settings.indirect = s.indirect.solver;
-    return s;
-}
+// --- Meshlight as `render` runs it (RenderLikeSession.h) ------------------------------------
 
 // The snapshot of each checkpoint is copied as it is taken and composited
 // once the worker has stopped: `render` composites once, after stopping the
@@ -247,7 +223,7 @@ RenderLikeSession renderLikeSession(const BenchRun& run, const Scene& scene) {
 ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scene& scene, const Camera& camera,
                            Compositor& compositor, StillResult& r) {
     const RenderLikeSession how = renderLikeSession(run, scene);
-    r.meshlightBounces = how.indirect.active() ? how.indirect.solver.bounces : 0;
+    r.meshlightBounces = how.bounces();
     r.indirectMethod = how.indirect.active() ? how.indirect.describe() : std::string("none");
     struct Taken {
         CurvePoint point;
@@ -410,17 +386,11 @@ struct CyclesAtError {
     int sppBelow = 0;  // the fewest samples per pixel measured at or below the error (0: none)
 };
 
-struct ViewResult {
+// Meshlight's view (ViewShown: from setCamera, the first view's from before
+// the session, to the passing composite), its reference, and Cycles'.
+struct ViewResult : ViewShown {
     double referenceSeconds = 0;
     double referenceNoise = 0;
-    // Meshlight
-    double seconds = 0;  // from setCamera (the first view: from before the session) to the passing composite
-    double compositeSeconds = 0;  // of all its composites
-    int composites = 0;
-    bool reached = false;
-    ImageError error;
-    double estimatedError = 0;
-    size_t vertices = 0;
     // Cycles
     std::vector<CyclesTry> tries;  // by samples per pixel
     double cyclesLevel = 0;        // the error Cycles is held to: Meshlight's, floored (see runWalkthrough)
@@ -523,30 +493,18 @@ WalkResult runWalkthrough(const BenchRun& run, const Workload& work, const Scene
     const uint32_t seed = run.options().seed;
     const std::vector<Camera> cameras = walkthroughCameras(scene, work.views);
     const EmbreeScene rays(scene);
-    checkViewsInside(rays, cameras, work.viewSize);
+    checkViewsInside(rays, cameras, work.viewSize, work.viewSize);
     r.views.resize(cameras.size());
 
     // The references first, so that nothing else runs while Meshlight and Cycles are timed.
-    run.progress("walkthrough: %zu references, %d spp at %dx%d (load %s)\n", cameras.size(), work.viewReferenceSpp,
-                 work.viewSize, work.viewSize, loadAverage().c_str());
-    std::vector<Reference> refs(cameras.size());
+    const std::vector<Reference> refs = renderViewReferences(run, rays, cameras, work.viewSize, work.viewSize,
+                                                             work.viewReferenceSpp, tracerSettings(seed), 0x71e0u);
     for (size_t v = 0; v < cameras.size(); ++v) {
-        const Clock::time_point t = Clock::now();
-        const PathTracer tracer(rays, tracerSettings(seedFor(seed, 0x71e0u, uint32_t(v))));
-        ReferenceImage image = tracer.render(cameras[v], work.viewSize, work.viewSize, work.viewReferenceSpp);
-        refs[v].radiance = std::move(image.radiance);
-        refs[v].standardError = std::move(image.standardError);
-        refs[v].spp = work.viewReferenceSpp;
-        refs[v].seconds = secondsSince(t);
-        refs[v].noise = relativeNoise(refs[v].standardError, refs[v].radiance);
         r.views[v].referenceSeconds = refs[v].seconds;
         r.views[v].referenceNoise = refs[v].noise;
         r.referenceSeconds += refs[v].seconds;
         r.referenceNoiseMax = std::max(r.referenceNoiseMax, refs[v].noise);
     }
-    std::printf("walkthrough: %zu views %dx%d; references %d spp, %.1f s in all, relative noise up to %.3f%%\n",
-                cameras.size(), work.viewSize, work.viewSize, work.viewReferenceSpp, r.referenceSeconds,
-                100 * r.referenceNoiseMax);
 
     // Meshlight: one cache from cold, refined while the views are shown.
     run.progress("walkthrough: meshlight (load %s)\n", loadAverage().c_str());
@@ -567,26 +525,8 @@ WalkResult runWalkthrough(const BenchRun& run, const Workload& work, const Scene
             } else {
                 session.setCamera(view);
             }
-            uint64_t checked = 0;
-            for (;;) {
-                const CacheSnapshot* s = firstSnapshot(session, *reader);
-                if (s->version == checked) {
-                    if (secondsSince(viewStart) >= work.viewSecondsLimit || session.finished()) break;
-                    session.waitForVersion(checked + 1, 0.05);
-                    continue;
-                }
-                checked = s->version;
-                const Clock::time_point c = Clock::now();
-                const ImageRgb image = compositor.render(cameras[v], s->direct, s->indirect, comp);
-                out.compositeSeconds += secondsSince(c);
-                ++out.composites;
-                out.error = errorAgainst(image, refs[v]);
-                out.estimatedError = s->estimatedError;
-                out.vertices = s->vertices;
-                out.reached = out.error.corrected <= kViewTarget;
-                if (out.reached || secondsSince(viewStart) >= work.viewSecondsLimit) break;
-            }
-            out.seconds = secondsSince(viewStart);
+            static_cast<ViewShown&>(out) = showViewUntilWithin(session, *reader, compositor, cameras[v], comp,
+                                                               refs[v], kViewTarget, viewStart, work.viewSecondsLimit);
             std::printf("  view %2zu meshlight %6.2f s (%d composite%s, %.2f s): relative RMSE %6.3f%% (raw %.3f%%), "
                         "estimated %.3f%%, %zu vertices%s\n",
                         v, out.seconds, out.composites, out.composites == 1 ? "" : "s", out.compositeSeconds,

@@ -6,7 +6,9 @@
 #include "BenchTable.h"
 #include "Gnuplot.h"
 #include "NoisyReference.h"
+#include "OfficeWalkRun.h"
 #include "PowerLawFit.h"
+#include "RenderLikeSession.h"
 
 #include "cache/IrradianceCache.h"
 #include "cache/ProgressiveSession.h"
@@ -57,6 +59,10 @@ const std::vector<TimeTarget> kTimeTargets = {{0.10, 5}, {0.05, 15}, {0.02, 60}}
 constexpr size_t kTargetLights = 12;
 constexpr double kTargetSpeedup = 3;
 constexpr double kTargetGrowth = 2;
+// The walkthrough: every view within kWalkLevel, in at least kWalkSpeedup
+// times less total time than the path tracer at the same error.
+constexpr double kWalkLevel = 0.05;
+constexpr double kWalkSpeedup = 5;
 
 // As `meshlight reference` renders by default: emission, direct light and 7
 // indirect bounces, far more than the office's albedo leaves visible.
@@ -75,6 +81,14 @@ struct OfficeVariant {
     size_t lights() const { return size_t(panelsX) * size_t(panelsZ); }
 };
 
+OfficeSettings officeSettings(const OfficeVariant& office) {
+    OfficeSettings settings;
+    settings.panelsX = office.panelsX;
+    settings.panelsZ = office.panelsZ;
+    settings.panelSize = office.panelSize;
+    return settings;
+}
+
 struct Workload {
     int width, height;                // pixels
     double seconds;                   // Meshlight's budget; the path tracer stops past it
@@ -90,17 +104,29 @@ struct Workload {
     // pixel, so the lower levels are measured all the same.
     int referenceSpp;
     std::vector<OfficeVariant> offices;
+    // The walkthrough, through the 12-panel office (OfficeWalkRun.h): views, pixels, the references'
+    // samples per pixel, the first view's and the others' time limits. At 160×90 and 512 spp a reference
+    // takes ~15 s on 2 cores with a relative noise near 6%: 30 of them ~8 minutes.
+    int walkViews, walkWidth, walkHeight, walkReferenceSpp;
+    double walkFirstSeconds, walkSeconds;
 };
 
 Workload workloadFor(bool quick) {
-    if (quick) return {96, 54, 5, {0.5, 1, 2, 3, 5}, 512, {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}}};
+    if (quick)
+        return {96, 54, 3, {0.5, 1, 2, 3}, 256, {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}}, 3, 64, 36, 64, 4, 2};
     // 5, 15 and 60 s join the times, to read the targets off directly.
     return {320,
             180,
             60,
             {0.5, 1, 2, 3, 5, 8, 12, 15, 20, 30, 45, 60},
             2048,
-            {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}, {"8x6", 8, 6, 0.6}, {"16x12", 16, 12, 0.4}}};
+            {{"3x1", 3, 1, 0.6}, {"4x3", 4, 3, 0.6}, {"8x6", 8, 6, 0.6}, {"16x12", 16, 12, 0.4}},
+            30,
+            160,
+            90,
+            512,
+            60,
+            20};
 }
 
 // --- Memory ------------------------------------------------------------------------
@@ -134,19 +160,6 @@ PathTracerSettings tracerSettings(uint32_t seed) {
     s.threads = 0;  // every core
     s.seed = seed;
     return s;
-}
-
-Reference renderReference(const EmbreeScene& rays, const Camera& camera, const Workload& work, uint32_t seed) {
-    const Clock::time_point start = Clock::now();
-    const PathTracer tracer(rays, tracerSettings(seed));
-    ReferenceImage image = tracer.render(camera, work.width, work.height, work.referenceSpp);
-    Reference r;
-    r.radiance = std::move(image.radiance);
-    r.standardError = std::move(image.standardError);
-    r.spp = work.referenceSpp;
-    r.seconds = secondsSince(start);
-    r.noise = relativeNoise(r.standardError, r.radiance);
-    return r;
 }
 
 // --- One scene ------------------------------------------------------------------------
@@ -230,17 +243,8 @@ size_t meshBytes(const std::vector<IrradianceMeshCopy>& meshes) {
 // its composite time: `render --time` stopping there would have it then.
 ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& camera, const Workload& work,
                       Compositor& compositor, SceneResult& r) {
-    DirectChoice direct;  // the production sampler
-    direct.seed = run.options().seed;
-    direct.backend = run.options().backend;
-    IndirectChoice indirect;  // the production gather, the plan's bounces
-    indirect.decide(scene);
-    r.bounces = indirect.active() ? indirect.solver.bounces : 0;
-    SessionSettings settings;
-    settings.worker.seed = run.options().seed;
-    settings.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;  // as `render` refines
-    if (indirect.active()) settings.indirect = indirect.solver;
-
+    const RenderLikeSession how = renderLikeSession(run, scene);
+    r.bounces = how.bounces();
     struct Taken {
         CurvePoint point;  // all but the image's error and composite time
         std::vector<IrradianceMeshCopy> direct, indirect;
@@ -251,7 +255,7 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
     {
         const Clock::time_point start = Clock::now();
         const std::unique_ptr<ProgressiveSession> session =
-            std::make_unique<ProgressiveSession>(scene, settings, samplerFactory(scene, direct, indirect));
+            std::make_unique<ProgressiveSession>(scene, how.settings, samplerFactory(scene, how.direct, how.indirect));
         r.cacheBuildSeconds = secondsSince(start);
         session->start(RefinementCamera{camera, work.width, work.height});
         CacheWorker::Reader reader = session->reader();
@@ -336,11 +340,7 @@ SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVari
                      GlContext& context) {
     SceneResult r;
     r.office = office;
-    OfficeSettings settings;
-    settings.panelsX = office.panelsX;
-    settings.panelsZ = office.panelsZ;
-    settings.panelSize = office.panelSize;
-    const Scene scene = makeOfficeScene(settings);
+    const Scene scene = makeOfficeScene(officeSettings(office));
     ML_ASSERT(scene.lights.size() == office.lights(), "office ", office.label, " has ", scene.lights.size(),
               " lights, expected ", office.lights());
     r.triangles = scene.triangleCount();
@@ -351,7 +351,8 @@ SceneResult runScene(const BenchRun& run, const Workload& work, const OfficeVari
     const EmbreeScene referenceRays(scene);
     run.progress("%s: reference, %d spp at %dx%d\n", office.label.c_str(), work.referenceSpp, work.width,
                  work.height);
-    r.reference = renderReference(referenceRays, camera, work, seedFor(seed, 0x4ef0u, index));
+    r.reference = renderReference(referenceRays, camera, work.width, work.height, work.referenceSpp,
+                                  tracerSettings(seedFor(seed, 0x4ef0u, index)));
     std::printf("  %-5s reference: %d spp in %.1f s, relative noise %.2f%%\n", office.label.c_str(), r.reference.spp,
                 r.reference.seconds, 100 * r.reference.noise);
     writeImageLinear((run.dir() / fileLabel("reference", office, ".exr")).string(), r.reference.radiance);
@@ -653,11 +654,12 @@ BenchTable fitsTable(const std::vector<FitRow>& fits) {
 const std::vector<GnuplotOutput> kPlots = {
     {"out_error", "lights_error_vs_time.png"},
     {"out_levels", "lights_time_to_level.png"},
+    {"out_walk", "lights_walkthrough.png"},
 };
 
 const char* const kColours[] = {"#1f5fa8", "#c0392b", "#1e8449", "#8e44ad", "#d68910", "#17a589"};
 
-std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload& work) {
+std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload& work, const OfficeWalkResult& walk) {
     std::ostringstream gp;
     gp << "# Written by 'meshlight bench lights'; run with gnuplot in this folder.\n"
        << gnuplotOutputDefaults(kPlots)
@@ -756,6 +758,37 @@ std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload
         for (size_t i = 0; i < series.size(); ++i) gp << (i ? ", \\\n     " : "") << series[i];
         gp << "\n";
     }
+    gp << "unset label 1\nunset xtics\nset xtics\nunset xrange\nunset yrange\n\n";
+
+    // view, cumulative seconds: Meshlight, path tracer at its error, at the level; error %
+    gp << "# view, cumulative seconds (Meshlight, path tracer at Meshlight's error, at the level), Meshlight's error %\n"
+          "$walk << EOD\n";
+    double m = 0, p = 0, q = 0;
+    for (size_t v = 0; v < walk.views.size(); ++v) {
+        const OfficeWalkView& w = walk.views[v];
+        m += w.seconds;
+        p += w.pathAtMeshlight;
+        q += w.pathAtLevel;
+        gp << v << "," << benchNumber(m) << "," << benchNumber(p) << "," << benchNumber(q) << ","
+           << benchPct(std::max(w.error.corrected, 1e-4)) << "\n";
+    }
+    gp << "EOD\n"
+          "set output out_walk\n"
+          "set multiplot layout 2,1 title 'Walkthrough, " << walk.views.size() << " views " << walk.settings.width
+       << "x" << walk.settings.height << ", " << walk.settings.office.panelsX * walk.settings.office.panelsZ
+       << " panels: each view until within " << benchPct(walk.settings.level) << "%'\n"
+          "unset logscale\nset logscale y\nset xlabel 'view'\nset xtics " << (walk.views.size() > 10 ? 5 : 1)
+       << "\nset ylabel 'cumulative seconds'\nset key left top\n"
+          "set title 'Cumulative time: Meshlight from cold, the path tracer at the same error and at the level'\n"
+          "plot $walk using 1:2 with linespoints lc rgb '#1f5fa8' pt 7 title 'Meshlight', \\\n"
+          "     $walk using 1:3 with linespoints dt 2 lc rgb '#c0392b' pt 5 title 'path tracer, same error', \\\n"
+          "     $walk using 1:4 with linespoints dt 4 lc rgb '#e6a09a' pt 4 title 'path tracer, "
+       << benchPct(walk.settings.level) << "%'\n"
+          "unset logscale\nset ylabel 'relative RMSE (%)'\nset yrange [0:*]\n"
+          "set title \"Meshlight's error at each view's last image (the reference's noise taken out)\"\n"
+          "plot $walk using 1:5 with linespoints lc rgb '#1f5fa8' pt 7 title 'Meshlight', "
+       << benchPct(walk.settings.level) << " with lines dt 3 lc rgb 'gray40' title 'level'\n"
+          "unset multiplot\n";
     return gp.str();
 }
 
@@ -763,7 +796,7 @@ std::string gnuplotScript(const std::vector<SceneResult>& scenes, const Workload
 
 std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workload& work,
                             const std::vector<SceneResult>& scenes, const std::vector<FitRow>& fits,
-                            const std::vector<BenchTarget>& targets) {
+                            const std::vector<BenchTarget>& targets, const OfficeWalkResult& walk) {
     const unsigned threads = std::thread::hardware_concurrency();
     double noiseMax = 0;
     for (const SceneResult& s : scenes) noiseMax = std::max(noiseMax, s.reference.noise);
@@ -864,7 +897,8 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
           "the run.\n\n"
        << scenesTable(scenes).markdown() << "\n"
        << "Every image of both methods: lights_checkpoints.csv; the references (and their noise), Meshlight's last "
-          "image and the path tracer's last, as lights_*.exr.\n";
+          "image and the path tracer's last, as lights_*.exr.\n\n"
+       << walk.markdown();
     return md.str();
 }
 
@@ -880,10 +914,28 @@ int runBenchLights(const BenchOptions& options) {
     for (size_t i = 0; i < work.offices.size(); ++i)
         scenes.push_back(runScene(run, work, work.offices[i], uint32_t(i), *context));
     const std::vector<FitRow> fits = fitRows(scenes);
-    const std::vector<BenchTarget> targets = targetRows(scenes, work);
+    std::vector<BenchTarget> targets = targetRows(scenes, work);
+
+    OfficeWalkSettings walkSettings;
+    const SceneResult* walked = withLights(scenes, kTargetLights);
+    ML_ASSERT(walked, "every workload has the 12-panel office");
+    walkSettings.office = officeSettings(walked->office);
+    walkSettings.views = work.walkViews;
+    walkSettings.width = work.walkWidth;
+    walkSettings.height = work.walkHeight;
+    walkSettings.referenceSpp = work.walkReferenceSpp;
+    walkSettings.tracer = tracerSettings(seedFor(options.seed, 0x3a1c0u));
+    walkSettings.composite.supersample = kSupersample;
+    walkSettings.level = kWalkLevel;
+    walkSettings.speedup = kWalkSpeedup;
+    walkSettings.firstViewSeconds = work.walkFirstSeconds;
+    walkSettings.viewSeconds = work.walkSeconds;
+    const OfficeWalkResult walk = runOfficeWalk(run, *context, walkSettings);
+    for (const BenchTarget& t : walk.targets()) targets.push_back(t);
 
     const BenchTable checkpointsT = checkpointsTable(scenes), summaryT = summaryTable(scenes, work),
-                     scenesT = scenesTable(scenes), fitsT = fitsTable(fits), targetsT = targetsTable(targets);
+                     scenesT = scenesTable(scenes), fitsT = fitsTable(fits), targetsT = targetsTable(targets),
+                     walkT = walk.table();
     std::printf("\nTime to each level (relative RMSE corrected for the reference's noise; ratio = path tracer / "
                 "Meshlight).\n\n%s",
                 summaryT.aligned().c_str());
@@ -893,6 +945,8 @@ int runBenchLights(const BenchOptions& options) {
     std::printf("\nDirect-light pairs by how they are answered (3 points on every triangle, every light): share "
                 "and microseconds each.\n\n%s",
                 pairsT.aligned().c_str());
+    std::printf("\nWalkthrough: each view until within %s%%.\n\n%s", benchPct(kWalkLevel).c_str(),
+                walkT.aligned().c_str());
     std::printf("\nTargets (many lights).\n\n%s", targetsT.aligned().c_str());
 
     run.writeCsv("lights_checkpoints.csv", checkpointsT);
@@ -901,9 +955,10 @@ int runBenchLights(const BenchOptions& options) {
     run.writeCsv("lights_fits.csv", fitsT);
     run.writeCsv("lights_targets.csv", targetsT);
     run.writeCsv("lights_pairs.csv", pairsT);
-    run.plot("lights_plots.gp", gnuplotScript(scenes, work), kPlots);
+    run.writeCsv("lights_walkthrough.csv", walkT);
+    run.plot("lights_plots.gp", gnuplotScript(scenes, work, walk), kPlots);
     const double wall = run.seconds();
-    run.write("lights_summary.md", summaryMarkdown(run, wall, work, scenes, fits, targets));
+    run.write("lights_summary.md", summaryMarkdown(run, wall, work, scenes, fits, targets, walk));
     std::printf("\n");
     run.printWallTime(wall);
     return 0;

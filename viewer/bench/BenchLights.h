@@ -29,15 +29,22 @@
 // level against the number of lights (PowerLawFit). Memory per scene: the
 // cache's vertices and bytes, the indirect caches', the peak resident set.
 //
+// Then a walkthrough of the 12-panel office (OfficeWalkRun.h): 30 views of
+// 160×90 along OfficeWalkthrough.h's path, each with its own 512-spp
+// reference; one session from cold walks them, each view shown until its
+// composite is within 5%; the path tracer's time for the same views at the
+// same error is its reference's time scaled by (noise / error)².
+//
 // Writes into outDir: lights_checkpoints.csv (every image of both methods),
 // lights_summary.csv (time to each level, ratios), lights_scenes.csv
 // (references, memory, final errors), lights_fits.csv, lights_targets.csv,
-// lights_plots.gp and its PNGs (when gnuplot is installed), the references
+// lights_walkthrough.csv (a row per view) and each view's last image and
+// reference (lights_walk_NN_*.exr), lights_plots.gp and its PNGs (when gnuplot is installed), the references
 // and Meshlight's last image as EXR, and lights_summary.md; prints the
 // tables. Times are measured and reported, never asserted.
 //
-// quick: CI size (well under two minutes on 2 cores): 3 and 12 panels at
-// 96×54, 4 s each, a smaller reference. seed: the worker's jitter and the
+// quick: CI size (well under a minute on 2 cores): 3 and 12 panels at
+// 96×54, 3 s each, a 256-spp reference; a walkthrough of 3 views of 64×36. seed: the worker's jitter and the
 // path tracer's streams (the reference's and the curve's differ); the
 // cache runs against the clock, so runs repeat only as far as timing allows.
 #pragma once

@@ -9,8 +9,6 @@
 
 namespace ml {
 
-class EmbreeScene;
-
 // `views` cameras from the box's own view, moved in to just inside its open
 // front: the eye dollies in and rises towards the short block while the
 // view pans down to the gap between the blocks, where the penumbrae are.
@@ -18,10 +16,5 @@ class EmbreeScene;
 // Cornell box's millimetres (x = 0 is the green wall, y up, the open front
 // at z = 0); the field of view is the box's camera's.
 std::vector<Camera> walkthroughCameras(const Scene& scene, int views);
-
-// Every view must look at the scene from inside the box: the ray through
-// every pixel corner of a size × size image hits a surface, and the eye is
-// inside the box's bounds, so nothing is seen out of its open front.
-void checkViewsInside(const EmbreeScene& rays, const std::vector<Camera>& cameras, int size);
 
 }  // namespace ml

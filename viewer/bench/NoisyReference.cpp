@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace ml {
 
@@ -18,6 +19,38 @@ namespace {
 inline double relativeWeight(double reference) { return 1.0 / (reference * reference + 0.01); }
 
 }  // namespace
+
+Reference renderReference(const EmbreeScene& rays, const Camera& camera, int width, int height, int spp,
+                          const PathTracerSettings& settings) {
+    const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ReferenceImage image = PathTracer(rays, settings).render(camera, width, height, spp);
+    Reference r;
+    r.radiance = std::move(image.radiance);
+    r.standardError = std::move(image.standardError);
+    r.spp = spp;
+    r.seconds = secondsSince(start);
+    r.noise = relativeNoise(r.standardError, r.radiance);
+    return r;
+}
+
+std::vector<Reference> renderViewReferences(const BenchRun& run, const EmbreeScene& rays,
+                                            const std::vector<Camera>& cameras, int width, int height, int spp,
+                                            const PathTracerSettings& settings, uint32_t tag) {
+    run.progress("walkthrough: %zu references, %d spp at %dx%d (load %s)\n", cameras.size(), spp, width, height,
+                 loadAverage().c_str());
+    std::vector<Reference> refs;
+    double seconds = 0, noise = 0;
+    for (size_t v = 0; v < cameras.size(); ++v) {
+        PathTracerSettings view = settings;
+        view.seed = seedFor(settings.seed, tag, uint32_t(v));
+        refs.push_back(renderReference(rays, cameras[v], width, height, spp, view));
+        seconds += refs.back().seconds;
+        noise = std::max(noise, refs.back().noise);
+    }
+    std::printf("walkthrough: %zu views %dx%d; references %d spp, %.1f s in all, relative noise up to %.3f%%\n",
+                cameras.size(), width, height, spp, seconds, 100 * noise);
+    return refs;
+}
 
 Reference averageReferences(const Reference& a, const Reference& b) {
     ML_ASSERT(a.radiance.data.size() == b.radiance.data.size() && a.spp > 0 && b.spp > 0,

@@ -14,6 +14,7 @@
 
 namespace ml {
 
+class BenchRun;
 class EmbreeScene;
 
 // A path-traced reference and its standard error, per pixel and channel.
@@ -23,6 +24,19 @@ struct Reference {
     double seconds = 0;
     double noise = 0;  // relativeNoise(standardError, radiance)
 };
+
+// The path tracer's image of `camera` at `spp` samples per pixel, with its
+// standard error, the time it took (on settings.threads) and its noise.
+Reference renderReference(const EmbreeScene& rays, const Camera& camera, int width, int height, int spp,
+                          const PathTracerSettings& settings);
+
+// A walkthrough's references: renderReference for each camera, view v
+// with the stream seedFor(settings.seed, tag, v), one after another (so
+// that nothing else runs while they are timed); the progress and a line of
+// totals (time, largest noise) printed through `run`.
+std::vector<Reference> renderViewReferences(const BenchRun& run, const EmbreeScene& rays,
+                                            const std::vector<Camera>& cameras, int width, int height, int spp,
+                                            const PathTracerSettings& settings, uint32_t tag);
 
 // The mean of two independent references of the same view (other streams),
 // weighted by their samples per pixel; its standard error combined from

@@ -26,4 +26,31 @@ const CacheSnapshot* snapshotAt(ProgressiveSession& session, CacheWorker::Reader
     return firstSnapshot(session, reader);
 }
 
+ViewShown showViewUntilWithin(ProgressiveSession& session, CacheWorker::Reader& reader, Compositor& compositor,
+                              const Camera& camera, const CompositorSettings& settings, const Reference& reference,
+                              double level, std::chrono::steady_clock::time_point start, double limitSeconds) {
+    ViewShown out;
+    uint64_t checked = 0;
+    for (;;) {
+        const CacheSnapshot* s = firstSnapshot(session, reader);
+        if (s->version == checked) {
+            if (secondsSince(start) >= limitSeconds || session.finished()) break;
+            session.waitForVersion(checked + 1, 0.05);
+            continue;
+        }
+        checked = s->version;
+        const std::chrono::steady_clock::time_point c = std::chrono::steady_clock::now();
+        out.image = compositor.render(camera, s->direct, s->indirect, settings);
+        out.compositeSeconds += secondsSince(c);
+        ++out.composites;
+        out.error = errorAgainst(out.image, reference);
+        out.estimatedError = s->estimatedError;
+        out.vertices = s->vertices;
+        out.reached = out.error.corrected <= level;
+        if (out.reached || secondsSince(start) >= limitSeconds) break;
+    }
+    out.seconds = secondsSince(start);
+    return out;
+}
+
 }  // namespace ml

@@ -2,7 +2,10 @@
 // ProgressiveSession: wait for the time, then take the latest snapshot.
 #pragma once
 
+#include "NoisyReference.h"
+
 #include "cache/ProgressiveSession.h"
+#include "viewer/compositor/Compositor.h"
 
 #include <chrono>
 
@@ -16,5 +19,25 @@ const CacheSnapshot* firstSnapshot(ProgressiveSession& session, CacheWorker::Rea
 // meanwhile), then returns firstSnapshot's.
 const CacheSnapshot* snapshotAt(ProgressiveSession& session, CacheWorker::Reader& reader,
                                 std::chrono::steady_clock::time_point start, double due);
+
+// A walkthrough's view as the benches show it (bench gi, bench lights):
+// every new snapshot composited until the image is within `level` of the
+// view's reference (noise-corrected relative RMSE) or `limitSeconds` have
+// passed since `start` (when the view's camera was set; the first view's:
+// before the session was made). The session's camera must already be the
+// view's. The last composite's image and numbers are returned.
+struct ViewShown {
+    double seconds = 0;           // from `start` to the last composite's end
+    double compositeSeconds = 0;  // of all its composites
+    int composites = 0;
+    bool reached = false;
+    ImageError error;
+    double estimatedError = 0;  // the snapshot's
+    size_t vertices = 0;        // the snapshot's
+    ImageRgb image;
+};
+ViewShown showViewUntilWithin(ProgressiveSession& session, CacheWorker::Reader& reader, Compositor& compositor,
+                              const Camera& camera, const CompositorSettings& settings, const Reference& reference,
+                              double level, std::chrono::steady_clock::time_point start, double limitSeconds);
 
 }  // namespace ml
