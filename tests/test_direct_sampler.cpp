@@ -845,8 +845,10 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
     auto micros = [](Clock::time_point a, Clock::time_point b) {
         return std::chrono::duration<double, std::micro>(b - a).count();
     };
-    int count[3] = {0, 0, 0};
-    double cheapTime[3] = {0, 0, 0}, gpuTime[3] = {0, 0, 0};
+    // By DirectPath: unlit, unoccluded, rasterised, occluded, cpu-rasterised.
+    constexpr int kPaths = int(DirectPath::CpuRasterised) + 1;
+    int count[kPaths] = {};
+    double cheapTime[kPaths] = {}, gpuTime[kPaths] = {};
     Rgb cheapTotal(0.0), gpuTotal(0.0);
     constexpr uint32_t kPasses = 3;  // more points for the timing
     for (uint32_t pass = 0; pass < kPasses; ++pass)
@@ -859,6 +861,7 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
             const DirectSample b = gpu.sample(0, r.position, r.normal, seed);
             const Clock::time_point t2 = Clock::now();
             const int path = int(a.path);
+            ASSERT_LT(path, kPaths);
             ++count[path];
             cheapTime[path] += micros(t0, t1);
             gpuTime[path] += micros(t1, t2);
@@ -871,14 +874,20 @@ TEST(DirectSampler, MostCornellBoxPairsAreCheapAndTheirTotalIsUnchanged) {
         }
     const int pairs = int(kPasses * points.size());
     const int unlit = count[int(DirectPath::Unlit)], cpu = count[int(DirectPath::Unoccluded)];
-    const int raster = count[int(DirectPath::Rasterised)];
-    auto each = [](double total, int n) { return n ? total / n : 0.0; };
-    std::printf("[ cheap    ] Cornell box, %d pairs: %d unlit, %d on the CPU (%.0f%% of the lit), %d rasterised\n"
-                "[ cheap    ] us each: CPU pair %.1f (rasterised when forced: %.1f), rasterised pair %.1f, "
-                "unlit %.1f\n",
-                pairs, unlit, cpu, 100.0 * cpu / std::max(cpu + raster, 1), raster,
-                each(cheapTime[1], cpu), each(gpuTime[1], cpu), each(cheapTime[2], raster),
-                each(cheapTime[0], unlit));
+    const int raster = count[int(DirectPath::Rasterised)], umbra = count[int(DirectPath::Occluded)];
+    const int few = count[int(DirectPath::CpuRasterised)];
+    auto each = [&](double (&time)[kPaths], DirectPath path) {
+        const int n = count[int(path)];
+        return n ? time[int(path)] / n : 0.0;
+    };
+    std::printf("[ cheap    ] Cornell box, %d pairs: %d unlit, %d unoccluded on the CPU (%.0f%% of the lit), %d in "
+                "umbra, %d with few occluders on the CPU, %d rasterised\n"
+                "[ cheap    ] us each: unoccluded pair %.1f (rasterised when forced: %.1f), few occluders %.1f, "
+                "rasterised pair %.1f, unlit %.1f\n",
+                pairs, unlit, cpu, 100.0 * cpu / std::max(pairs - unlit, 1), umbra, few, raster,
+                each(cheapTime, DirectPath::Unoccluded), each(gpuTime, DirectPath::Unoccluded),
+                each(cheapTime, DirectPath::CpuRasterised), each(cheapTime, DirectPath::Rasterised),
+                each(cheapTime, DirectPath::Unlit));
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(cheapTotal[c], gpuTotal[c], 1e-12 * gpuTotal[c]) << "channel " << c;
     EXPECT_GT(gpuTotal.r, 0.0);
     // The ceiling (30 points) sees the light's back, the two sides of each
