@@ -64,7 +64,7 @@ void writeSideBySide(const fs::path& path, const ImageRgb& render, const ImageRg
 int runBenchScenes(const BenchOptions& options) {
     BenchRun run(options);
     const fs::path folder = scenesFolder();
-    const double seconds = options.quick ? 3 : 60;
+    const double seconds = options.quick ? 2 : 60;
     const int spp = options.quick ? 64 : 1024;
     BenchTable table({"scene", "width", "height", "render_s", "reference_spp", "relative_rmse_pct", "mean_ratio"});
     std::ostringstream summary;

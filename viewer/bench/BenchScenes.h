@@ -12,7 +12,7 @@
 //   water      mcguire-cornellbox/CornellBox-Water.obj  (a water surface: caustics)
 //   backrooms  backrooms-gltf/scene.gltf                (glTF, textures, 16 lights, 6 glowing walls)
 // Full: 256×256 (backrooms 240×135), 60 s against 1024 spp. Quick (CI):
-// 64 pixels wide, 3 s against 64 spp.
+// 64 pixels wide, 2 s against 64 spp.
 // Each run is the meshlight binary itself, as a user types it: the
 // commands are in the summary. Writes scenes.csv, scenes_<id>.png,
 // scenes_summary.md. Errors are reported, never asserted.

@@ -269,7 +269,7 @@ int runBenchView(const BenchOptions& options) {
     BenchRun run(options);
     const Scene scene = makeCornellBox();
     const Scene specular = specularCornell();
-    const double d = options.quick ? 4 : 15;
+    const double d = options.quick ? 2.5 : 15;
 
     std::vector<Scenario> scenarios = {
         {"walk-paused", "walking, refinement paused after its first snapshot", true, 1.0 / 32, false, d},

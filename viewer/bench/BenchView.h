@@ -18,7 +18,7 @@
 // view_targets.csv, view_plots.gp and its PNGs, view_summary.md. Times are
 // reported, never asserted.
 //
-// quick: CI size, 4 s per scenario instead of 15, 8 light changes instead
+// quick: CI size, 2.5 s per walk instead of 15, 8 light changes instead
 // of 20. seed: the worker's jitter. options.backend is not read: the bench
 // draws in a GLFW window, as `view` does.
 #pragma once
