@@ -497,45 +497,29 @@ WalkResult runWalkthrough(const BenchRun& run, const Workload& work, const Scene
     r.views.resize(cameras.size());
 
     // The references first, so that nothing else runs while Meshlight and Cycles are timed.
-    const std::vector<Reference> refs = renderViewReferences(run, rays, cameras, work.viewSize, work.viewSize,
-                                                             work.viewReferenceSpp, tracerSettings(seed), 0x71e0u);
+    const ViewReferences references = renderViewReferences(run, rays, cameras, work.viewSize, work.viewSize,
+                                                           work.viewReferenceSpp, tracerSettings(seed), 0x71e0u);
+    const std::vector<Reference>& refs = references.views;
+    r.referenceSeconds = references.seconds;
+    r.referenceNoiseMax = references.noiseMax;
     for (size_t v = 0; v < cameras.size(); ++v) {
         r.views[v].referenceSeconds = refs[v].seconds;
         r.views[v].referenceNoise = refs[v].noise;
-        r.referenceSeconds += refs[v].seconds;
-        r.referenceNoiseMax = std::max(r.referenceNoiseMax, refs[v].noise);
     }
 
     // Meshlight: one cache from cold, refined while the views are shown.
     run.progress("walkthrough: meshlight (load %s)\n", loadAverage().c_str());
-    const CompositorSettings comp = renderComposite(work.viewSize, work.viewSize);
-    {
-        const RenderLikeSession how = renderLikeSession(run, scene);
-        const Clock::time_point start = Clock::now();
-        ProgressiveSession session(scene, how.settings, samplerFactory(scene, how.direct, how.indirect));
-        r.cacheBuildSeconds = secondsSince(start);
-        std::optional<CacheWorker::Reader> reader;
-        for (size_t v = 0; v < cameras.size(); ++v) {
+    r.cacheBuildSeconds = walkViewsUntilWithin(
+        scene, renderLikeSession(run, scene), compositor, cameras, renderComposite(work.viewSize, work.viewSize), refs,
+        kViewTarget, work.viewSecondsLimit, work.viewSecondsLimit, [&](size_t v, ViewShown&& shown) {
             ViewResult& out = r.views[v];
-            const Clock::time_point viewStart = v == 0 ? start : Clock::now();
-            const RefinementCamera view{cameras[v], work.viewSize, work.viewSize};
-            if (v == 0) {
-                session.start(view);
-                reader.emplace(session.reader());
-            } else {
-                session.setCamera(view);
-            }
-            static_cast<ViewShown&>(out) = showViewUntilWithin(session, *reader, compositor, cameras[v], comp,
-                                                               refs[v], kViewTarget, viewStart, work.viewSecondsLimit);
-            std::printf("  view %2zu meshlight %6.2f s (%d composite%s, %.2f s): relative RMSE %6.3f%% (raw %.3f%%), "
-                        "estimated %.3f%%, %zu vertices%s\n",
+            static_cast<ViewShown&>(out) = std::move(shown);
+            std::printf("  view %2zu meshlight %6.2f s (%d composite%s, %.2f s): relative RMSE %6.3f%% (raw "
+                        "%.3f%%), estimated %.3f%%, %zu vertices%s\n",
                         v, out.seconds, out.composites, out.composites == 1 ? "" : "s", out.compositeSeconds,
                         100 * out.error.corrected, 100 * out.error.raw, 100 * out.estimatedError, out.vertices,
                         out.reached ? "" : " (time limit)");
-        }
-        session.stop();
-        session.rethrowIfFailed();
-    }
+        });
 
     // Cycles: per view, to the error Meshlight reached there, and to the target.
     CyclesRunner* runner = cycles.get(run);

@@ -33,23 +33,21 @@ Reference renderReference(const EmbreeScene& rays, const Camera& camera, int wid
     return r;
 }
 
-std::vector<Reference> renderViewReferences(const BenchRun& run, const EmbreeScene& rays,
-                                            const std::vector<Camera>& cameras, int width, int height, int spp,
-                                            const PathTracerSettings& settings, uint32_t tag) {
+ViewReferences renderViewReferences(const BenchRun& run, const EmbreeScene& rays, const std::vector<Camera>& cameras,
+                                    int width, int height, int spp, const PathTracerSettings& settings, uint32_t tag) {
     run.progress("walkthrough: %zu references, %d spp at %dx%d (load %s)\n", cameras.size(), spp, width, height,
                  loadAverage().c_str());
-    std::vector<Reference> refs;
-    double seconds = 0, noise = 0;
+    ViewReferences r;
     for (size_t v = 0; v < cameras.size(); ++v) {
         PathTracerSettings view = settings;
         view.seed = seedFor(settings.seed, tag, uint32_t(v));
-        refs.push_back(renderReference(rays, cameras[v], width, height, spp, view));
-        seconds += refs.back().seconds;
-        noise = std::max(noise, refs.back().noise);
+        r.views.push_back(renderReference(rays, cameras[v], width, height, spp, view));
+        r.seconds += r.views.back().seconds;
+        r.noiseMax = std::max(r.noiseMax, r.views.back().noise);
     }
     std::printf("walkthrough: %zu views %dx%d; references %d spp, %.1f s in all, relative noise up to %.3f%%\n",
-                cameras.size(), width, height, spp, seconds, 100 * noise);
-    return refs;
+                cameras.size(), width, height, spp, r.seconds, 100 * r.noiseMax);
+    return r;
 }
 
 Reference averageReferences(const Reference& a, const Reference& b) {

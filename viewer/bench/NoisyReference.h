@@ -33,10 +33,14 @@ Reference renderReference(const EmbreeScene& rays, const Camera& camera, int wid
 // A walkthrough's references: renderReference for each camera, view v
 // with the stream seedFor(settings.seed, tag, v), one after another (so
 // that nothing else runs while they are timed); the progress and a line of
-// totals (time, largest noise) printed through `run`.
-std::vector<Reference> renderViewReferences(const BenchRun& run, const EmbreeScene& rays,
-                                            const std::vector<Camera>& cameras, int width, int height, int spp,
-                                            const PathTracerSettings& settings, uint32_t tag);
+// totals printed through `run`.
+struct ViewReferences {
+    std::vector<Reference> views;  // by camera
+    double seconds = 0;            // all of them
+    double noiseMax = 0;           // the largest relative noise
+};
+ViewReferences renderViewReferences(const BenchRun& run, const EmbreeScene& rays, const std::vector<Camera>& cameras,
+                                    int width, int height, int spp, const PathTracerSettings& settings, uint32_t tag);
 
 // The mean of two independent references of the same view (other streams),
 // weighted by their samples per pixel; its standard error combined from

@@ -12,16 +12,12 @@
 #include "gpu_sampling/gl/GlContext.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
-#include <optional>
 #include <sstream>
 
 namespace ml {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 // Below a quarter of the reference's noise the corrected error (a
 // difference of two near-equal sums) can come out near zero: the path
@@ -128,14 +124,11 @@ OfficeWalkResult runOfficeWalk(const BenchRun& run, GlContext& context, const Of
     r.views.resize(cameras.size());
 
     // The references first, so that nothing else runs while Meshlight is timed.
-    const std::vector<Reference> refs =
+    const ViewReferences references =
         renderViewReferences(run, rays, cameras, s.width, s.height, s.referenceSpp, s.tracer, 0x3a1cu);
-    for (size_t v = 0; v < cameras.size(); ++v) {
-        r.views[v].referenceSeconds = refs[v].seconds;
-        r.views[v].referenceNoise = refs[v].noise;
-        r.referenceSeconds += refs[v].seconds;
-        r.referenceNoiseMax = std::max(r.referenceNoiseMax, refs[v].noise);
-    }
+    const std::vector<Reference>& refs = references.views;
+    r.referenceSeconds = references.seconds;
+    r.referenceNoiseMax = references.noiseMax;
 
     run.progress("walkthrough: meshlight (load %s)\n", loadAverage().c_str());
     context.use();
@@ -143,38 +136,26 @@ OfficeWalkResult runOfficeWalk(const BenchRun& run, GlContext& context, const Of
     CompositorSettings comp = s.composite;
     comp.width = s.width;
     comp.height = s.height;
-    const RenderLikeSession how = renderLikeSession(run, scene);
-    const Clock::time_point start = Clock::now();
-    ProgressiveSession session(scene, how.settings, samplerFactory(scene, how.direct, how.indirect));
-    r.cacheBuildSeconds = secondsSince(start);
-    std::optional<CacheWorker::Reader> reader;
-    for (size_t v = 0; v < cameras.size(); ++v) {
-        OfficeWalkView& out = r.views[v];
-        const Clock::time_point viewStart = v == 0 ? start : Clock::now();
-        const double limit = v == 0 ? s.firstViewSeconds : s.viewSeconds;
-        const RefinementCamera view{cameras[v], s.width, s.height};
-        if (v == 0) {
-            session.start(view);
-            reader.emplace(session.reader());
-        } else {
-            session.setCamera(view);
-        }
-        static_cast<ViewShown&>(out) =
-            showViewUntilWithin(session, *reader, compositor, cameras[v], comp, refs[v], s.level, viewStart, limit);
-        const std::string name = concat("lights_walk_", v < 10 ? "0" : "", v);
-        writeImageLinear((run.dir() / (name + "_meshlight.exr")).string(), out.image);
-        writeImageLinear((run.dir() / (name + "_reference.exr")).string(), refs[v].radiance);
-        out.pathLevel = std::max(out.error.corrected, kNoiseFloor * refs[v].noise);
-        out.pathAtMeshlight = pathSecondsAt(refs[v].seconds, refs[v].noise, out.pathLevel);
-        out.pathAtLevel = pathSecondsAt(refs[v].seconds, refs[v].noise, s.level);
-        std::printf("  view %2zu meshlight %6.2f s (%d composite%s, %.2f s): relative RMSE %6.3f%% (raw %.3f%%), "
-                    "estimated %.3g%%, %zu vertices%s; path tracer %.2f s at that error, %.2f s at %g%%\n",
-                    v, out.seconds, out.composites, out.composites == 1 ? "" : "s", out.compositeSeconds,
-                    100 * out.error.corrected, 100 * out.error.raw, 100 * out.estimatedError, out.vertices,
-                    out.reached ? "" : " (time limit)", out.pathAtMeshlight, out.pathAtLevel, 100 * s.level);
-    }
-    session.stop();
-    session.rethrowIfFailed();
+    r.cacheBuildSeconds = walkViewsUntilWithin(
+        scene, renderLikeSession(run, scene), compositor, cameras, comp, refs, s.level, s.firstViewSeconds,
+        s.viewSeconds, [&](size_t v, ViewShown&& shown) {
+            OfficeWalkView& out = r.views[v];
+            static_cast<ViewShown&>(out) = std::move(shown);
+            out.referenceSeconds = refs[v].seconds;
+            out.referenceNoise = refs[v].noise;
+            const std::string name = concat("lights_walk_", v < 10 ? "0" : "", v);
+            writeImageLinear((run.dir() / (name + "_meshlight.exr")).string(), out.image);
+            writeImageLinear((run.dir() / (name + "_reference.exr")).string(), refs[v].radiance);
+            out.pathLevel = std::max(out.error.corrected, kNoiseFloor * refs[v].noise);
+            out.pathAtMeshlight = pathSecondsAt(refs[v].seconds, refs[v].noise, out.pathLevel);
+            out.pathAtLevel = pathSecondsAt(refs[v].seconds, refs[v].noise, s.level);
+            std::printf("  view %2zu meshlight %6.2f s (%d composite%s, %.2f s): relative RMSE %6.3f%% (raw "
+                        "%.3f%%), estimated %.3g%%, %zu vertices%s; path tracer %.2f s at that error, %.2f s at "
+                        "%g%%\n",
+                        v, out.seconds, out.composites, out.composites == 1 ? "" : "s", out.compositeSeconds,
+                        100 * out.error.corrected, 100 * out.error.raw, 100 * out.estimatedError, out.vertices,
+                        out.reached ? "" : " (time limit)", out.pathAtMeshlight, out.pathAtLevel, 100 * s.level);
+        });
     std::printf("walkthrough: meshlight %.2f s in all; the path tracer %.2f s at the same error (%.2fx), %.2f s at "
                 "%g%% per view\n",
                 r.meshlightTotal(), r.pathTotal(false), r.pathTotal(false) / r.meshlightTotal(), r.pathTotal(true),

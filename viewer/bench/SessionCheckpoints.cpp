@@ -4,6 +4,7 @@
 #include "core/Error.h"
 
 #include <algorithm>
+#include <optional>
 #include <thread>
 
 namespace ml {
@@ -51,6 +52,31 @@ ViewShown showViewUntilWithin(ProgressiveSession& session, CacheWorker::Reader& 
     }
     out.seconds = secondsSince(start);
     return out;
+}
+
+double walkViewsUntilWithin(const Scene& scene, const RenderLikeSession& how, Compositor& compositor,
+                            const std::vector<Camera>& cameras, const CompositorSettings& settings,
+                            const std::vector<Reference>& refs, double level, double firstLimit, double limit,
+                            const std::function<void(size_t, ViewShown&&)>& onView) {
+    const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ProgressiveSession session(scene, how.settings, samplerFactory(scene, how.direct, how.indirect));
+    const double made = secondsSince(start);
+    std::optional<CacheWorker::Reader> reader;
+    for (size_t v = 0; v < cameras.size(); ++v) {
+        const std::chrono::steady_clock::time_point viewStart = v == 0 ? start : std::chrono::steady_clock::now();
+        const RefinementCamera view{cameras[v], settings.width, settings.height};
+        if (v == 0) {
+            session.start(view);
+            reader.emplace(session.reader());
+        } else {
+            session.setCamera(view);
+        }
+        onView(v, showViewUntilWithin(session, *reader, compositor, cameras[v], settings, refs[v], level, viewStart,
+                                      v == 0 ? firstLimit : limit));
+    }
+    session.stop();
+    session.rethrowIfFailed();
+    return made;
 }
 
 }  // namespace ml

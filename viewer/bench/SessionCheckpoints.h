@@ -3,11 +3,14 @@
 #pragma once
 
 #include "NoisyReference.h"
+#include "RenderLikeSession.h"
 
 #include "cache/ProgressiveSession.h"
 #include "viewer/compositor/Compositor.h"
 
 #include <chrono>
+#include <functional>
+#include <vector>
 
 namespace ml {
 
@@ -39,5 +42,17 @@ struct ViewShown {
 ViewShown showViewUntilWithin(ProgressiveSession& session, CacheWorker::Reader& reader, Compositor& compositor,
                               const Camera& camera, const CompositorSettings& settings, const Reference& reference,
                               double level, std::chrono::steady_clock::time_point start, double limitSeconds);
+
+// A walkthrough as the benches time it: one session made from cold as
+// `render` makes it (`how`), started on the first camera and set to each
+// next one; every view shown by showViewUntilWithin against refs[v] at
+// settings' size, within firstLimit seconds for view 0 (whose time
+// includes making the session) and `limit` for the others. onView(v, shown)
+// takes each view as it ends. The session is stopped and its worker's
+// failure rethrown at the end. Returns the seconds the session took to make.
+double walkViewsUntilWithin(const Scene& scene, const RenderLikeSession& how, Compositor& compositor,
+                            const std::vector<Camera>& cameras, const CompositorSettings& settings,
+                            const std::vector<Reference>& refs, double level, double firstLimit, double limit,
+                            const std::function<void(size_t, ViewShown&&)>& onView);
 
 }  // namespace ml
