@@ -1,6 +1,7 @@
 // Images: pixel filter, files (EXR/HDR/PNG, atomic writes, path checks),
 // tone mapping and photometry, checked against values known exactly.
 #include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"
 #include "core/image/Photometry.h"
 #include "core/image/ToneMap.h"
 
@@ -122,6 +123,47 @@ TEST(BoxDownsample, FactorOneIsIdentityAndNonDivisorIsABug) {
     EXPECT_EQ(boxDownsample(img, 1).data, img.data);
     EXPECT_THROW(boxDownsample(img, 4), std::logic_error);
     EXPECT_THROW(boxDownsample(img, 0), std::logic_error);
+}
+
+// --- Metrics ---
+
+ImageRgb uniformImage(int w, int h, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    ImageRgb img(w, h);
+    for (float& v : img.data) v = u(rng);
+    return img;
+}
+
+ImageRgb scaled(ImageRgb img, float k) {
+    for (float& v : img.data) v *= k;
+    return img;
+}
+
+TEST(RelativeRmse, BrightImagesKeepTheFloorOfATenthExactly) {
+    // A reference of 0.5 everywhere (mean above 0.1): the floor is 0.1².
+    // Pixels are 32-bit floats (0.55 and 0.03 are not exact): 1e-7.
+    const ImageRgb r(8, 4, Rgb(0.5));
+    EXPECT_DOUBLE_EQ(relativeRmseFloor(r), 0.01);
+    EXPECT_NEAR(relativeRmse(ImageRgb(8, 4, Rgb(0.55)), r), 0.05 / std::sqrt(0.26), 1e-7);
+    EXPECT_NEAR(relativeRmsError(ImageRgb(8, 4, Rgb(0.03)), r), 0.03 / std::sqrt(0.26), 1e-7);
+    // Black: the floor stays 0.1² (no division by zero).
+    EXPECT_DOUBLE_EQ(relativeRmseFloor(ImageRgb(8, 4, Rgb(0.0))), 0.01);
+    EXPECT_NEAR(relativeRmse(ImageRgb(8, 4, Rgb(0.02)), ImageRgb(8, 4, Rgb(0.0))), 0.2, 1e-7);
+}
+
+TEST(RelativeRmse, DimImagesMeasureTheSameAtAnyScale) {
+    // Random images of mean 0.05 and under: the floor is the reference's
+    // mean squared, so scaling an image and its reference by any factor
+    // that keeps the mean under 0.1 leaves the error as it was (exactly,
+    // up to rounding); a fixed floor made the dimmer one read 1,000 times
+    // lower.
+    const ImageRgb r = scaled(uniformImage(16, 8, 3), 0.1f), x = scaled(uniformImage(16, 8, 4), 0.1f);
+    const double at1 = relativeRmse(x, r);
+    ASSERT_GT(at1, 0.1);
+    for (float k : {1e-3f, 1e-1f, 1.5f})
+        EXPECT_NEAR(relativeRmse(scaled(x, k), scaled(r, k)), at1, 1e-5 * at1) << "scale " << k;
+    EXPECT_NEAR(relativeRmsError(scaled(x, 1e-3f), scaled(r, 1e-3f)), relativeRmsError(x, r), 1e-5 * at1);
 }
 
 // --- Files ---

@@ -1,6 +1,7 @@
 // The image's error estimate (viewer/compositor/ImageErrorEstimate.h), what
 // `render --until-error` stops on, against the relative RMSE measured
-// against the path tracer, on the Cornell box and the office.
+// against the path tracer, on the Cornell box and the office, and the
+// Cornell box made 1,000 times dimmer.
 //
 // Each state is the worker's snapshot after a budget of samples on one
 // thread (the same on any machine). The measured error is the composite's
@@ -139,6 +140,49 @@ TEST(ImageErrorEstimate, OfficeWithinOneAndAHalfOfThePathTracer) {
     o.desks = 2;
     o.cabinets = 1;
     expectWithinFactor(compare(makeOfficeScene(o), 64, 36, 1024, {30000, 60000}), 1.5);
+}
+
+// The scene with every emitter's radiance times k.
+Scene withEmission(Scene scene, float k) {
+    for (Material& m : scene.materials) m.ke *= k;
+    for (Light& l : scene.lights) l.radiance *= k;
+    return scene;
+}
+
+TEST(ImageErrorEstimate, ADimSceneEstimatesAndMeasuresAsItsBrightTwin) {
+    // The Cornell box at half its emission (mean radiance 0.07) and 1,000
+    // times dimmer still (7e-5, like the back rooms of ../shared/scenes at
+    // 6e-4): the same budget makes the same cache scaled (the refinement
+    // judges levels against the cache's own white), so the dim box's
+    // estimate, and its error against the reference scaled alike, must read
+    // as its twin's. Both means are under 0.1, where the metric's floor is
+    // the mean's square; with a fixed floor of 0.1² the dim box would read under
+    // 0.01% (an error of 5% of 7e-5 over 0.1).
+    // Tolerance 1% of the value: the two caches are sampled alike but not
+    // bit for bit (the sampler's exact solid angles are not scaled, its
+    // weights are).
+    const float k = 1e-3f;
+    const Scene twin = withEmission(makeCornellBox(), 0.5f), dim = withEmission(twin, k);
+    const int size = 48;
+    const Camera camera = twin.cameraOrDefault(1.0);
+    const EmbreeScene rays(twin);
+    const ReferenceImage ref = PathTracer(rays, PathTracerSettings{}).render(camera, size, size, 256);
+    ImageRgb dimRef = ref.radiance;
+    for (float& v : dimRef.data) v *= k;
+    Compositor twinCompositor(test::glContext(), twin), dimCompositor(test::glContext(), dim);
+    CompositorSettings cs;
+    cs.width = cs.height = size;
+    cs.passes = 4;
+    const CacheSnapshot a = refined(twin, 12000), b = refined(dim, 12000);
+    ASSERT_FALSE(a.indirect.empty());
+    const ImageErrorEstimate ea = estimateImageError(twinCompositor, twin, camera, a.direct, a.indirect, cs);
+    const ImageErrorEstimate eb = estimateImageError(dimCompositor, dim, camera, b.direct, b.indirect, cs);
+    const double ma = relativeRmse(ea.image, ref.radiance), mb = relativeRmse(eb.image, dimRef);
+    std::printf("twin: estimated %.3f%%, measured %.3f%%; 1/1000 as bright: estimated %.3f%%, measured %.3f%%\n",
+                100 * ea.cache, 100 * ma, 100 * eb.cache, 100 * mb);
+    EXPECT_GT(ma, 0.01);  // an error to compare, well above rounding
+    EXPECT_NEAR(eb.cache, ea.cache, 0.01 * ea.cache);
+    EXPECT_NEAR(mb, ma, 0.01 * ma);
 }
 
 TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {

@@ -370,7 +370,7 @@ TEST(NoisyReference, ErrorAgainstTakesTheReferenceNoiseOut) {
     e = errorAgainst(x, ref);
     EXPECT_NEAR(e.raw, expected, 1e-6);
     EXPECT_NEAR(e.corrected, std::sqrt(0.05 * 0.05 - 0.03 * 0.03) / std::sqrt(0.26), 1e-6);
-    EXPECT_NEAR(relativeNoise(ref.standardError, ref.radiance), 0.03 / std::sqrt(0.26), 1e-6);
+    EXPECT_NEAR(relativeRmsError(ref.standardError, ref.radiance), 0.03 / std::sqrt(0.26), 1e-6);
     // More noise than difference: zero, not the root of a negative number.
     ref.standardError = ImageRgb(8, 4, Rgb(0.08));
     EXPECT_EQ(errorAgainst(x, ref).corrected, 0.0);

@@ -796,8 +796,8 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
        << softwareRasteriserNote(run.glDescription())
        << "- reference: the path tracer, two independent images of " << r.referenceB.spp
        << " spp averaged (" << r.reference.spp << " spp); its relative noise " << benchPct(r.reference.noise)
-       << "% (sqrt(mean σ²/(r² + 0.01)), σ from each pixel's even and odd samples), taken out of every error in "
-          "quadrature: sqrt(max(0, mean((x − r)² − σ²)/(r² + 0.01))); the raw value is in gi_curves.csv\n"
+       << "% (sqrt(mean σ²/(r² + f)), f = min(0.1, mean r)² (ImageMetrics.h), σ from each pixel's even and odd samples), taken out of every error in "
+          "quadrature: sqrt(max(0, mean((x − r)² − σ²)/(r² + f))); the raw value is in gi_curves.csv\n"
        << "- Meshlight: the session `meshlight render cornell` makes with its defaults (" << r.indirectMethod
        << "; " << r.meshlightBounces << " bounces; refinement tightened up to level "
        << IrradianceCache::kMaxRefinementLevel << "), the clock started before the cache is made; the snapshot at ";

@@ -97,7 +97,7 @@ struct Workload {
     // indirectly (light bounces off the ceiling and walls), so the path
     // tracer is noisy: measured on 2 cores at 320×180, 8.5 samples per pixel
     // per second and a relative noise (as the error is measured, see
-    // relativeNoise) of 8.8% at 256 spp, falling as 1/√spp. 2048 spp (about
+    // relativeRmsError) of 8.8% at 256 spp, falling as 1/√spp. 2048 spp (about
     // 4 minutes per scene) leave ~3%, a third of the 10% level; 2% would
     // need ~20,000 spp (40 minutes per scene). The correction (errorAgainst)
     // removes the reference's noise from every error, pooled over every
@@ -840,11 +840,12 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
     for (double level : kLevels)
         if (noiseMax <= level / 3) wellBelow += concat(wellBelow.empty() ? "" : ", ", benchPct(level), "%");
     md << "## Error metric: corrected for the reference's noise\n\n"
-       << "Relative RMSE = sqrt(mean (x − r)² / (r² + 0.01)) over pixels and channels (core/image/ImageMetrics.h). "
+       << "Relative RMSE = sqrt(mean (x − r)² / (r² + f)) over pixels and channels, f = min(0.1, mean r)² (0.01 here: "
+          "core/image/ImageMetrics.h). "
           "The reference r is itself noisy: with σ its standard error per pixel and channel, (x − r)² exceeds the "
           "squared error against the true image by σ² on average. Every error reported here is therefore "
-          "**sqrt(max(0, mean ((x − r)² − σ²) / (r² + 0.01)))**; the raw value is kept in lights_checkpoints.csv. "
-          "The reference's own noise, sqrt(mean σ² / (r² + 0.01)), is "
+          "**sqrt(max(0, mean ((x − r)² − σ²) / (r² + f)))**; the raw value is kept in lights_checkpoints.csv. "
+          "The reference's own noise, sqrt(mean σ² / (r² + f)), is "
        << noises << " at " << work.referenceSpp << " spp. ";
     if (noiseMax <= kLevels.back() / 3) {
         md << "That is well below the lowest level measured (" << benchPct(kLevels.back()) << "%).";

@@ -13,13 +13,6 @@
 
 namespace ml {
 
-namespace {
-
-// The weight of a squared difference in ml::relativeRmse.
-inline double relativeWeight(double reference) { return 1.0 / (reference * reference + 0.01); }
-
-}  // namespace
-
 Reference renderReference(const EmbreeScene& rays, const Camera& camera, int width, int height, int spp,
                           const PathTracerSettings& settings) {
     const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
@@ -29,7 +22,7 @@ Reference renderReference(const EmbreeScene& rays, const Camera& camera, int wid
     r.standardError = std::move(image.standardError);
     r.spp = spp;
     r.seconds = secondsSince(start);
-    r.noise = relativeNoise(r.standardError, r.radiance);
+    r.noise = relativeRmsError(r.standardError, r.radiance);
     return r;
 }
 
@@ -64,17 +57,8 @@ Reference averageReferences(const Reference& a, const Reference& b) {
     }
     r.spp = a.spp + b.spp;
     r.seconds = a.seconds + b.seconds;
-    r.noise = relativeNoise(r.standardError, r.radiance);
+    r.noise = relativeRmsError(r.standardError, r.radiance);
     return r;
-}
-
-double relativeNoise(const ImageRgb& sigma, const ImageRgb& reference) {
-    ML_ASSERT(sigma.data.size() == reference.data.size(), "noise image of ", sigma.width, "x", sigma.height,
-              " for a ", reference.width, "x", reference.height, " reference");
-    double sum = 0;
-    for (size_t i = 0; i < sigma.data.size(); ++i)
-        sum += double(sigma.data[i]) * sigma.data[i] * relativeWeight(reference.data[i]);
-    return sigma.data.empty() ? 0.0 : std::sqrt(sum / double(sigma.data.size()));
 }
 
 ImageError errorAgainst(const ImageRgb& x, const Reference& ref) {
@@ -82,9 +66,10 @@ ImageError errorAgainst(const ImageRgb& x, const Reference& ref) {
     if (x.width != r.width || x.height != r.height)
         throw InputError(concat("image sizes differ: ", x.width, "x", x.height, " against a ", r.width, "x",
                                 r.height, " reference"));
+    const double floor = relativeRmseFloor(r);
     double squared = 0, noise = 0;
     for (size_t i = 0; i < r.data.size(); ++i) {
-        const double w = relativeWeight(r.data[i]), d = double(x.data[i]) - r.data[i],
+        const double w = 1.0 / (double(r.data[i]) * r.data[i] + floor), d = double(x.data[i]) - r.data[i],
                      s = ref.standardError.data[i];
         squared += d * d * w;
         noise += s * s * w;
@@ -130,7 +115,7 @@ ImageRgb DoublingPathTracer::standardError() const {
 }
 
 double DoublingPathTracer::ownNoise(const ImageRgb& reference) const {
-    return relativeNoise(standardError(), reference);
+    return relativeRmsError(standardError(), reference);
 }
 
 Reference DoublingPathTracer::asReference() const {
@@ -139,7 +124,7 @@ Reference DoublingPathTracer::asReference() const {
     r.standardError = standardError();
     r.spp = spp_;
     r.seconds = seconds_;
-    r.noise = relativeNoise(r.standardError, r.radiance);
+    r.noise = relativeRmsError(r.standardError, r.radiance);
     return r;
 }
 

@@ -7,6 +7,7 @@
 
 #include "core/Camera.h"
 #include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"
 #include "core/raytrace/PathTracer.h"
 
 #include <optional>
@@ -22,7 +23,7 @@ struct Reference {
     ImageRgb radiance, standardError;
     int spp = 0;
     double seconds = 0;
-    double noise = 0;  // relativeNoise(standardError, radiance)
+    double noise = 0;  // relativeRmsError(standardError, radiance), ImageMetrics.h
 };
 
 // The path tracer's image of `camera` at `spp` samples per pixel, with its
@@ -46,10 +47,6 @@ ViewReferences renderViewReferences(const BenchRun& run, const EmbreeScene& rays
 // weighted by their samples per pixel; its standard error combined from
 // theirs. `seconds` is the sum of theirs.
 Reference averageReferences(const Reference& a, const Reference& b);
-
-// sqrt(mean σ²/(r² + 0.01)): a noise image measured as relativeRmse measures
-// an error, σ a standard error per pixel and channel, r the reference.
-double relativeNoise(const ImageRgb& sigma, const ImageRgb& reference);
 
 struct ImageError {
     double raw = 0;        // ml::relativeRmse against the reference
@@ -85,7 +82,7 @@ public:
     const ImageRgb& image() const { return image_; }
     // Its standard error per pixel and channel.
     ImageRgb standardError() const;
-    // Its own relative noise (relativeNoise), weighted by `reference`.
+    // Its own relative noise (relativeRmsError), weighted by `reference`.
     double ownNoise(const ImageRgb& reference) const;
     // The image and its standard error as a Reference (seconds: every step's).
     Reference asReference() const;

@@ -1,5 +1,7 @@
 #include "ImageErrorEstimate.h"
 
+#include "core/image/ImageMetrics.h"
+
 #include "core/Error.h"
 
 #include <cmath>
@@ -21,18 +23,6 @@ std::vector<IrradianceMeshCopy> errorMeshes(std::vector<IrradianceMeshCopy> mesh
 }
 
 }  // namespace
-
-double relativeRmsError(const ImageRgb& sigma, const ImageRgb& image) {
-    ML_ASSERT(sigma.data.size() == image.data.size(), "error image of ", sigma.width, "x", sigma.height, " for a ",
-              image.width, "x", image.height, " image");
-    if (image.data.empty()) return 0;
-    double sum = 0;
-    for (size_t i = 0; i < image.data.size(); ++i) {
-        const double s = sigma.data[i], x = image.data[i];
-        sum += s * s / (x * x + 0.01);
-    }
-    return std::sqrt(sum / double(image.data.size()));
-}
 
 ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene, const Camera& camera,
                                       const std::vector<IrradianceMeshCopy>& direct,

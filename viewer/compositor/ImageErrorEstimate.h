@@ -1,7 +1,7 @@
 // How far an image of the cache is expected to be from the converged image,
 // in the metric the logs, benches and tests measure against a reference
 // (core/image/ImageMetrics.h: relative RMSE over pixels and channels, with
-// its 0.01 floor), so that `render --until-error E` stops where a
+// its floor, relativeRmseFloor), so that `render --until-error E` stops where a
 // measurement would say about E.
 //
 // The cache's part: every mesh's predicted error (IrradianceMeshCopy::
@@ -28,6 +28,7 @@
 #include "Compositor.h"
 #include "core/Scene.h"
 #include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"  // relativeRmsError
 
 namespace ml {
 
@@ -43,10 +44,5 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
                                       const std::vector<IrradianceMeshCopy>& direct,
                                       const std::vector<IrradianceMeshCopy>& indirect,
                                       const CompositorSettings& settings);
-
-// sqrt(mean over pixels and channels of σ² / (x² + 0.01)): the relative RMSE
-// an image x whose pixels err by σ (RMS) would measure against a reference
-// (ImageMetrics.h), taking x for the reference.
-double relativeRmsError(const ImageRgb& sigma, const ImageRgb& image);
 
 }  // namespace ml

@@ -277,18 +277,21 @@ def load_rgb(path):
 
 
 def compare(out, ref):
-    """Relative RMSE sqrt(mean over pixels and channels of (x - r)^2 / (r^2 + 0.01)) and ratio of the means."""
+    """Relative RMSE sqrt(mean over pixels and channels of (x - r)^2 / (r^2 + f)) and ratio of the means;
+    f = min(0.1, mean of r)^2, as core/image/ImageMetrics.h (relativeRmseFloor)."""
     (size, x), (rsize, r) = load_rgb(out), load_rgb(ref)
     if size != rsize:
         sys.exit(f"{ref}: {rsize[0]}x{rsize[1]}, not {size[0]}x{size[1]}")
     n = 3 * len(r)
-    rel = math.sqrt(sum((a - b) ** 2 / (b * b + 0.01) for pa, pb in zip(x, r) for a, b in zip(pa, pb)) / n)
+    mean = sum(sum(p) for p in r) / n
+    f = min(0.1, mean) ** 2 if mean > 0 else 0.01
+    rel = math.sqrt(sum((a - b) ** 2 / (b * b + f) for pa, pb in zip(x, r) for a, b in zip(pa, pb)) / n)
     ratio = sum(sum(p) for p in x) / sum(sum(p) for p in r)
     print(f"cycles: against {ref}: relative RMSE {100 * rel:.3f} %, mean {ratio:.5f} x the reference's")
     noise = os.path.splitext(ref)[0] + ".noise" + os.path.splitext(ref)[1]
     if os.path.exists(noise):
         se = load_rgb(noise)[1]
-        ref_rel = math.sqrt(sum(s * s / (b * b + 0.01) for ps, pb in zip(se, r) for s, b in zip(ps, pb)) / n)
+        ref_rel = math.sqrt(sum(s * s / (b * b + f) for ps, pb in zip(se, r) for s, b in zip(ps, pb)) / n)
         own = math.sqrt(max(rel * rel - ref_rel * ref_rel, 0.0))
         print(f"cycles: the reference's own noise ({noise}) accounts for {100 * ref_rel:.3f} %; "
               f"Cycles' error alone is about {100 * own:.3f} %")
