@@ -222,16 +222,6 @@ inline double addMasked(double sum, const double* w, uint32_t mask, int count) {
     return sum;
 }
 
-// A textured light's occluded samples (EmitterTexture.h): sum + Σ w·τ over
-// the samples in `mask`, τ = L / L̄ where the sample's ray meets the light,
-// read on the CPU at the very point the GPU tested (the GPU answers one bit
-// per sample, no radiance).
-void addTextured(const EmitterTexture& texture, const SamplingFrustum& f, const double* u, const double* v,
-                 const double* w, uint32_t mask, int count, Rgb& sum) {
-    for (int k = 0; k < count; ++k)
-        if ((mask >> k & 1u) && w[k] > 0) sum += w[k] * texture.weightAlong(f.eye, f.direction(u[k], v[k]));
-}
-
 // ∫ cosθ·dω over the window rectangle [u0, u1] × [v0, v1] of `grid`'s
 // frustum: the integral of SampleGrid::weights' w du dv, in closed form
 // (Lambert's, in camera coordinates, where the receiver's normal is
@@ -886,18 +876,22 @@ struct DirectLightSampler::Impl {
                 grid.weights(u, v, w);
                 lightSum = addMasked(lightSum, w, toWeigh, grid.count);
                 occludedSum = addMasked(occludedSum, w, toWeigh & ~visible, grid.count);
-                if (texture.textured()) addTextured(texture, f, u, v, w, toWeigh & ~visible, grid.count, out.texturedOccluded);
             }
         }
         const double sampleArea = grid.pw * grid.ph / bits;
         out.lightWeight = lightSum * sampleArea;
         out.occludedWeight = occludedSum * sampleArea;
-        out.texturedOccluded *= sampleArea;
-        if (texture.textured())
+        if (texture.textured()) {
             out.texturedLight = Rgb(out.lightWeight) +
                                 textureCorrection(f, grid, bits, texture, [&](uint32_t pixel, int k, double, double) {
                                     return (lightPx[pixel] >> k & 1u) != 0;
                                 });
+            out.texturedOccluded =
+                Rgb(out.occludedWeight) +
+                textureCorrection(f, grid, bits, texture, [&](uint32_t pixel, int k, double, double) {
+                    return (lightPx[pixel] >> k & 1u) != 0 && (visiblePx[pixel] >> k & 1u) == 0;
+                });
+        }
     }
 
     // The control variate's weighting when only occluders were rasterised:
@@ -906,8 +900,10 @@ struct DirectLightSampler::Impl {
     // their centre ± reach (edge functions are affine), so only pixels on the
     // light's outline test single samples. `visible`: the occluder pass's
     // bits per pixel (a sample is occluded where its bit is 0); null when no
-    // occluder lies in the frustum. A textured light's occluded samples are
-    // weighed by τ; its correction to the closed form is textureCorrection's.
+    // occluder lies in the frustum. A textured light's corrections for τ, to
+    // the closed form and to the occluded weight, are textureCorrection's,
+    // from the same block samples: where a block is all in shadow they
+    // cancel, as the light it hides does.
     void weighAnalytic(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, const SampleGrid& grid,
                        int bits, const uint32_t* visible, const EmitterTexture& texture, ImageResult& out) {
         const int size = settings.imageSize;
@@ -916,7 +912,6 @@ struct DirectLightSampler::Impl {
         const std::vector<WindowPiece> light = windowPieces(f, pieces, pw, ph);
         std::vector<WindowPiece::Span> spans(light.size());
         pixelClass.resize(size_t(size));
-        const bool textured = texture.textured();
         double occludedSum = 0, occludedExact = 0;
         double u[32], v[32], w[32];
         // A run of pixels wholly on the light whose every sample is
@@ -925,11 +920,7 @@ struct DirectLightSampler::Impl {
         // weight over them, which Lambert's form gives for the run's
         // rectangle at once. Unbiased as the samples were, without their
         // noise, and one closed form instead of a hash and a weight per
-        // sample (in the office most occluded samples are such). A
-        // textured light's Σ w·τ there is that integral plus its samples'
-        // Σ w (τ − 1), still read one by one (`runTextured`): unbiased too,
-        // and with a uniform texture what the untextured light gives.
-        Rgb runTextured(0.0);
+        // sample (in the office most occluded samples are such).
         int runStart = -1;
         auto closeRun = [&](int j, int end) {
             if (runStart < 0) return;
@@ -967,13 +958,6 @@ struct DirectLightSampler::Impl {
                     out.visibleSamples += uint32_t(bits) - bitCount(occluded);
                     if (occluded == allBits) {
                         if (runStart < 0) runStart = i;
-                        if (textured) {
-                            grid.points(i, j, pixel, u, v);
-                            grid.weights(u, v, w);
-                            Rgb wt(0.0);
-                            addTextured(texture, f, u, v, w, allBits, bits, wt);
-                            runTextured += wt - Rgb(addMasked(0.0, w, allBits, bits));
-                        }
                         continue;
                     }
                     closeRun(j, i);
@@ -981,7 +965,6 @@ struct DirectLightSampler::Impl {
                     grid.points(i, j, pixel, u, v);
                     grid.weights(u, v, w);
                     occludedSum = addMasked(occludedSum, w, occluded, bits);
-                    if (textured) addTextured(texture, f, u, v, w, occluded, bits, out.texturedOccluded);
                     continue;
                 }
                 closeRun(j, i);
@@ -1000,14 +983,19 @@ struct DirectLightSampler::Impl {
                 if (!occluded) continue;
                 grid.weights(u, v, w);
                 occludedSum = addMasked(occludedSum, w, occluded, bits);
-                if (textured) addTextured(texture, f, u, v, w, occluded, bits, out.texturedOccluded);
             }
             closeRun(j, rowHi + 1);
         }
         const double sampleArea = pw * ph / bits;
         out.occludedWeight = occludedSum * sampleArea + occludedExact;
-        out.texturedOccluded = (out.texturedOccluded + runTextured) * sampleArea + Rgb(occludedExact);
-        if (textured) out.texturedLight = analyticCorrection(f, pieces, grid, bits, texture);  // lightWeight stays 0
+        if (!texture.textured()) return;
+        out.texturedLight = analyticCorrection(f, pieces, grid, bits, texture);  // lightWeight stays 0
+        out.texturedOccluded =
+            Rgb(out.occludedWeight) +
+            textureCorrection(f, grid, bits, texture, [&](uint32_t pixel, int k, double uk, double vk) {
+                return visible && (visible[pixel] >> k & 1u) == 0 &&
+                       std::any_of(light.begin(), light.end(), [&](const WindowPiece& wp) { return wp.contains(uk, vk); });
+            });
     }
 
     // Setup of one pair: its frusta and their culls, or, where it needs no
