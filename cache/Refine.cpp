@@ -270,7 +270,13 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             const bool splittable = len > metric.minLength(mid);
             const double seen = metric.weight(mid);
             edgeWeight += seen * len * len;
-            if (splittable) edgeErr += seen * len * len * predicted * predicted;
+            // In the estimate, an edge errs by at most the level shown
+            // (what showing nothing or twice the light errs by): beyond, the
+            // plane fit is not modelling the light (a vertex beside an
+            // emitter, hundreds of times white, makes its dark neighbours'
+            // residuals huge). Splits keep the uncapped priority.
+            const double counted = std::min(predicted, 1.0);
+            if (splittable) edgeErr += seen * len * len * counted * counted;
             if (collect && splittable && predicted > cs.splitTolerance)
                 out.actions.push_back({predicted * len / s.diagonal * seen, uint32_t(l), Action::Split, a, b});
         }
@@ -297,11 +303,15 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
                     {rel * std::sqrt(area) / s.diagonal * seen, uint32_t(l), Action::ResampleGrid, uint32_t(g), 0});
         }
     }
-    // Each light's error is relative to the same white: the lights' errors
-    // add in quadrature over one copy of the surfaces.
-    const double meshes = double(s.meshes.size());
-    const double edgeRms = edgeWeight > 0 ? std::sqrt(edgeErr * meshes / edgeWeight) : 0.0;
-    const double noiseRms = noiseWeight > 0 ? std::sqrt(noiseErr * meshes / noiseWeight) : 0.0;
+    // Each mesh's errors are relative to its own light's level there: where
+    // several lights add up, the relative error of their sum is at most the
+    // RMS of theirs (equal at a place one light dominates, as the light
+    // meshes' coverage arranges), so the estimate is the RMS over every
+    // mesh's surface. (It was multiplied by the number of meshes, as if
+    // each were relative to the total: the office's 13 direct meshes read
+    // 10.7% at 16 s where the whole image measured 4.7%; 3.3% now.)
+    const double edgeRms = edgeWeight > 0 ? std::sqrt(edgeErr / edgeWeight) : 0.0;
+    const double noiseRms = noiseWeight > 0 ? std::sqrt(noiseErr / noiseWeight) : 0.0;
     out.error = std::hypot(edgeRms, noiseRms);
     return out;
 }
