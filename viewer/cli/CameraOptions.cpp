@@ -25,7 +25,13 @@ Camera cameraFromOptions(const Options& o, const Scene& scene, double aspect) {
     // a closed interior's outer walls (core/raytrace/DefaultCamera.h).
     if (!scene.camera && !o.has("camera-pos")) {
         const CameraChoice choice = chooseDefaultCamera(scene, aspect);
-        if (choice.camera.position != c.position) std::printf("camera: %s\n", choice.reason.c_str());
+        if (choice.camera.position != c.position) {
+            // The options that give this view again (for another command, or to move from it).
+            const Camera& k = choice.camera;
+            std::printf("camera: %s (--camera-pos %.6g,%.6g,%.6g --camera-target %.6g,%.6g,%.6g --fov %.6g)\n",
+                        choice.reason.c_str(), k.position.x, k.position.y, k.position.z, k.target.x, k.target.y,
+                        k.target.z, k.fovYDegrees);
+        }
         c = choice.camera;
     }
     if (o.has("camera-pos")) c.position = o.vec3("camera-pos");
