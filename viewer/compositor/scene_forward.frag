@@ -13,6 +13,9 @@ layout(location = 0) out vec4 outColor;
 
 void main() {
     if (cutAway()) discard;  // a hole of a cut-out: what lies behind shows
+    // Back faces a hair behind, as in scene_gbuffer.frag: of two coincident
+    // layers facing opposite ways the front one shows.
+    gl_FragDepth = gl_FrontFacing ? gl_FragCoord.z : gl_FragCoord.z * (1.0 - 1e-6);  // reversed: smaller is further
 #if QUANTITY == 1
     vec3 value = surfaceKd(vKd);
 #else
