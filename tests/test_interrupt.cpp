@@ -6,6 +6,7 @@
 #include "RunCommand.h"
 #include "TempDirTest.h"
 #include "core/image/Image.h"
+#include "core/image/ImageMetrics.h"
 
 #include <gtest/gtest.h>
 #include <fcntl.h>
@@ -216,12 +217,7 @@ TEST_F(Interrupt, TwentyInterruptsLeaveWholeFilesAndTheCacheResumes) {
         const ImageRgb resumedImage = readImageLinear(dir + "/r.exr");
         const bool same = resumedImage.data == expected.data && bytes(dir + "/c.bin") == expectedCache;
         exact += same;
-        double sum = 0;  // the project's relative RMSE against the whole run's image
-        for (size_t i = 0; i < resumedImage.data.size(); ++i) {
-            const double d = resumedImage.data[i] - expected.data[i];
-            sum += d * d / (double(expected.data[i]) * expected.data[i] + 0.01);
-        }
-        const double error = std::sqrt(sum / double(resumedImage.data.size()));
+        const double error = relativeRmse(resumedImage, expected);  // against the whole run's image
         worst = std::max(worst, error);
         EXPECT_LT(error, 1e-5) << "the resumed run's image is not the whole run's";
         if (kExactResume) {

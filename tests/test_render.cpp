@@ -2,6 +2,7 @@
 // exact reference, composited, on a small Cornell box render.
 #include "cache/IrradianceCache.h"
 #include "TestSamplers.h"
+#include "core/image/ImageMetrics.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/direct/DirectLightSampler.h"
@@ -47,16 +48,6 @@ test::IrradianceFn samplerEstimate(DirectLightSampler& sampler) {
     return [&sampler](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
         return sampler.sample(l, x, n, seed).irradiance;
     };
-}
-
-// sqrt(mean over pixels and channels of (x−r)²/(r²+0.01)), the project's relative RMSE.
-double relativeRmse(const ImageRgb& x, const ImageRgb& r) {
-    double sum = 0;
-    for (size_t i = 0; i < x.data.size(); ++i) {
-        const double d = x.data[i] - r.data[i];
-        sum += d * d / (double(r.data[i]) * r.data[i] + 0.01);
-    }
-    return std::sqrt(sum / double(x.data.size()));
 }
 
 }  // namespace
