@@ -612,7 +612,7 @@ struct DirectLightSampler::Impl {
                            int bits, const EmitterTexture& texture) const {
         const std::vector<WindowPiece> light = windowPieces(f, pieces, grid.pw, grid.ph);
         return textureCorrection(f, grid, bits, texture, [&](uint32_t, int, double u, double v) {
-            return std::any_of(light.begin(), light.end(), [&](const WindowPiece& wp) { return wp.contains(u, v); });
+            return onAnyPiece(light, u, v);
         });
     }
 
@@ -993,8 +993,7 @@ struct DirectLightSampler::Impl {
         out.texturedOccluded =
             Rgb(out.occludedWeight) +
             textureCorrection(f, grid, bits, texture, [&](uint32_t pixel, int k, double uk, double vk) {
-                return visible && (visible[pixel] >> k & 1u) == 0 &&
-                       std::any_of(light.begin(), light.end(), [&](const WindowPiece& wp) { return wp.contains(uk, vk); });
+                return visible && (visible[pixel] >> k & 1u) == 0 && onAnyPiece(light, uk, vk);
             });
     }
 

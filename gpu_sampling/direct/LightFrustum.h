@@ -93,4 +93,11 @@ struct WindowPiece {
 std::vector<WindowPiece> windowPieces(const SamplingFrustum& f, const std::vector<Polygon3>& pieces, double pw = 0,
                                       double ph = 0);
 
+// (u, v) on the window lies on one of the light's pieces.
+inline bool onAnyPiece(const std::vector<WindowPiece>& pieces, double u, double v) {
+    for (const WindowPiece& p : pieces)
+        if (p.contains(u, v)) return true;
+    return false;
+}
+
 }  // namespace ml
