@@ -221,6 +221,68 @@ TEST(Textures, MipmapsAverageAFarCheckerToItsMean) {
     std::printf("far checker: textured / untextured in [%.4f, %.4f] (mean 0.5)\n", lo, hi);
 }
 
+// A texture atlas without room between its charts, seen at a grazing
+// angle: the floor reads a long thin grey chart of a 1024² texture (along
+// the view texels 0..1023, across it texels 0..15 and 2 texels of grey
+// beyond: a thin gutter), the rest of the texture
+// white. Every texel the floor covers is grey, as the path tracer reads
+// it; a filter adds white only by reaching past the gutter. One pass (the
+// viewer: the trilinear level, from the footprint's longer axis) reads a
+// square as long as the grazing footprint, across the chart; several
+// passes filter over their samples' spacing along the shorter axis
+// (textureLodShiftFor). Measured here: +35.8% with one pass, +0.36% with 4
+// passes of 4 × 4 sub-pixels. Bounds: 1% for 4 passes (the chart is 16
+// texels wide: the back rooms' floor came out 0.3% off), one pass at least
+// 10× further off: the filter this test is about.
+TEST(Textures, SeveralPassesFilterAnAtlasOverTheirSamplesNotAcrossItsCharts) {
+    const int n = 1024, chart = 16 + 2;
+    std::vector<unsigned char> rgb;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            for (int c = 0; c < 3; ++c) rgb.push_back(x < chart ? 128 : 255);
+    const auto atlas = makeTexture(n, n, rgb, false, TextureWrap::Repeat);
+    const double grey = atlas->sample(Vec2(0.005, 0.5)).r;  // sRGB 128, decoded: 0.2158
+    EXPECT_NEAR(grey, 0.2158, 1e-3);
+    Scene textured = floorScene(atlas, Rgb(1.0));
+    textured.materials[0].kdMap.scale = Vec2(16.0 / n, 1.0);  // u = (x + 1)/2: the chart's 16 texels across
+    const Scene plain = floorScene(nullptr, Rgb(1.0));
+    Camera camera;  // 10 cm above the floor, looking along z: along the chart
+    camera.position = Vec3(0, 0.1, 1.3);
+    camera.target = Vec3(0, 0, -1);
+    camera.fovYDegrees = 40;
+    const std::vector<IrradianceMeshCopy> meshes = smoothCache(plain);
+    const auto reflectance = [&](const Scene& scene, int passes) {
+        Compositor compositor(test::glContext(), scene);
+        CompositorSettings s;
+        s.width = s.height = 64;
+        s.supersample = 4;
+        s.passes = passes;
+        s.quantity = CompositeQuantity::Reflectance;
+        return compositor.render(camera, meshes, s);
+    };
+    const ImageRgb covered = reflectance(plain, 1);  // Kd 1 on the floor, 0 beyond it
+    double error[2] = {0, 0};
+    int pixels = 0;
+    const int passes[2] = {1, 4};
+    for (int k = 0; k < 2; ++k) {
+        const ImageRgb image = reflectance(textured, passes[k]);
+        double sum = 0;
+        pixels = 0;
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x) {
+                if (covered.at(x, y).r < 0.999) continue;  // wholly the floor
+                sum += image.at(x, y).r;
+                ++pixels;
+            }
+        error[k] = sum / pixels / grey - 1;
+    }
+    EXPECT_GT(pixels, 64 * 64 / 4);
+    std::printf("atlas floor's mean reflectance over %d pixels: %+.2f%% (one pass), %+.2f%% (4 passes)\n", pixels,
+                100 * error[0], 100 * error[1]);
+    EXPECT_LT(std::abs(error[1]), 0.01);
+    EXPECT_GT(std::abs(error[0]), 10 * std::abs(error[1]));
+}
+
 // The path tracer reads Kd at the hit's uv: with the same seed, the
 // radiance of a textured floor is Kd(uv)/π·E where the untextured floor
 // (Kd 1) gives 1/π·E, wherever a pixel lies inside one texel (nearest),

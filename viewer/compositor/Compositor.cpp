@@ -19,6 +19,8 @@
 
 namespace ml {
 
+float textureLodShiftFor(int passes) { return passes > 1 ? float(-0.5 * std::log2(double(passes)) - 1.0) : 0.0f; }
+
 void CompositorSettings::validate() const {
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError(concat("image size ", width, "x", height, " is not within 1..16384"));
@@ -149,6 +151,7 @@ struct Compositor::Impl {
     CompositeQuantity quantity = CompositeQuantity::Radiance;
     Photometry photometry;
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
+    float textureLodShift = 0;  // common_textures.glsl's uTextureLodShift for this composite
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
 
     // The specular pass, in scenes with a glossy or specular material: the
@@ -400,6 +403,7 @@ struct Compositor::Impl {
             if (r.count == 0) continue;
             const Material* mat = r.material >= 0 ? &scene.materials[size_t(r.material)] : nullptr;
             const bool kd = mat && mat->kdMap, ke = mat && mat->keMap;
+            gl.Uniform1f(p.uniform("uTextureLodShift"), textureLodShift);
             gl.Uniform1i(p.uniform("uKdMapped"), kd ? 1 : 0);
             gl.Uniform1i(p.uniform("uKeMapped"), ke ? 1 : 0);
             if (kd) {
@@ -646,6 +650,7 @@ struct Compositor::Impl {
         setFrustum();
         quantity = s.quantity;
         photometry = s.photometry;
+        textureLodShift = textureLodShiftFor(s.passes);
         // The last traced specular image, if it is of this view's grid.
         const SpecularTrace& st = specularTrace;
         const bool specularFits = st.valid && st.settings.width == s.width && st.settings.height == s.height &&

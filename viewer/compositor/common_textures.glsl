@@ -24,6 +24,35 @@ uniform float uAlphaCutoff;   // Material::alphaCutoff
 uniform int uAlphaFromGrey;   // 1: no alpha channel, the grey level is the coverage
 #endif
 
+#if TEXTURES
+// The mip level each texture read takes, from the fragment's footprint in
+// texels (Compositor.h's textureLodShiftFor says why): log2 of its longer
+// axis for one pass (the GL's own trilinear choice); for K passes, log2 of
+// its shorter axis plus this shift (negative).
+uniform float uTextureLodShift;
+vec2 gUvDx, gUvDy;  // this fragment's uv derivatives (footprintBegin)
+#endif
+
+// Takes the fragment's uv derivatives, first thing in main(): before a
+// discard or any branch, where derivatives are defined.
+void footprintBegin() {
+#if TEXTURES
+    gUvDx = dFdx(vUv);
+    gUvDy = dFdy(vUv);
+#endif
+}
+
+#if TEXTURES
+// The texture at vUv × transform.xy + transform.zw, at the level above (one
+// read: no branch, which llvmpipe would take both ways).
+vec4 footprintTexture(sampler2D tex, vec4 transform) {
+    vec2 texels = vec2(textureSize(tex, 0)) * transform.xy;
+    float lx = length(gUvDx * texels), ly = length(gUvDy * texels);
+    float axis = uTextureLodShift < 0.0 ? min(lx, ly) : max(lx, ly);
+    return textureLod(tex, vUv * transform.xy + transform.zw, log2(max(axis, 1e-8)) + uTextureLodShift);
+}
+#endif
+
 // Whether this fragment falls in a hole of its face's cut-out. (The grey
 // level of an image without alpha is read decoded from sRGB here, not as the
 // CPU reads it: the same for the black and white masks map_d files hold.)
@@ -41,7 +70,7 @@ bool cutAway() {
 vec3 surfaceKd(vec3 faceKd) {
 #if TEXTURES
     if (uKdMapped != 0)
-        return clamp(uKdFactor * texture(uKdTexture, vUv * uKdTransform.xy + uKdTransform.zw).rgb, 0.0, 1.0);
+        return clamp(uKdFactor * footprintTexture(uKdTexture, uKdTransform).rgb, 0.0, 1.0);
 #endif
     return faceKd;
 }
@@ -49,7 +78,7 @@ vec3 surfaceKd(vec3 faceKd) {
 // Emitted radiance here over the light's uniform radiance (Light::radiance).
 vec3 emissionScale() {
 #if TEXTURES
-    if (uKeMapped != 0) return uKeScale * texture(uKeTexture, vUv * uKeTransform.xy + uKeTransform.zw).rgb;
+    if (uKeMapped != 0) return uKeScale * footprintTexture(uKeTexture, uKeTransform).rgb;
 #endif
     return vec3(1.0);
 }

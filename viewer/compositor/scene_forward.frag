@@ -12,6 +12,7 @@ uniform vec3 uLuxFactors;  // lm/W per channel: Photometry::factors(), efficacy 
 layout(location = 0) out vec4 outColor;
 
 void main() {
+    footprintBegin();
     if (cutAway()) discard;  // a hole of a cut-out: what lies behind shows
     // Back faces a hair behind, as in scene_gbuffer.frag: of two coincident
     // layers facing opposite ways the front one shows.

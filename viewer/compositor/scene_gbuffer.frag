@@ -11,6 +11,7 @@ layout(location = 1) out vec4 outEmissionScale;
 #endif
 
 void main() {
+    footprintBegin();
     if (cutAway()) discard;  // a hole of a cut-out: what lies behind shows
     // Back faces a hair behind their depth, as irradiance.frag's: a surface
     // modelled two-sided as two coincident layers facing opposite ways (the
