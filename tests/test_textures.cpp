@@ -230,10 +230,12 @@ TEST(Textures, MipmapsAverageAFarCheckerToItsMean) {
 // viewer: the trilinear level, from the footprint's longer axis) reads a
 // square as long as the grazing footprint, across the chart; several
 // passes filter over their samples' spacing along the shorter axis
-// (textureLodShiftFor). Measured here: +35.8% with one pass, +0.36% with 4
-// passes of 4 × 4 sub-pixels. Bounds: 1% for 4 passes (the chart is 16
-// texels wide: the back rooms' floor came out 0.3% off), one pass at least
-// 10× further off: the filter this test is about.
+// (textureLodShiftFor). Measured here (llvmpipe): +35.8% with one pass,
+// +0.36% with 4 passes of 4 × 4 sub-pixels; the trilinear level of the
+// samples' spacing, isotropic, gave +3.5%. Bound: 1% for 4 passes (the
+// chart is 16 texels wide: the back rooms' floor came out 0.3% off). The
+// one pass is printed, not bounded: a GL that filters anisotropically
+// reads that footprint as it is (Compositor's textureAnisotropy).
 TEST(Textures, SeveralPassesFilterAnAtlasOverTheirSamplesNotAcrossItsCharts) {
     const int n = 1024, chart = 16 + 2;
     std::vector<unsigned char> rgb;
@@ -280,7 +282,6 @@ TEST(Textures, SeveralPassesFilterAnAtlasOverTheirSamplesNotAcrossItsCharts) {
     std::printf("atlas floor's mean reflectance over %d pixels: %+.2f%% (one pass), %+.2f%% (4 passes)\n", pixels,
                 100 * error[0], 100 * error[1]);
     EXPECT_LT(std::abs(error[1]), 0.01);
-    EXPECT_GT(std::abs(error[0]), 10 * std::abs(error[1]));
 }
 
 // The path tracer reads Kd at the hit's uv: with the same seed, the

@@ -204,7 +204,10 @@ struct Compositor::Impl {
         return GlProgram(gl, {{GL_VERTEX_SHADER, vertName, std::move(vert)}, {GL_FRAGMENT_SHADER, fragName, std::move(frag)}});
     }
     // "#define TEXTURES 0|1\n": set once per scene (common_textures.glsl).
-    std::string texturesDefine() const { return concat("#define TEXTURES ", textured ? 1 : 0, "\n"); }
+    std::string texturesDefine() const {
+        return concat("#define TEXTURES ", textured ? 1 : 0, "\n#define TEXTURE_ANISOTROPY ", anisotropy > 1 ? 1 : 0,
+                      "\n");
+    }
 
     // Display variants: operator and contours matter only where they are used.
     static std::string displayDefines(CompositeQuantity q, int supersample, ToneOperator op, bool contours, int& key) {
@@ -269,6 +272,7 @@ struct Compositor::Impl {
 
     Impl(GlContext& ctx, const Scene& s)
         : gl(ctx.gl()), scene(s), origin(s.bounds.center()), textured(s.hasTextures()) {
+        if (textured) anisotropy = textureAnisotropy();
         const std::string tex = texturesDefine();
         surfaceProgram = program("scene_gbuffer.vert", glslSource({tex.c_str(), shaders::scene_gbuffer_vert}),
                                  "scene_gbuffer.frag",
@@ -357,14 +361,16 @@ struct Compositor::Impl {
     // texels by most of a pixel (tests/test_textures.cpp: a nearest texel
     // came out blended with its neighbour, Kd wrong by up to 2.4×), and
     // each of its taps costs CPU time.
-    void uploadTextures() {
+    GLint textureAnisotropy() const {
         const bool llvmpipe = gl.renderer.find("llvmpipe") != std::string::npos;
-        if (!llvmpipe && (gl.hasExtension("GL_ARB_texture_filter_anisotropic") ||
-                          gl.hasExtension("GL_EXT_texture_filter_anisotropic"))) {
-            GLint most = 1;
-            gl.GetIntegerv(GL_MAX_TEXTURE_MAX_ANISOTROPY, &most);
-            anisotropy = std::clamp(most, 1, 16);
-        }
+        if (llvmpipe || !(gl.hasExtension("GL_ARB_texture_filter_anisotropic") ||
+                          gl.hasExtension("GL_EXT_texture_filter_anisotropic")))
+            return 1;
+        GLint most = 1;
+        gl.GetIntegerv(GL_MAX_TEXTURE_MAX_ANISOTROPY, &most);
+        return std::clamp(most, 1, 16);
+    }
+    void uploadTextures() {
         for (const DrawRange& r : ranges) {
             if (r.material < 0) continue;
             const Material& mat = scene.materials[size_t(r.material)];

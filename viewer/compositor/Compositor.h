@@ -78,9 +78,10 @@ struct CompositorSettings {
 };
 
 // How textures are filtered in a composite of `passes` passes
-// (common_textures.glsl). One pass (the viewer): 0, trilinearly at the
-// level of the sub-pixel's footprint's longer axis, as the GL chooses it:
-// smooth, but wider than the footprint. Any filter wider than the pixel's
+// (common_textures.glsl). One pass (the viewer): 0, the GL's own filter
+// over each sub-pixel's footprint: anisotropic where the GL offers it (not
+// llvmpipe), else trilinear at the level of the footprint's longer axis,
+// smooth but wider than the footprint. Any filter wider than the pixel's
 // own samples adds a blur the path tracer (which reads texels at its hits)
 // does not, and a blur is a bias where a texture is an atlas of charts
 // without gutters: on the back rooms' floor, seen at a grazing angle, the

@@ -43,13 +43,20 @@ void footprintBegin() {
 }
 
 #if TEXTURES
-// The texture at vUv × transform.xy + transform.zw, at the level above (one
-// read: no branch, which llvmpipe would take both ways).
+// The texture at vUv × transform.xy + transform.zw over the footprint above.
 vec4 footprintTexture(sampler2D tex, vec4 transform) {
+    vec2 uv = vUv * transform.xy + transform.zw;
+#if TEXTURE_ANISOTROPY
+    // A GL that filters anisotropically (Compositor's textureAnisotropy),
+    // one pass: its own filter over the footprint, as texture() would.
+    if (uTextureLodShift >= 0.0) return textureGrad(tex, uv, gUvDx * transform.xy, gUvDy * transform.xy);
+#endif
+    // The level of the longer axis (one pass) or the shorter (several), in
+    // one read: on llvmpipe, no branch, which it would take both ways.
     vec2 texels = vec2(textureSize(tex, 0)) * transform.xy;
     float lx = length(gUvDx * texels), ly = length(gUvDy * texels);
     float axis = uTextureLodShift < 0.0 ? min(lx, ly) : max(lx, ly);
-    return textureLod(tex, vUv * transform.xy + transform.zw, log2(max(axis, 1e-8)) + uTextureLodShift);
+    return textureLod(tex, uv, log2(max(axis, 1e-8)) + uTextureLodShift);
 }
 #endif
 
