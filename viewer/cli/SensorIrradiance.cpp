@@ -10,6 +10,7 @@
 #include "core/raytrace/EmbreeScene.h"
 #include "gpu_sampling/direct/RayTracedLightSampler.h"
 #include "gpu_sampling/gl/GlContext.h"
+#include "gpu_sampling/indirect/RadianceProxy.h"
 
 #include <array>
 #include <chrono>
@@ -171,11 +172,16 @@ bool refineInterruptibly(ProgressiveSession& session, CacheWorker::Reader& reade
 }
 
 // Indirect irradiance at the points, as render computes it: the direct
-// caches are refined (with bounce after bounce of indirect caches) on the
-// worker until converged or `seconds`; then, bounce by bounce, each point
-// gathers from the source the bounce's cache gathered from (the direct
-// meshes for bounce 1, bounce n−1's mesh for bounce n), `passes` jittered
-// gathers averaged. Returns one sum over the bounces per point.
+// caches are refined (with bounce after bounce of indirect caches, and the
+// caustics' photons) on the worker until converged or `seconds`; then,
+// bounce by bounce, each point gathers from the source the bounce's cache
+// gathered from (the direct meshes and the caustic mesh for bounce 1,
+// bounce n−1's mesh for bounce n), `passes` jittered gathers averaged; and
+// each point on a surface adds the caustic mesh's irradiance there (light
+// through or off mirrors and glass: the direct sampler treats them as
+// opaque). A point off every surface (a work plane in the air) has no
+// caustic mesh to read: its caustics are left out. Returns one sum over the
+// bounces and the caustics per point.
 std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, const std::vector<SensorPoint>& points,
                                  const char* label, const InterruptGuard* interrupt, SensorReadings& readings) {
     const DirectChoice& choice = s.direct;
@@ -207,14 +213,17 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
     }
     const IrradianceCache& cache = session.cache();
     const IndirectSolver& solver = *session.indirect();
+    std::vector<IrradianceMeshCopy> caustics;  // the caustic mesh, if the scene has caustics
+    if (session.caustics() && session.caustics()->active()) caustics.push_back(session.caustics()->copyMesh());
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::unique_ptr<IndirectEstimator> estimator = makeIndirectEstimator(*context, scene, s.indirect);
     Progress progress(concat(label, ": gathering"), points.size() * size_t(solver.started()));
     for (int b = 1; b <= solver.started(); ++b) {
         std::vector<IrradianceMeshCopy> source;
-        if (b == 1)
+        if (b == 1) {
             source = cache.copyMeshes();
-        else
+            source.insert(source.end(), caustics.begin(), caustics.end());  // as CacheWorker's bounce 1 reflects
+        } else
             source.push_back(solver.copyMesh(b - 1));
         // Slot 0 is bounce 1's (where the ray gather would add gathered
         // lights' emission, GatheredLights.h); later bounces use slot 1.
@@ -228,6 +237,13 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
             sum[i] += e / double(choice.passes);
             progress.update(size_t(b - 1) * points.size() + i + 1);
         }
+    }
+    if (!caustics.empty()) {
+        // A sensor a little off its surface (as a CSV gives it) still reads
+        // it: a thousandth of the scene's size.
+        const double diagonal = std::max(scene.bounds.diagonal(), 1e-30);
+        const MeshIrradianceLookup lookup(caustics.front(), diagonal / 64, 1e-3 * diagonal);
+        for (size_t i = 0; i < points.size(); ++i) sum[i] += lookup.at(points[i].position, points[i].normal);
     }
     progress.finish();
     if (solver.started() < solver.bounces())
