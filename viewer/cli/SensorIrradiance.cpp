@@ -244,12 +244,13 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
         const double diagonal = std::max(scene.bounds.diagonal(), 1e-30);
         const MeshIrradianceLookup lookup(caustics.front(), diagonal / 64, 1e-3 * diagonal);
         for (size_t i = 0; i < points.size(); ++i) sum[i] += lookup.at(points[i].position, points[i].normal);
+    }
+    progress.finish();
+    if (!caustics.empty())
         std::fprintf(stderr,
                      "note: the scene has caustics (light through or off mirrors and glass): they are read from "
                      "the surfaces' caustic mesh, so a point off every surface (a work plane in the air) leaves "
                      "them out\n");
-    }
-    progress.finish();
     if (solver.started() < solver.bounces())
         std::fprintf(stderr, "warning: only %d of %d bounces were reached in the time given\n", solver.started(),
                      solver.bounces());
