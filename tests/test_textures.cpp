@@ -229,10 +229,10 @@ TEST(Textures, MipmapsAverageAFarCheckerToItsMean) {
 // it; a filter adds white only by reaching past the gutter. One pass (the
 // viewer: the trilinear level, from the footprint's longer axis) reads a
 // square as long as the grazing footprint, across the chart; several
-// passes filter over their samples' spacing along the shorter axis
+// passes filter over half their samples' spacing along the shorter axis
 // (textureLodShiftFor). Measured here (llvmpipe): +35.8% with one pass,
-// +0.36% with 4 passes of 4 × 4 sub-pixels; the trilinear level of the
-// samples' spacing, isotropic, gave +3.5%. Bound: 1% for 4 passes (the
+// +0.36% with 4 passes of 4 × 4 sub-pixels; the GL's isotropic filter over
+// the same half spacing gave +3.5%. Bound: 1% for 4 passes (the
 // chart is 16 texels wide: the back rooms' floor came out 0.3% off). The
 // one pass is printed, not bounded: a GL that filters anisotropically
 // reads that footprint as it is (Compositor's textureAnisotropy).
