@@ -405,11 +405,11 @@ struct Compositor::Impl {
             gl.DrawArrays(GL_TRIANGLES, 0, sceneVertices);
             return;
         }
+        gl.Uniform1f(p.uniform("uTextureLodShift"), textureLodShift);  // the same for every range
         for (const DrawRange& r : ranges) {
             if (r.count == 0) continue;
             const Material* mat = r.material >= 0 ? &scene.materials[size_t(r.material)] : nullptr;
             const bool kd = mat && mat->kdMap, ke = mat && mat->keMap;
-            gl.Uniform1f(p.uniform("uTextureLodShift"), textureLodShift);
             gl.Uniform1i(p.uniform("uKdMapped"), kd ? 1 : 0);
             gl.Uniform1i(p.uniform("uKeMapped"), ke ? 1 : 0);
             if (kd) {

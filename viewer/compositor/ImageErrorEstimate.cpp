@@ -1,7 +1,5 @@
 #include "ImageErrorEstimate.h"
 
-#include "core/image/ImageMetrics.h"
-
 #include "core/Error.h"
 
 #include <cmath>
