@@ -174,6 +174,12 @@ void Scene::finalize() {
     for (Light& l : lights)
         if (l.punctual()) punctual.push_back(std::move(l));
     lights.clear();
+    // An area light is named after its material, with "#k" where the scene
+    // (not only its mesh) has several lights of that material, so that each
+    // light's name, a column of `probe`'s CSV and a name in view scripts, is
+    // its own.
+    std::vector<uint32_t> lightMaterial;
+    std::vector<int> lightLine;
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
         const Mesh& mesh = meshes[mi];
         // Grouped by connection; grouped again where a two-sided panel splits.
@@ -184,22 +190,35 @@ void Scene::finalize() {
         bool split = false;
         for (const auto& [root, tris] : groups) split |= splitBySide(mesh, tris, side);
         if (split) groups = connectedEmitters(*this, mesh, side);
-        std::map<uint32_t, int> perMaterial;
-        for (auto& [root, tris] : groups) perMaterial[mesh.materials[tris.front()]]++;
-        std::map<uint32_t, int> seen;
         for (auto& [root, tris] : groups) {
             const uint32_t mat = mesh.materials[tris.front()];
-            Light light = makeLight(*this, mi, mat, tris);
-            light.name = materials[mat].name;
-            if (perMaterial[mat] > 1) light.name += "#" + std::to_string(seen[mat]++);
-            if (!(light.area > 0))
-                throw InputError(SourceLocation{name, mesh.sourceLines.empty() ? 0 : mesh.sourceLines[tris.front()]},
-                                 concat("light '", light.name, "' has zero area"));
-            lights.push_back(std::move(light));
+            lights.push_back(makeLight(*this, mi, mat, tris));
+            lightMaterial.push_back(mat);
+            lightLine.push_back(mesh.sourceLines.empty() ? 0 : mesh.sourceLines[tris.front()]);
         }
+    }
+    std::map<uint32_t, int> perMaterial, seen;
+    for (uint32_t mat : lightMaterial) perMaterial[mat]++;
+    for (size_t i = 0; i < lights.size(); ++i) {
+        Light& light = lights[i];
+        const uint32_t mat = lightMaterial[i];
+        light.name = materials[mat].name;
+        if (perMaterial[mat] > 1) light.name += "#" + std::to_string(seen[mat]++);
+        if (!(light.area > 0))
+            throw InputError(SourceLocation{name, lightLine[i]}, concat("light '", light.name, "' has zero area"));
     }
     for (Light& l : punctual) {
         finalizePunctual(*this, l);
+        // A punctual light named as an area light (or as another punctual
+        // one) takes the first free "#k" after its name.
+        const auto taken = [&](const std::string& n) {
+            return std::any_of(lights.begin(), lights.end(), [&](const Light& o) { return o.name == n; });
+        };
+        if (taken(l.name)) {
+            int k = 1;
+            while (taken(l.name + "#" + std::to_string(k))) ++k;
+            l.name += "#" + std::to_string(k);
+        }
         lights.push_back(std::move(l));
     }
 }

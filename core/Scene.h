@@ -113,7 +113,7 @@ enum class LightKind {
 // a punctual light (point, spot, photometric luminaire, directional) that
 // a loader or a luminaire layout adds to Scene::lights before finalize().
 struct Light {
-    std::string name;                 // "<material>" or "<material>#k" when a material makes several
+    std::string name;                 // "<material>", or "<material>#k" when a material makes several in the scene; unique
     LightKind kind = LightKind::Area;
     std::string group;                // lights that switch together share a group name; empty: its own
 

@@ -199,6 +199,44 @@ TEST(SceneLights, PanelOutOfPlaneByMoreThanTheToleranceIsNotSplit) {
     EXPECT_FALSE(scene.lights[0].planar);
 }
 
+TEST(SceneLights, NamesAreUniqueAcrossMeshesAndPunctualLights) {
+    // Two objects of one emissive material, each one light: named "lamp#0"
+    // and "lamp#1" (as two lights of one mesh), not "lamp" twice; two point
+    // lights named "lamp": the first keeps its name, free, the second takes
+    // the first free suffix, "lamp#2". Names are CSV columns of `probe` and
+    // names in view scripts: each must be one light's.
+    Scene scene;
+    scene.name = "lights";
+    scene.materials = {Material::diffuse("lamp", Rgb(0.5), Rgb(1.0))};
+    for (double x : {0.0, 5.0}) {
+        Mesh m;
+        addQuad(m, Vec3(x, 1.0, 0.0), Vec3(2, 0, 0), Vec3(0, 0, 3));  // facing down
+        m.name = "lamp";
+        m.materials.assign(m.triangles.size(), 0);
+        m.sourceLines.assign(m.triangles.size(), 0);
+        computeShadingNormals(m, 30);
+        scene.meshes.push_back(m);
+    }
+    Light point;
+    point.name = "lamp";
+    point.kind = LightKind::Point;
+    point.emission.position = Vec3(0.0, 2.0, 0.0);
+    point.emission.intensity = Rgb(1.0);
+    scene.lights = {point, point};
+    scene.finalize();
+    std::vector<std::string> names;
+    for (const Light& l : scene.lights) names.push_back(l.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"lamp#0", "lamp#1", "lamp", "lamp#2"}));
+    EXPECT_EQ(scene.lights[0].mesh, 0u);
+    EXPECT_EQ(scene.lights[1].mesh, 1u);
+    EXPECT_TRUE(scene.lights[2].punctual() && scene.lights[3].punctual());
+    for (const Light& l : scene.lights) EXPECT_EQ(lightGroupOf(l.name), "lamp") << l.name;
+
+    Scene again = scene;  // finalized again: the same names
+    again.finalize();
+    for (size_t i = 0; i < names.size(); ++i) EXPECT_EQ(again.lights[i].name, names[i]);
+}
+
 TEST(SceneLights, BuiltInScenesKeepTheirLights) {
     const Scene cornell = makeCornellBox();
     ASSERT_EQ(cornell.lights.size(), 1u);
