@@ -232,13 +232,23 @@ void CacheWorker::run() {
                 // start then, and indirect light waits for the first pass.
                 const bool slow = !settings_.maxSamples && left > is.startSeconds;
                 const bool early = indirect_->showingStale() || (firstPass >= is.startFraction && slow);
-                if (!indirectStarted && (directConverged || unsampled == 0 || (early && !settings_.indirectStandIn))) {
+                // Bounce 1 also reflects the caustics (light off mirrors and
+                // through glass: a lamp under a mirror ceiling lights the
+                // floor with nothing else), whose photons start once direct
+                // light's first pass is complete: it is not gathered from
+                // their mesh before its first round (it would hold none of
+                // that light and, its first-pass samples staying in its
+                // means, keep too little of it), but after it, a round later.
+                const bool causticsTraced = !caustics_ || caustics_->photonsEmitted() > 0;
+                if (!indirectStarted && ((causticsTraced && (directConverged || unsampled == 0)) ||
+                                         (early && !settings_.indirectStandIn))) {
                     indirectStarted = true;
-                    sourceIncomplete = unsampled > 0;
+                    sourceIncomplete = unsampled > 0 || !causticsTraced;
                 }
-                // Bounce 1 reflected an incomplete first pass: gather every
-                // bounce again now that direct light is complete.
-                if (indirectStarted && sourceIncomplete && unsampled == 0) {
+                // Bounce 1 reflected an incomplete first pass (or caustics
+                // not traced yet): gather every bounce again now that direct
+                // light is complete and the caustics have their first round.
+                if (indirectStarted && sourceIncomplete && unsampled == 0 && causticsTraced) {
                     indirect_->restart(*estimator);
                     sourceIncomplete = false;
                 }

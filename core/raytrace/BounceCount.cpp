@@ -35,6 +35,17 @@ std::string g3(double v) {
 
 double uniform(uint32_t seed, uint32_t a, uint32_t b) { return (hash32(seedFor(seed, a, b)) >> 8) * (1.0 / 16777216.0); }
 
+// The share of the light meeting a material's smooth layer that it sends
+// on: a mirror's reflectance (at normal incidence), glass's transmission
+// filter (its Fresnel reflection sends on the rest, near enough).
+Rgb specularCarry(const Material& m) {
+    switch (m.smooth.kind) {
+        case SpecularKind::Mirror: return m.smooth.reflectance;
+        case SpecularKind::Glass: return m.smooth.transmission;
+        default: return Rgb(0.0);
+    }
+}
+
 Vec3 pointOnTriangle(const Triangle3& t, double u, double v) {
     const double su = std::sqrt(u);
     return (1 - su) * t[0] + su * (1 - v) * t[1] + su * v * t[2];
@@ -66,6 +77,7 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
         const Rgb r = areaWeighted / total;
         plan.areaAlbedo = std::clamp(std::max({r.r, r.g, r.b}), 0.0, 1.0);
     }
+    const Rgb areaMean = total > 0 ? areaWeighted / total : Rgb(0.0);
     Rgb weighted(0.0), landed(0.0);
     double weight = 0, leaving = 0;
     if (!tris.empty() && !scene.lights.empty()) {
@@ -113,7 +125,13 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             }
             // The triangle's own mean over its texture footprint (Mesh::albedo).
             const Rgb kd = scene.albedo(tris[k].mesh, tris[k].tri);
-            weighted += e * kd;
+            // What is reflected diffusely from here: by the surface itself,
+            // and by the surfaces where what a mirror or glass sends on
+            // lands (a caustic), taken as the scene's area-weighted albedo.
+            // Without the second a lamp that lights only a mirror over a
+            // grey floor would plan no indirect light, and so no caustics.
+            const Rgb carried = specularCarry(scene.materials[mesh.materials[tris[k].tri]]) * areaMean;
+            weighted += e * glm::min(kd + carried, Rgb(1.0));
             weight += e;
             // Where the light it reflects lands: one cosine-distributed ray
             // on its front side, the albedo there.

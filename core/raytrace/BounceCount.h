@@ -28,7 +28,10 @@ struct BounceCountSettings {
 };
 
 struct BounceCount {
-    Rgb albedo{0.0};        // per channel, area- and direct-irradiance-weighted
+    // Per channel, area- and direct-irradiance-weighted: Kd, plus what a
+    // mirror or glass sends on (its reflectance, its transmission filter)
+    // times the area-weighted albedo, where that caustic is reflected.
+    Rgb albedo{0.0};
     double meanAlbedo = 0;  // ā: the largest channel (it decays slowest)
     // The largest channel of the albedo weighted by area alone: what light
     // meets once a few bounces have spread it over the scene (the ambient
