@@ -186,6 +186,10 @@ IrradianceMeshCopy CausticCache::copyMesh() const {
         m.samples[v] = uint32_t(std::min(count_[v], 4e9));
         m.standardError[v] = m.irradiance[v] / std::sqrt(count_[v]);
     }
+    // What the image's error estimate composites (ImageErrorEstimate.h):
+    // each vertex's photon noise (its kernel's blur, shrinking as PPM goes
+    // on, is not counted).
+    m.predictedError = m.standardError;
     return m;
 }
 
