@@ -263,6 +263,8 @@ TEST(Caustics, ALampLightingOnlyAMirrorStillPlansIndirectLight) {
     EXPECT_GE(mirrored.bounces, 1);
     EXPECT_GT(mirrored.areaAlbedo, 0.2);  // the grey floor's half of the area, Kd 0.5
     EXPECT_NEAR(mirrored.meanAlbedo, 0.9 * mirrored.areaAlbedo, 1e-12);
+    EXPECT_NE(mirrored.reason.find("100% of the direct light meets mirrors or glass"), std::string::npos)
+        << mirrored.reason;
     const BounceCount black = countBounces(lampUnder(Material::diffuse("mirror", Rgb(0.0))));
     EXPECT_EQ(black.bounces, 0);
     EXPECT_EQ(black.reason, "the surfaces that receive direct light are black: they reflect nothing");

@@ -79,7 +79,7 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
     }
     const Rgb areaMean = total > 0 ? areaWeighted / total : Rgb(0.0);
     Rgb weighted(0.0), landed(0.0);
-    double weight = 0, leaving = 0;
+    double weight = 0, leaving = 0, carriedWeight = 0;
     if (!tris.empty() && !scene.lights.empty()) {
         const EmbreeScene rt(scene);
         for (int i = 0; i < settings.points; ++i) {
@@ -132,6 +132,7 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             // grey floor would plan no indirect light, and so no caustics.
             const Rgb carried = specularCarry(scene.materials[mesh.materials[tris[k].tri]]) * areaMean;
             weighted += e * glm::min(kd + carried, Rgb(1.0));
+            if (luminance(carried) > 0) carriedWeight += e;
             weight += e;
             // Where the light it reflects lands: one cosine-distributed ray
             // on its front side, the albedo there.
@@ -168,6 +169,12 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
         plan.reason = "the surfaces that receive direct light are black: they reflect nothing";
         return plan;
     }
+    // Says where mirrors and glass made part of ā.
+    const std::string carriedNote =
+        carriedWeight > 0 ? concat(" (", g3(100 * carriedWeight / weight), "% of the direct light meets mirrors or glass, ",
+                                   "counted as what they send on times the area-weighted albedo ", g3(plan.areaAlbedo),
+                                   ", where their caustics land)")
+                          : std::string();
     int n = 1;
     while (missingAfter(n) > settings.missingFraction && n < settings.maxBounces) ++n;
     plan.bounces = n;
@@ -175,11 +182,11 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
     plan.capped = plan.missing > settings.missingFraction;
     plan.reason =
         plan.capped
-            ? concat(n, " bounces (the cap): the albedo light meets is ", g3(a), ", so ", g3(100 * plan.missing),
+            ? concat(n, " bounces (the cap): the albedo light meets is ", g3(a), carriedNote, ", so ", g3(100 * plan.missing),
                      "% of the reflected light is still missing after them, above the ",
                      g3(100 * settings.missingFraction), "% asked; raise --max-bounces to go on")
             : concat(n, " bounces: the albedo light meets is ", g3(a), " (area- and irradiance-weighted, largest ",
-                     "channel), so ", g3(a), "^", n + 1, " = ", g3(100 * plan.missing),
+                     "channel)", carriedNote, ", so ", g3(a), "^", n + 1, " = ", g3(100 * plan.missing),
                      "% of the reflected light is left out, below the ", g3(100 * settings.missingFraction), "% asked");
     return plan;
 }
