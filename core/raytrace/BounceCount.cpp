@@ -73,11 +73,8 @@ BounceCount countBounces(const Scene& scene, const BounceCountSettings& settings
             tris.push_back({m, t});
             cdf.push_back(total);
         }
-    if (total > 0) {
-        const Rgb r = areaWeighted / total;
-        plan.areaAlbedo = std::clamp(std::max({r.r, r.g, r.b}), 0.0, 1.0);
-    }
     const Rgb areaMean = total > 0 ? areaWeighted / total : Rgb(0.0);
+    plan.areaAlbedo = std::clamp(std::max({areaMean.r, areaMean.g, areaMean.b}), 0.0, 1.0);
     Rgb weighted(0.0), landed(0.0);
     double weight = 0, leaving = 0, carriedWeight = 0;
     if (!tris.empty() && !scene.lights.empty()) {

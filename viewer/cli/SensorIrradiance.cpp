@@ -214,7 +214,7 @@ std::vector<Rgb> measureIndirect(const Scene& scene, const SensorSettings& s, co
     const IrradianceCache& cache = session.cache();
     const IndirectSolver& solver = *session.indirect();
     std::vector<IrradianceMeshCopy> caustics;  // the caustic mesh, if the scene has caustics
-    if (session.caustics() && session.caustics()->active()) caustics.push_back(session.caustics()->copyMesh());
+    if (session.caustics()) caustics.push_back(session.caustics()->copyMesh());  // null unless active
     std::unique_ptr<GlContext> context = createHeadlessContext(choice.backend);
     std::unique_ptr<IndirectEstimator> estimator = makeIndirectEstimator(*context, scene, s.indirect);
     Progress progress(concat(label, ": gathering"), points.size() * size_t(solver.started()));
