@@ -643,7 +643,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
 // face would gather with the wrong normal. None: the vertex itself.
 //
 // `correction` (a control variate, to be taken off the sample): I(y) − Ī,
-// where I is the mesh's interpolant of its vertices' present means and Ī
+// where I is the mesh's interpolant of its vertices' present values and Ī
 // its hat-weighted mean over the ring (on each face the mean of y under
 // density ∝ λ_v is (2v + b + c)/4, and I is linear there). Its mean over
 // the draw is exactly 0, so the vertex's mean still tends to the
@@ -651,38 +651,58 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
 // that only says where in the ring it was drawn (the slope of irradiance
 // times the offset), which would otherwise count as noise: in the Cornell
 // box's corners it tripled the vertices' spread and the image's estimated
-// error with it. Zero while a corner of the ring has no sample. A vertex's
-// first sample is taken at the vertex itself (requestFor): then no
-// neighbour has a mean yet, and an uncorrected draw's spread would read as
-// a noisy mesh (the Cornell box's estimated error at 24,000 samples 3.06%
-// against 1.88%, measured 1.0%), with a vertex's mean off the hat-weighted
-// one by its point's bias over its sample count.
-Vec3 hatSamplePoint(const CacheTriMesh& mesh, const std::vector<VertexStats>& stats, CacheTriMesh::VertexHandle vh,
-                    uint32_t seed, const Vec3& vertexPoint, Rgb& correction) {
+// error with it. While a neighbour has no value, neither a mean nor the one
+// it had before resetSamples() (a bounce's first pass samples every vertex
+// at once), the sample is taken at the vertex itself:
+// an uncorrected draw's spread would read as a noisy mesh (drawing them
+// brought the Cornell box's estimated error at 24,000 samples from 1.88% to
+// 3.06%, measured 1.0%). Such a first sample leaves the vertex's mean off
+// the hat-weighted one by its point's bias over its sample count.
+Vec3 hatSamplePoint(const LightMesh& lm, CacheTriMesh::VertexHandle vh, uint32_t seed, const Vec3& vertexPoint,
+                    Rgb& correction) {
     correction = Rgb(0.0);
+    const CacheTriMesh& mesh = lm.mesh;
+    // A vertex's value: its mean, or after resetSamples() the mean it had
+    // (what copies show until it has a new one); none: red < 0.
+    const auto valueOf = [&lm](size_t i) {
+        if (lm.stats[i].count > 0) return lm.stats[i].mean();
+        return i < lm.provisional.size() ? lm.provisional[i] : Rgb(-1.0);
+    };
     const Vec3 x = toVec3(mesh.point(vh));
     const Vec3 n = toVec3(mesh.normal(vh));
     struct RingFace {
-        Vec3 b, c;        // the corners after vh, in order
-        uint32_t ib, ic;  // their indices
+        Vec3 b, c;  // the corners after vh, in order
         double area;
     };
-    std::array<RingFace, 32> faces;
+    std::array<RingFace, 16> faces;
+    std::array<Rgb, 32> values;  // values[2k], values[2k + 1]: face k's b and c
     size_t count = 0;
     double total = 0;
-    bool sampled = stats[size_t(vh.idx())].count > 0;
+    bool sampled = true;  // every neighbour in the ring has a value
     for (auto h : mesh.voh_range(vh)) {
-        if (mesh.is_boundary(h) || count == faces.size()) continue;
+        if (mesh.is_boundary(h)) continue;
+        if (count == faces.size()) return vertexPoint;  // a ring of more than 16 faces: seldom, kept simple
         const auto vb = mesh.to_vertex_handle(h), vc = mesh.to_vertex_handle(mesh.next_halfedge_handle(h));
         const Vec3 b = toVec3(mesh.point(vb)), c = toVec3(mesh.point(vc));
         const Vec3 cr = glm::cross(b - x, c - x);
         const double twice = glm::length(cr);
         if (!(twice > 0) || glm::dot(cr / twice, n) < 0.999) continue;
-        faces[count++] = {b, c, uint32_t(vb.idx()), uint32_t(vc.idx()), 0.5 * twice};
+        values[2 * count] = valueOf(size_t(vb.idx()));
+        values[2 * count + 1] = valueOf(size_t(vc.idx()));
+        sampled = sampled && values[2 * count].r >= 0 && values[2 * count + 1].r >= 0;
+        faces[count++] = {b, c, 0.5 * twice};
         total += 0.5 * twice;
-        sampled = sampled && stats[size_t(vb.idx())].count > 0 && stats[size_t(vc.idx())].count > 0;
     }
-    if (count == 0 || !(total > 0)) return vertexPoint;
+    if (count == 0 || !(total > 0) || !sampled) return vertexPoint;
+    // The interpolant's value at v: its mean, or before it has one (a vertex
+    // a split made) its neighbours' (any value fixed before the draw keeps
+    // the correction's mean 0).
+    Rgb mv = valueOf(size_t(vh.idx()));
+    if (mv.r < 0) {
+        mv = Rgb(0.0);
+        for (size_t k = 0; k < count; ++k) mv += 0.5 * (values[2 * k] + values[2 * k + 1]);
+        mv = mv / double(count);
+    }
     uint32_t state = hash32(seed ^ 0x6a09e667u);
     const auto next = [&state] {
         state = hash32(state + 0x9e3779b9u);
@@ -697,13 +717,9 @@ Vec3 hatSamplePoint(const CacheTriMesh& mesh, const std::vector<VertexStats>& st
         if (u + v > 1) u = 1 - u, v = 1 - v;
         const double lambda = 1 - u - v;
         if (!(next() < lambda)) continue;
-        if (sampled) {
-            const Rgb mv = stats[size_t(vh.idx())].mean();
-            Rgb hatMean(0.0);
-            for (size_t k = 0; k < count; ++k)
-                hatMean += faces[k].area * (2.0 * mv + stats[faces[k].ib].mean() + stats[faces[k].ic].mean()) * 0.25;
-            correction = lambda * mv + u * stats[faces[f].ib].mean() + v * stats[faces[f].ic].mean() - hatMean / total;
-        }
+        Rgb hatMean(0.0);
+        for (size_t k = 0; k < count; ++k) hatMean += faces[k].area * (2.0 * mv + values[2 * k] + values[2 * k + 1]) * 0.25;
+        correction = lambda * mv + u * values[2 * f] + v * values[2 * f + 1] - hatMean / total;
         return x + u * (faces[f].b - x) + v * (faces[f].c - x);
     }
     return vertexPoint;
@@ -720,8 +736,7 @@ SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t s
         r.n = toVec3(lm.mesh.normal(vh));
         r.seed = seedFor(seed, p.index, p.mesh, lm.stats[p.index].count);
         Rgb taken(0.0);
-        // hatSamplePoint: a vertex's first sample is at the vertex.
-        if (s.hatSamples && lm.stats[p.index].count > 0) r.x = hatSamplePoint(lm.mesh, lm.stats, vh, r.seed, r.x, taken);
+        if (s.hatSamples) r.x = hatSamplePoint(lm, vh, r.seed, r.x, taken);
         if (correction) *correction = taken;
     } else {
         const GridObject& o = gridOf(s, p.index);

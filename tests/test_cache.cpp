@@ -126,7 +126,8 @@ TEST(CacheRefinement, HatSamplesKeepTheIntegralOfADomeThatPointSamplesReadDark) 
     // (edges up to 1/8 of the diagonal, 0.54) is never split. Read at its
     // vertices, the linear interpolant lies under the concave dome
     // everywhere: measured 16.3125, 1.1% short. With
-    // CacheLayout::hatSamples a vertex's first sample is still at the vertex
+    // CacheLayout::hatSamples a vertex's first sample (the base sampled at
+    // once, no neighbour has a value) is still at the vertex
     // and the rest are drawn over its ring (with their control variate), so
     // with 256 samples a vertex its mean is the hat-weighted mean but for a
     // 256th of the point's bias (under 0.01% here), whose interpolant
