@@ -75,7 +75,6 @@ CacheLayout bounceCacheLayout() {
     // gather little but the voxels' leaks and cost as much as the rest.
     layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
     layout.insetBorders = true;
-    layout.hatSamples = true;
     return layout;
 }
 

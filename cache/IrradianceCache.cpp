@@ -262,7 +262,6 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     s.sceneFingerprint = detail::sceneFingerprint(scene);
     s.insetBorders = layout.insetBorders;
-    s.hatSamples = layout.hatSamples;
     if (layout.coverage)
         for (size_t l = 0; l < scene.lights.size(); ++l)
             if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
@@ -634,99 +633,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     return x + 1e-3 * shortest * glm::normalize(inward);
 }
 
-// A point of vh's one ring drawn with the density of its hat function
-// (CacheLayout::hatSamples), from `seed`: a face with probability ∝ its
-// area (φ integrates to area/3 over each), then a point of it uniformly,
-// kept with probability λ_v, its barycentric towards vh (density ∝ λ_v).
-// Only faces in vh's plane take part (normals within 2.6°): across a crease
-// or on a curved object the ring is not one surface, and a point of another
-// face would gather with the wrong normal. None: the vertex itself.
-//
-// `correction` (a control variate, to be taken off the sample): I(y) − Ī,
-// where I is the mesh's interpolant of its vertices' present values and Ī
-// its hat-weighted mean over the ring (on each face the mean of y under
-// density ∝ λ_v is (2v + b + c)/4, and I is linear there). Its mean over
-// the draw is exactly 0, so the vertex's mean still tends to the
-// hat-weighted mean of irradiance; but it takes off the part of a sample
-// that only says where in the ring it was drawn (the slope of irradiance
-// times the offset), which would otherwise count as noise: in the Cornell
-// box's corners it tripled the vertices' spread and the image's estimated
-// error with it. While a neighbour has no value, neither a mean nor the one
-// it had before resetSamples() (a bounce's first pass samples every vertex
-// at once), the sample is taken at the vertex itself:
-// an uncorrected draw's spread would read as a noisy mesh (drawing them
-// brought the Cornell box's estimated error at 24,000 samples from 1.88% to
-// 3.06%, measured 1.0%). Such a first sample leaves the vertex's mean off
-// the hat-weighted one by its point's bias over its sample count.
-Vec3 hatSamplePoint(const LightMesh& lm, CacheTriMesh::VertexHandle vh, uint32_t seed, const Vec3& vertexPoint,
-                    Rgb& correction) {
-    correction = Rgb(0.0);
-    const CacheTriMesh& mesh = lm.mesh;
-    // A vertex's value: its mean, or after resetSamples() the mean it had
-    // (what copies show until it has a new one); none: red < 0.
-    const auto valueOf = [&lm](size_t i) {
-        if (lm.stats[i].count > 0) return lm.stats[i].mean();
-        return i < lm.provisional.size() ? lm.provisional[i] : Rgb(-1.0);
-    };
-    const Vec3 x = toVec3(mesh.point(vh));
-    const Vec3 n = toVec3(mesh.normal(vh));
-    struct RingFace {
-        Vec3 b, c;  // the corners after vh, in order
-        double area;
-    };
-    std::array<RingFace, 16> faces;
-    std::array<Rgb, 32> values;  // values[2k], values[2k + 1]: face k's b and c
-    size_t count = 0;
-    double total = 0;
-    bool sampled = true;  // every neighbour in the ring has a value
-    for (auto h : mesh.voh_range(vh)) {
-        if (mesh.is_boundary(h)) continue;
-        if (count == faces.size()) return vertexPoint;  // a ring of more than 16 faces: seldom, kept simple
-        const auto vb = mesh.to_vertex_handle(h), vc = mesh.to_vertex_handle(mesh.next_halfedge_handle(h));
-        const Vec3 b = toVec3(mesh.point(vb)), c = toVec3(mesh.point(vc));
-        const Vec3 cr = glm::cross(b - x, c - x);
-        const double twice = glm::length(cr);
-        if (!(twice > 0) || glm::dot(cr / twice, n) < 0.999) continue;
-        values[2 * count] = valueOf(size_t(vb.idx()));
-        values[2 * count + 1] = valueOf(size_t(vc.idx()));
-        sampled = sampled && values[2 * count].r >= 0 && values[2 * count + 1].r >= 0;
-        faces[count++] = {b, c, 0.5 * twice};
-        total += 0.5 * twice;
-    }
-    if (count == 0 || !(total > 0) || !sampled) return vertexPoint;
-    // The interpolant's value at v: its mean, or before it has one (a vertex
-    // a split made) its neighbours' (any value fixed before the draw keeps
-    // the correction's mean 0).
-    Rgb mv = valueOf(size_t(vh.idx()));
-    if (mv.r < 0) {
-        mv = Rgb(0.0);
-        for (size_t k = 0; k < count; ++k) mv += 0.5 * (values[2 * k] + values[2 * k + 1]);
-        mv = mv / double(count);
-    }
-    uint32_t state = hash32(seed ^ 0x6a09e667u);
-    const auto next = [&state] {
-        state = hash32(state + 0x9e3779b9u);
-        return (state >> 8) * (1.0 / 16777216.0);
-    };
-    double pick = next() * total;
-    size_t f = 0;
-    while (f + 1 < count && pick >= faces[f].area) pick -= faces[f++].area;
-    // Acceptance 1/3 on average: 64 tries fail with probability 1e-11.
-    for (int attempt = 0; attempt < 64; ++attempt) {
-        double u = next(), v = next();
-        if (u + v > 1) u = 1 - u, v = 1 - v;
-        const double lambda = 1 - u - v;
-        if (!(next() < lambda)) continue;
-        Rgb hatMean(0.0);
-        for (size_t k = 0; k < count; ++k) hatMean += faces[k].area * (2.0 * mv + values[2 * k] + values[2 * k + 1]) * 0.25;
-        correction = lambda * mv + u * values[2 * f] + v * values[2 * f + 1] - hatMean / total;
-        return x + u * (faces[f].b - x) + v * (faces[f].c - x);
-    }
-    return vertexPoint;
-}
-
-SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed, Rgb* correction) {
-    if (correction) *correction = Rgb(0.0);
+SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed) {
     SampleRequest r;
     r.mesh = p.mesh;
     if (!p.grid) {
@@ -735,9 +642,6 @@ SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t s
         r.x = samplePoint(s, lm.mesh, vh);
         r.n = toVec3(lm.mesh.normal(vh));
         r.seed = seedFor(seed, p.index, p.mesh, lm.stats[p.index].count);
-        Rgb taken(0.0);
-        if (s.hatSamples) r.x = hatSamplePoint(lm, vh, r.seed, r.x, taken);
-        if (correction) *correction = taken;
     } else {
         const GridObject& o = gridOf(s, p.index);
         const size_t k = p.index - o.firstSample;
@@ -770,9 +674,8 @@ std::string whereSampled(const CacheState& s, const PendingSample& p, const Samp
 void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending) {
     if (pending.empty()) return;
     std::vector<SampleRequest> requests;
-    std::vector<Rgb> corrections(pending.size());
     requests.reserve(pending.size());
-    for (size_t i = 0; i < pending.size(); ++i) requests.push_back(requestFor(s, pending[i], seed, &corrections[i]));
+    for (const PendingSample& p : pending) requests.push_back(requestFor(s, p, seed));
     std::vector<VertexSample> results;
     try {
         sampler.sampleBatch(requests, results);
@@ -783,7 +686,6 @@ void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std
               " samples");
     for (size_t i = 0; i < pending.size(); ++i) {
         const PendingSample& p = pending[i];
-        results[i].irradiance -= corrections[i];
         p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
     }
 }
@@ -830,7 +732,6 @@ size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t see
     std::vector<SampleRequest> requests;
     std::vector<VertexSample> results;
     std::vector<char> answered;
-    std::vector<Rgb> corrections;
     size_t taken = 0, next = 0;
     while (taken < budget && next < ranked.size()) {
         ask.clear();
@@ -841,8 +742,7 @@ size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t see
         }
         if (ask.empty()) break;
         requests.clear();
-        corrections.assign(ask.size(), Rgb(0.0));
-        for (size_t i = 0; i < ask.size(); ++i) requests.push_back(requestFor(s, ask[i], seed, &corrections[i]));
+        for (const PendingSample& p : ask) requests.push_back(requestFor(s, p, seed));
         try {
             sampler.sampleBatchWithoutGpu(requests, results, answered);
         } catch (const SampleBatchError& e) {
@@ -855,7 +755,6 @@ size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t see
                 p.grid ? flag(lm.gridNeedsGpu, p.index, lm.gridStats.size()) : flag(lm.needsGpu, p.index, lm.stats.size());
                 continue;
             }
-            results[i].irradiance -= corrections[i];
             p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
             ++taken;
         }

@@ -136,23 +136,6 @@ struct CacheLayout {
     // for gathers, to which a floor's edge under a wall would otherwise see
     // both rooms.
     bool insetBorders = false;
-    // A vertex's samples are taken at points drawn over its flat one ring
-    // with the density of its hat function (the mesh's linear basis
-    // function φ_v, 1 at v and 0 at the ring's rim):
-    // the vertex's mean tends to ∫φ_v E / ∫φ_v, the lumped L² projection of
-    // irradiance onto the mesh, whose linear interpolant integrates to the
-    // true irradiance over each flat surface. Point samples interpolated
-    // linearly err by h²/12 of the slopes at a surface's rim, which for
-    // gathers has one sign: a ceiling's or a wall's bounce light falls
-    // towards the corners, so read at vertices it is read too dark (the
-    // office's bounce 1, 1.2% under the path tracer; cache/README.md). For
-    // gathers, whose noise hides the blur of a ring; direct light, with its
-    // sharp shadows, keeps point samples. Each drawn sample carries a control
-    // variate that takes off what the mesh's slope says about where it was
-    // drawn (detail::hatSamplePoint): the mean is unchanged, the spread is
-    // the gather's. Where a neighbour has no value yet (a first pass), the
-    // sample is taken at the vertex.
-    bool hatSamples = false;
     // Direct light with lights sharing (LightCoverage.h): when it shares,
     // mesh l < L keeps only the faces where light l has weight, and one more
     // mesh, the shared one, covers the whole scene. Null: a mesh per light
