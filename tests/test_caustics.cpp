@@ -1,6 +1,7 @@
 // Caustics (issue 16): photons through mirrors and glass into a cache mesh of
 // their own (CausticCache), checked against irradiance known exactly, and
 // the indirect ray gather through a mirror.
+#include "SessionRun.h"
 #include "TestScenes.h"
 
 #include "cache/CausticCache.h"
@@ -303,10 +304,7 @@ TEST(Caustics, BounceOneReflectsTheCausticsOnceTheyAreTraced) {
     StopRule stop;
     stop.samples = 40000;
     ProgressiveSession session(scene, settings, samplerFactory(scene, direct, indirect), stop);
-    session.start();
-    CacheWorker::Reader reader = session.reader();
-    session.refineUntil(reader, stop, 0);
-    session.stop();
+    test::refineUntilStopped(session, stop);
     ASSERT_NE(session.caustics(), nullptr);
     ASSERT_GT(session.caustics()->photonsEmitted(), 0u);
     const std::vector<IrradianceMeshCopy> bounces = session.indirect()->copyMeshes();

@@ -15,6 +15,7 @@
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
 #include "GlTestContext.h"
+#include "SessionRun.h"
 
 #include <gtest/gtest.h>
 
@@ -172,10 +173,7 @@ TEST(SamplerPool, ThreadsGiveTheSameCacheAsOneForASampleBudget) {
         StopRule stop;
         stop.samples = 12000;
         ProgressiveSession session(scene, s, samplerFactory(scene, direct, indirect), stop);
-        session.start();
-        CacheWorker::Reader reader = session.reader();
-        session.refineUntil(reader, stop, 0);
-        session.stop();
+        test::refineUntilStopped(session, stop);
         std::vector<IrradianceMeshCopy> meshes = session.cache().copyMeshes();
         for (const IrradianceMeshCopy& m : session.indirect()->copyMeshes()) meshes.push_back(m);
         return meshes;

@@ -15,6 +15,7 @@
 #include "gpu_sampling/SamplerFactory.h"
 
 #include "TestSamplers.h"
+#include "SessionRun.h"
 #include "TestScenes.h"
 
 #include <gtest/gtest.h>
@@ -403,12 +404,9 @@ TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
     Scene scene = plateScene();
     const std::unique_ptr<ProgressiveSession> owned = indirectSession(scene, 1);
     ProgressiveSession& session = *owned;
-    session.start();
-    CacheWorker::Reader reader = session.reader();
     StopRule stop;
     stop.seconds = 10;
-    session.refineUntil(reader, stop, 0);
-    session.stop();
+    test::refineUntilStopped(session, stop);
     ASSERT_TRUE(session.indirect()->firstPassDone());
     const IrradianceMeshCopy gathered = session.indirect()->copyMesh(1);
     const InvalidationReport r = session.applyChange(scene, SceneChange::moveObject("plate", Vec3(1.0, 0.0, 0.0)));
