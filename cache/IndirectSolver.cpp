@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ml {
 
@@ -47,6 +48,22 @@ void IndirectSettings::validate() const {
 IndirectSolver::IndirectSolver(const Scene& scene, const IndirectSettings& settings)
     : scene_(scene), settings_(settings) {
     settings_.validate();
+    resetPass2();
+}
+
+void IndirectSolver::resetPass2() {
+    converged_.assign(size_t(settings_.bounces), 0);
+    bounceError_.assign(size_t(settings_.bounces), std::numeric_limits<double>::infinity());
+}
+
+double IndirectSolver::share(int bounce) const { return std::pow(settings_.albedo, double(bounce - 1)); }
+
+int IndirectSolver::nextBounce() const {
+    int best = 1;
+    double worst = -1;
+    for (int b = 1; b <= settings_.bounces; ++b)
+        if (!converged_[size_t(b - 1)] && bounceError_[size_t(b - 1)] > worst) best = b, worst = bounceError_[size_t(b - 1)];
+    return best;
 }
 
 IndirectSolver::~IndirectSolver() = default;
@@ -93,6 +110,14 @@ void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
                             effort * std::pow(std::max(settings_.albedo, 1e-3), bounce - 1));
     sourceBuilt_[slot] = true;
     sourceForFirstPass_[slot] = firstPass;
+    if (sourceSamples_.size() <= slot) sourceSamples_.resize(slot + 1, 0);
+    sourceSamples_[slot] = bounce >= 2 ? caches_[slot - 1]->totalSamples() : 0;
+}
+
+void IndirectSolver::releaseSource(IndirectEstimator& estimator, size_t slot) {
+    if (slot >= sourceBuilt_.size() || !sourceBuilt_[slot]) return;
+    estimator.releaseSource(slot);
+    sourceBuilt_[slot] = false;
 }
 
 RefineReport IndirectSolver::step(IndirectEstimator& estimator,
@@ -111,7 +136,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         prepareSource(estimator, bounce, direct, true);
     }
     const bool first = !firstPassDone();
-    const int bounce = first ? firstPassBounce() : allFinished() ? 1 : finished_ + 1;
+    const int bounce = first ? firstPassBounce() : allFinished() ? 1 : nextBounce();
     const size_t slot = size_t(bounce - 1);
     // A first pass gathered again (restart): only the source it gathers from is kept.
     if (first)
@@ -127,6 +152,13 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         sourceBuilt_[0] = false;
         directRefreshed_ = true;
     }
+    // In pass 2 a later bounce's source follows its predecessor's
+    // refinement: built again each time the predecessor's samples have
+    // doubled since (a rebuild costs a copy of the mesh, a few
+    // hundredths of a second; doubling keeps them to a few per bounce).
+    if (!first && bounce >= 2 && slot < sourceBuilt_.size() && sourceBuilt_[slot] && !sourceForFirstPass_[slot] &&
+        caches_[slot - 1]->totalSamples() >= 2 * std::max<uint64_t>(sourceSamples_[slot], 1))
+        releaseSource(estimator, slot);
     prepareSource(estimator, bounce, direct, first);
     // The bounce's one mesh is filled by gathers from its source slot.
     struct Gather : VertexSampler {
@@ -155,20 +187,32 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         report.candidates = std::max<size_t>(report.candidates, 1);  // the first pass goes on
         return report;
     }
-    if (!allFinished() && report.converged()) {
-        ++finished_;
+    if (allFinished()) return report;
+    if (report.converged()) {
+        converged_[slot] = 1;
         // Only bounce 1 keeps refining (for new views): later sources go.
-        if (bounce >= 2) {
-            estimator.releaseSource(slot);
-            sourceBuilt_[slot] = false;
+        if (bounce >= 2) releaseSource(estimator, slot);
+        // The next bounce gathers from this one as it now is, and its
+        // convergence, judged from a source this one has since refined, is
+        // judged again.
+        if (bounce < settings_.bounces) {
+            releaseSource(estimator, slot + 1);
+            if (converged_[slot + 1]) {
+                converged_[slot + 1] = 0;
+                bounceError_[slot + 1] = std::numeric_limits<double>::infinity();
+            }
         }
-        // The next bounce gathers from this one as it now is.
-        if (size_t(bounce) < sourceBuilt_.size() && sourceBuilt_[size_t(bounce)]) {
-            estimator.releaseSource(size_t(bounce));
-            sourceBuilt_[size_t(bounce)] = false;
-        }
-        report.candidates = allFinished() ? 0 : 1;  // not converged while bounces remain
     }
+    bounceError_[slot] = report.estimatedError * share(bounce);
+    // What the bounces' errors add up to in the image, relative to bounce
+    // 1's light (their errors are independent: root of the sum of squares),
+    // from the rounds that measured them: what the worker weighs against
+    // direct light's error.
+    double sum = 0;
+    for (double e : bounceError_)
+        if (std::isfinite(e)) sum += e * e;
+    report.estimatedError = std::sqrt(sum);
+    report.candidates = allFinished() ? 0 : std::max<size_t>(report.candidates, 1);  // not converged while bounces remain
     return report;
 }
 
@@ -188,7 +232,7 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     for (auto& c : caches_) c->resetSamples();
     regathering_ = true;
     restarted_ = true;
-    finished_ = 0;
+    resetPass2();
     directRefreshed_ = true;  // the source about to be built is direct light as it is now
     for (size_t s = 0; s < sourceBuilt_.size(); ++s)
         if (sourceBuilt_[s]) {
@@ -201,7 +245,7 @@ void IndirectSolver::sceneChanged() {
     std::vector<IrradianceMeshCopy> shown = displayMeshes();
     if (!shown.empty()) stale_ = std::move(shown);
     caches_.clear();
-    finished_ = 0;
+    resetPass2();
     directRefreshed_ = false;
     regathering_ = false;
     restarted_ = false;
@@ -213,7 +257,7 @@ bool IndirectSolver::tighten(IndirectEstimator& estimator) {
     bool tightened = false;
     for (auto& c : caches_) tightened |= c->tighten();
     if (!tightened) return false;
-    finished_ = 0;
+    resetPass2();
     directRefreshed_ = false;
     for (size_t s = 0; s < sourceBuilt_.size(); ++s)
         if (sourceBuilt_[s]) {

@@ -6,8 +6,13 @@
 // so that every bounce's light shows early:
 //  1. bounce after bounce, every vertex of the bounce's base mesh is
 //     gathered once, then the next bounce's source is built from it;
-//  2. bounce after bounce, each is refined until it converges, from a source
-//     rebuilt from its predecessor's refined mesh.
+//  2. each bounce is refined until it converges, from a source rebuilt from
+//     its predecessor's refined mesh (again each time the predecessor's
+//     samples double). Round by round, the bounce refined is the one whose
+//     share of the image's error was largest when last measured, not one
+//     bounce after the other: in the office bounce 1 took most of a minute
+//     to converge, and bounces 2-7, which carry more light than bounce 1
+//     there, kept their first pass's single gathers all that time.
 // A bounce's first-pass samples came from its predecessor's base mesh;
 // refinement adds detail, not light, so they stay in its means. Each bounce carries about ā
 // (the albedo light meets) of the light of the one before, so bounce n's
@@ -29,6 +34,7 @@
 #include "IndirectEstimator.h"
 #include "IrradianceCache.h"
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -109,9 +115,9 @@ public:
     // Bounces whose cache exists (started: sampled in the first pass), and
     // of those, refined until converged in the second.
     int started() const { return int(caches_.size()); }
-    int finished() const { return finished_; }
+    int finished() const { return int(std::count(converged_.begin(), converged_.end(), char(1))); }
     bool firstPassDone() const { return int(caches_.size()) == settings_.bounces && firstPassBounce() == 0; }
-    bool allFinished() const { return finished_ >= settings_.bounces; }
+    bool allFinished() const { return finished() >= settings_.bounces; }
 
     // One round of up to `budget` gathers: the first pass's next vertices
     // (starting a bounce, and building its source from `direct()` or the
@@ -185,6 +191,15 @@ public:
 
 private:
     CacheSettings settingsFor(int bounce) const;
+    // Pass 2 from the start: no bounce converged, none measured.
+    void resetPass2();
+    // Bounce n's share of bounce 1's light, ā^(n−1): how its error shows.
+    double share(int bounce) const;
+    // Pass 2's next bounce: of those not converged, the one whose share of
+    // the image's error was largest when last measured (one not yet
+    // measured first, lowest first).
+    int nextBounce() const;
+    void releaseSource(IndirectEstimator& estimator, size_t slot);
     // The first bounce whose cache has vertices without a sample (0: none).
     int firstPassBounce() const;
     // Bounce `bounce + 1` has gathered a sixteenth of its base and bounce
@@ -200,7 +215,14 @@ private:
     const Scene& scene_;
     IndirectSettings settings_;
     std::vector<std::unique_ptr<IrradianceCache>> caches_;
-    int finished_ = 0;
+    // Pass 2, by slot (bounce − 1): converged at the level in hand; the
+    // share of the image's error the bounce's last round began with (its
+    // estimated error × ā^(n−1); infinite until it has had a round), which
+    // chooses the next bounce; and its predecessor's samples when its
+    // source was built, which says when the source is built again.
+    std::vector<char> converged_;
+    std::vector<double> bounceError_;
+    std::vector<uint64_t> sourceSamples_;
     std::vector<bool> sourceBuilt_;  // by slot (bounce − 1)
     std::vector<bool> sourceForFirstPass_;  // by slot: built for a first pass
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2

@@ -9,6 +9,7 @@
 #include "RoomLeak.h"
 #include "TestSamplers.h"
 #include "cache/IrradianceCache.h"
+#include "core/Random.h"
 #include "core/raytrace/BounceCount.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
@@ -21,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 
@@ -512,6 +514,47 @@ void expectFirstPassEffort(double firstPassGathers) {
 
 TEST(FirstPassEffort, ALargeBaseIsGatheredFirstAtItsShare) { expectFirstPassEffort(10); }
 TEST(FirstPassEffort, ASmallBaseIsGatheredAtFullEffort) { expectFirstPassEffort(1e9); }
+
+// --- Pass 2: which bounce next -----------------------------------------------------
+
+// Every estimate is 1 plus noise drawn from the seed: ±`noise[slot]`
+// (uniform) for the bounce gathering from that slot.
+struct NoisyEstimator : EffortRecorder {
+    std::array<double, 2> noise{0.1, 0.8};
+    Rgb estimate(size_t slot, const Vec3&, const Vec3&, uint32_t seed) override {
+        const double u = double(hash32(seed) & 0xffff) / 65535.0 - 0.5;
+        return Rgb(1 + 2 * noise.at(slot) * u);
+    }
+};
+
+// Bounce 2's gathers are eight times noisier than bounce 1's, so its share
+// of the image's error (its error × ā) is the larger: pass 2 refines it
+// before bounce 1 has converged, rather than waiting for bounce 1 to
+// converge first; and bounce 2's source, built from bounce 1, is built
+// again as bounce 1's samples double. Both converge.
+TEST(PassTwo, TheBounceWithTheLargestShareOfTheErrorGoesFirst) {
+    const Scene scene = test::furnaceBox(0.5, 0.0);
+    IndirectSettings is;
+    is.bounces = 2;
+    is.albedo = 0.5;
+    IndirectSolver solver(scene, is);
+    NoisyEstimator estimator;
+    const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, 1.0);
+    int r = 0;
+    for (; r < 400 && !solver.firstPassDone(); ++r) solver.step(estimator, [&] { return direct; }, 64, 7, std::nullopt);
+    ASSERT_TRUE(solver.firstPassDone());
+    const uint64_t secondBase = solver.cache(2).totalSamples();
+    bool secondRefinedEarly = false;
+    for (; r < 4000 && !solver.allFinished(); ++r) {
+        solver.step(estimator, [&] { return direct; }, 64, 7, std::nullopt);
+        if (solver.cache(2).totalSamples() > secondBase && solver.finished() == 0) secondRefinedEarly = true;
+    }
+    ASSERT_TRUE(solver.allFinished());
+    EXPECT_TRUE(secondRefinedEarly);
+    size_t secondSources = 0;
+    for (const auto& [slot, importance] : estimator.built) secondSources += slot == 1;
+    EXPECT_GE(secondSources, 3u);  // the first pass's, pass 2's, and at least one rebuilt as bounce 1 grew
+}
 
 }  // namespace
 }  // namespace ml
