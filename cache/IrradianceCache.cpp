@@ -29,6 +29,9 @@ void CacheSettings::validate() const {
                                 maxEdgeFraction, "] (the maximum edge fraction)"));
     if (!(minEdgePixels >= 0 && minEdgePixels <= 1e4))
         throw InputError(concat("cache minimum edge size ", minEdgePixels, " pixels is not in [0, 1e4]"));
+    if (!(uniformEdgeFraction == 0 || (uniformEdgeFraction > 0 && uniformEdgeFraction <= maxEdgeFraction)))
+        throw InputError(concat("cache uniform edge fraction ", uniformEdgeFraction, " is not 0 or in (0, ",
+                                maxEdgeFraction, "] (the maximum edge fraction)"));
     if (!(splitTolerance > 0 && splitTolerance < 1))
         throw InputError(concat("cache split tolerance ", splitTolerance, " is not in (0, 1)"));
     if (!(noiseTolerance > 0 && noiseTolerance < 1))
@@ -84,7 +87,7 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.maxEdgeFraction), f.f64(s.minEdgeFraction), f.f64(s.minEdgePixels);
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
-    f.f64(s.sampleNoise), f.f64(s.lightShare);
+    f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction);
     return f.h;
 }
 

@@ -44,6 +44,13 @@ struct CacheSettings {
     // midpoint exceeds this fraction of the local displayed level (Weber
     // contrast: 1% is about the smallest step people see in a smooth ramp).
     double splitTolerance = 0.01;
+    // Edges longer than this fraction of the diagonal are split whatever
+    // their predicted error (0: none), after the splits and resamples that
+    // score higher: the bounce meshes, whose noisy gathers hide the
+    // curvature the predicted error is read from, while linear
+    // interpolation of indirect light, which falls towards corners and
+    // edges, reads it dark (IndirectSolver.cpp, bounceCacheSettings).
+    double uniformEdgeFraction = 0;
     // A vertex is sampled again while the standard error of its mean exceeds
     // this fraction of its displayed level...
     double noiseTolerance = 0.005;

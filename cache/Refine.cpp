@@ -32,6 +32,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ml {
 
@@ -229,6 +230,8 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
     if (!(white > 0)) return out;  // no light reaches any vertex: nothing to refine
     const ViewMetric metric(view, cs.minEdgeFraction * s.diagonal, cs.minEdgePixels);
 
+    const double uniformEdge = cs.uniformEdgeFraction > 0 ? cs.uniformEdgeFraction * s.diagonal
+                                                          : std::numeric_limits<double>::infinity();
     double edgeErr = 0, edgeWeight = 0, noiseErr = 0, noiseWeight = 0;
     std::vector<double> t, lum, lap, res;
     for (size_t l = 0; l < s.meshes.size(); ++l) {
@@ -279,6 +282,12 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             if (splittable) edgeErr += seen * len * len * counted * counted;
             if (collect && splittable && predicted > cs.splitTolerance)
                 out.actions.push_back({predicted * len / s.diagonal * seen, uint32_t(l), Action::Split, a, b});
+            else if (collect && len > uniformEdge && t[a] + t[b] > 0)
+                // Split as if its error were at the tolerance: after the
+                // edges that measurably need it. However few pixels it
+                // spans: the bias is in the light the mesh holds (and that
+                // the next bounce reflects), not in detail on screen.
+                out.actions.push_back({cs.splitTolerance * len / s.diagonal * seen, uint32_t(l), Action::Split, a, b});
         }
 
         for (size_t v = 0; v < nv; ++v) {

@@ -119,6 +119,47 @@ TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
     EXPECT_LT(cache.estimatedError(), 1e-9);
 }
 
+TEST(CacheRefinement, UniformSplitsHalveTheBaseWhereTheLightIsLinear) {
+    // The same linear signal with CacheSettings::uniformEdgeFraction half
+    // the base edge: no edge asks for a split by its error, yet every lit
+    // edge longer than the uniform edge is split, and every new vertex is
+    // sampled in the round that made it.
+    CacheSettings s = coarse();
+    s.uniformEdgeFraction = s.maxEdgeFraction / 2;
+    IrradianceCache cache(bench(), s);
+    auto linear = samplerOf([](size_t, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(1 + 0.3 * x.x + 0.2 * x.z + 0.1 * x.y), 1.0, false};
+    });
+    const size_t base = cache.totalVertices();
+    cache.refine(linear, 1 << 20, 1);  // samples the base mesh
+    size_t splits = 0;
+    for (int round = 0; round < 40; ++round) {
+        const RefineReport r = cache.refine(linear, 1 << 20, 1);
+        splits += r.splits;
+        EXPECT_EQ(0u, cache.unsampledCount());
+        if (r.converged()) break;
+    }
+    EXPECT_GT(cache.totalVertices(), 2 * base);
+    EXPECT_EQ(cache.totalVertices(), base + splits);
+    const double uniform = s.uniformEdgeFraction * bench().bounds.diagonal();
+    const IrradianceMeshCopy m = viewOf(cache);
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k)
+            ASSERT_LE(glm::length(m.positions[t[k]] - m.positions[t[(k + 1) % 3]]), uniform * (1 + 1e-9));
+    // The signal is linear: the new vertices hold it exactly, and the
+    // estimate stays zero.
+    EXPECT_LT(cache.estimatedError(), 1e-9);
+    // Without the setting the same signal keeps its base.
+    IrradianceCache plain(bench(), coarse());
+    plain.refine(linear, 1 << 20, 1);
+    EXPECT_EQ(0u, plain.refine(linear, 1 << 20, 1).splits);
+    // An edge is at most the base's longest fraction; one above it is
+    // refused.
+    CacheSettings bad = coarse();
+    bad.uniformEdgeFraction = 2 * bad.maxEdgeFraction;
+    EXPECT_THROW(bad.validate(), InputError);
+}
+
 TEST(CacheRefinement, TheEstimateDoesNotGrowWithTheNumberOfLights) {
     // The bench's unit light over its floor, and the same light cut into
     // four quarters (four lights, four meshes), each giving a quarter of the

@@ -185,6 +185,10 @@ TEST_F(Cli, IndirectEdgeSetsTheBounceMeshesBase) {
     EXPECT_NE(office.output.find("edges at most 1/32 of the scene (the mean free path"), std::string::npos)
         << office.output;
     EXPECT_NE(office.output.find("raytrace: 100 stratified"), std::string::npos) << office.output;
+    // Once gathered, each base is split down to half its edge (the
+    // office's 1/32 to 1/64; the Cornell box's 1/20.4 to 1/40.8).
+    EXPECT_NE(office.output.find("then split down to 1/64 once gathered"), std::string::npos) << office.output;
+    EXPECT_NE(plain.output.find("then split down to 1/41 once gathered"), std::string::npos) << plain.output;
     // --gather-size keeps its rays whatever base is chosen.
     const CommandResult asked = runMeshlight("plan office --gather-size 40");
     ASSERT_EQ(0, asked.status) << asked.output;

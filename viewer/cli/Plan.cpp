@@ -264,10 +264,15 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                         20.0 * 2 * (double(grid.dims[0]) * grid.dims[1] * grid.dims[2]) * 3 / 1e6);
         }
         const CacheSettings& ic = indirect.solver.cache;
-        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene (%s), split tolerance "
-                    "%.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; indirect light "
+        const CacheSettings first = bounceCacheSettings(indirect.solver, 1);
+        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene (%s), then split down to "
+                    "1/%.0f once gathered (linear interpolation reads indirect light dark where it falls towards "
+                    "corners and contacts, and the gathers' noise hides the curvature that would ask for the splits); "
+                    "split tolerance %.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; "
+                    "the bounce refined next is the one whose share of the image's error is largest; indirect light "
                     "starts %s\n",
-                    1 / ic.maxEdgeFraction, indirect.baseReason.c_str(), ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
+                    1 / ic.maxEdgeFraction, indirect.baseReason.c_str(), 1 / first.uniformEdgeFraction,
+                    ic.splitTolerance, ic.noiseTolerance, b.meanAlbedo,
                     concat("once direct light's first pass is complete, or once ", 100 * indirect.solver.startFraction,
                            "% of it is done if the rest would take over ", indirect.solver.startSeconds,
                            " s (a coarse first bounce is then in the first complete image, and bounce 1 is gathered "
