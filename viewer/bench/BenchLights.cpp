@@ -815,9 +815,10 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
        << "- load average " << run.loadAtStart() << " at the start, " << loadAverage()
        << " at the end (other processes slow every timing)\n"
        << softwareRasteriserNote(run.glDescription())
-       << "- Meshlight: the production session (cache defaults, jittered 64×64 direct sampler, the slices gather, "
-          "the plan's bounces, one sampling thread per core), the clock started before the cache is made; its "
-          "latest snapshot (direct and indirect meshes) composited at "
+       << "- Meshlight: the production session (cache defaults, jittered 64×64 direct sampler, the gather "
+          "the plan picks (in the office, Embree rays reading the cache where they land), the plan's bounces, "
+          "one sampling thread per core), the clock started before the cache is made; its latest snapshot "
+          "(direct and indirect meshes) composited at "
        << kSupersample << "×" << kSupersample << " sub-pixels at ";
     for (size_t i = 0; i < work.checkpoints.size(); ++i) md << (i ? ", " : "") << work.checkpoints[i];
     md << " s and composited once the worker has stopped (a composite made while it runs takes its cores: "
