@@ -140,10 +140,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     if (!firstPassDone() && firstPassBounce() == 0) {
         const int bounce = int(caches_.size()) + 1;
         // The previous bounce's source is not needed until pass 2.
-        if (bounce > 2) {
-            estimator.releaseSource(size_t(bounce - 2));
-            sourceBuilt_[size_t(bounce - 2)] = false;
-        }
+        if (bounce > 2) releaseSource(estimator, size_t(bounce - 2));
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), bounceCacheLayout()));
         prepareSource(estimator, bounce, direct, true);
     }
@@ -153,10 +150,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // A first pass gathered again (restart): only the source it gathers from is kept.
     if (first)
         for (size_t s = 0; s < sourceBuilt_.size(); ++s)
-            if (s != slot && sourceBuilt_[s]) {
-                estimator.releaseSource(s);
-                sourceBuilt_[s] = false;
-            }
+            if (s != slot) releaseSource(estimator, s);
     // Pass 2 refines bounce 1 from direct light as it is now, not as it was
     // when the first pass began.
     if (!first && bounce == 1 && !directRefreshed_) {
@@ -246,11 +240,7 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     restarted_ = true;
     resetPass2();
     directRefreshed_ = true;  // the source about to be built is direct light as it is now
-    for (size_t s = 0; s < sourceBuilt_.size(); ++s)
-        if (sourceBuilt_[s]) {
-            estimator.releaseSource(s);
-            sourceBuilt_[s] = false;
-        }
+    for (size_t s = 0; s < sourceBuilt_.size(); ++s) releaseSource(estimator, s);
 }
 
 void IndirectSolver::sceneChanged() {
@@ -271,11 +261,7 @@ bool IndirectSolver::tighten(IndirectEstimator& estimator) {
     if (!tightened) return false;
     resetPass2();
     directRefreshed_ = false;
-    for (size_t s = 0; s < sourceBuilt_.size(); ++s)
-        if (sourceBuilt_[s]) {
-            estimator.releaseSource(s);
-            sourceBuilt_[s] = false;
-        }
+    for (size_t s = 0; s < sourceBuilt_.size(); ++s) releaseSource(estimator, s);
     return true;
 }
 
@@ -451,7 +437,7 @@ double IndirectSolver::estimatedError(const std::optional<RefinementCamera>& vie
     if (!firstPassDone()) return 1;
     double worst = 0;
     for (size_t b = 0; b < caches_.size(); ++b)
-        worst = std::max(worst, caches_[b]->estimatedError(view) * std::pow(settings_.albedo, double(b)));
+        worst = std::max(worst, caches_[b]->estimatedError(view) * share(int(b) + 1));
     return worst;
 }
 

@@ -199,6 +199,7 @@ private:
     // the image's error was largest when last measured (one not yet
     // measured first, lowest first).
     int nextBounce() const;
+    // Releases source `slot` if it is built (nothing otherwise).
     void releaseSource(IndirectEstimator& estimator, size_t slot);
     // The first bounce whose cache has vertices without a sample (0: none).
     int firstPassBounce() const;
