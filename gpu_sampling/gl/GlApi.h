@@ -26,6 +26,7 @@ namespace ml {
     X(PFNGLFINISHPROC, Finish)                                          \
     X(PFNGLFLUSHPROC, Flush)                                            \
     X(PFNGLVIEWPORTPROC, Viewport)                                      \
+    X(PFNGLSCISSORPROC, Scissor)                                        \
     X(PFNGLCLEARPROC, Clear)                                            \
     X(PFNGLCLEARCOLORPROC, ClearColor)                                  \
     X(PFNGLCLEARDEPTHPROC, ClearDepth)                                  \

@@ -60,7 +60,8 @@ constexpr double kWalkSpeedup = 5;
 // bounces; Cycles' "max bounces" counts the bounces after the first hit.
 constexpr int kMaxDepth = 8;
 constexpr int kCyclesBounces = kMaxDepth - 1;
-// `render`'s composite: --supersample 4, --subpixel-passes 4 (its defaults).
+// `render`'s composite: --supersample 4, --subpixel-passes 4 (its snapshots'),
+// --outline-passes (its default).
 constexpr int kSupersample = 4, kSubpixelPasses = 4;
 
 struct Workload {
@@ -103,6 +104,7 @@ CompositorSettings renderComposite(int width, int height) {
     c.height = height;
     c.supersample = kSupersample;
     c.passes = kSubpixelPasses;
+    c.outlinePasses = kRenderOutlinePasses;
     return c;
 }
 

@@ -69,6 +69,8 @@ constexpr double kWalkSpeedup = 5;
 constexpr int kMaxDepth = 8;
 // Sub-pixels per pixel side of the compositor: the production default (render --supersample).
 constexpr int kSupersample = 4;
+// The fewest sub-pixel passes render's last image takes (--subpixel-passes auto).
+constexpr int kRenderPasses = 4;
 // The path tracer's curve starts at 2 samples per pixel, its least (the two
 // halves estimate its noise).
 constexpr int kFirstSpp = 2;
@@ -170,7 +172,8 @@ struct CurvePoint {
     ImageError error;
     double estimatedError = 0;  // the method's own estimate: the cache's, or the path tracer's noise
     // Meshlight
-    double compositeSeconds = 0;
+    double compositeSeconds = 0;  // a timing pass and the image's `passes` (subpixelPassesWithin)
+    int passes = 0;
     size_t vertices = 0, indirectVertices = 0;  // over every mesh of the snapshot; of those, indirect
     uint64_t samples = 0;                       // estimates and gathers in all
     int bouncesFinished = 0, bounces = 0;
@@ -283,15 +286,30 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
         if (const CacheSnapshot* s = reader.acquire()) r.sourceBytes = s->indirectStats.sourceBytes;
     }
 
+    // Each checkpoint composited as `render --time` stopping there writes
+    // its last image: one pass timed, then as many sub-pixel passes as a
+    // tenth of the refinement's time pays for, at least render's 4. Both
+    // composites count in the image's time.
     CompositorSettings comp;
     comp.width = work.width;
     comp.height = work.height;
     comp.supersample = kSupersample;
+    comp.outlinePasses = kRenderOutlinePasses;
+    const LightWeights unit = LightWeights::unit(scene.lights.size());
     ImageRgb image;
     for (Taken& t : taken) {
         const Clock::time_point c = Clock::now();
-        image = compositor.render(camera, t.direct, t.indirect, comp);
+        const GpuCacheMeshes meshes = compositor.upload(t.direct, t.indirect);
+        compositor.setSpecularCache(t.direct, t.indirect);
+        CompositorSettings timing = comp;
+        timing.passes = 1;
+        timing.outlinePasses = 0;
+        const Clock::time_point one = Clock::now();
+        image = compositor.composite(camera, meshes, unit, timing);
+        comp.passes = subpixelPassesWithin(secondsSince(one), t.point.seconds - r.cacheBuildSeconds, kRenderPasses);
+        image = compositor.composite(camera, meshes, unit, comp);
         CurvePoint p = t.point;
+        p.passes = comp.passes;
         p.compositeSeconds = secondsSince(c);
         p.seconds += p.compositeSeconds;
         p.error = errorAgainst(image, r.reference);
@@ -299,10 +317,10 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
         t.indirect = {};
         r.meshlight.push_back(p);
         std::printf("  %-5s meshlight   %6.2f s: relative RMSE %6.2f%% (raw %6.2f%%), %zu vertices (%zu indirect), "
-                    "%llu samples, bounces %d/%d, estimated error %.3g%%; composite %.2f s\n",
+                    "%llu samples, bounces %d/%d, estimated error %.3g%%; composite %.2f s (%d passes)\n",
                     r.office.label.c_str(), p.seconds, 100 * p.error.corrected, 100 * p.error.raw, p.vertices,
                     p.indirectVertices, static_cast<unsigned long long>(p.samples), p.bouncesFinished, p.bounces,
-                    100 * p.estimatedError, p.compositeSeconds);
+                    100 * p.estimatedError, p.compositeSeconds, p.passes);
     }
     return image;
 }
@@ -561,17 +579,19 @@ std::vector<BenchTarget> targetRows(const std::vector<SceneResult>& scenes, cons
 
 BenchTable checkpointsTable(const std::vector<SceneResult>& scenes) {
     BenchTable t({"scene", "lights", "method", "seconds", "relative_rmse_pct", "raw_relative_rmse_pct", "vertices",
-                  "indirect_vertices", "samples", "spp", "estimated_error_pct", "bounces_done", "composite_ms"});
+                  "indirect_vertices", "samples", "spp", "estimated_error_pct", "bounces_done", "composite_ms",
+                  "subpixel_passes"});
     for (const SceneResult& s : scenes) {
         const std::string lights = std::to_string(s.office.lights());
         for (const CurvePoint& p : s.meshlight)
             t.addRow({s.office.label, lights, "meshlight", benchNumber(p.seconds), benchPct(p.error.corrected),
                       benchPct(p.error.raw), std::to_string(p.vertices), std::to_string(p.indirectVertices),
                       std::to_string(p.samples), "", benchPct(p.estimatedError),
-                      concat(p.bouncesFinished, "/", p.bounces), benchMs(p.compositeSeconds)});
+                      concat(p.bouncesFinished, "/", p.bounces), benchMs(p.compositeSeconds),
+                      std::to_string(p.passes)});
         for (const CurvePoint& p : s.path)
             t.addRow({s.office.label, lights, "path-tracer", benchNumber(p.seconds), benchPct(p.error.corrected),
-                      benchPct(p.error.raw), "", "", "", std::to_string(p.spp), benchPct(p.estimatedError), "", ""});
+                      benchPct(p.error.raw), "", "", "", std::to_string(p.spp), benchPct(p.estimatedError), "", "", ""});
     }
     return t;
 }
@@ -822,8 +842,11 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
        << kSupersample << "×" << kSupersample << " sub-pixels at ";
     for (size_t i = 0; i < work.checkpoints.size(); ++i) md << (i ? ", " : "") << work.checkpoints[i];
     md << " s and composited once the worker has stopped (a composite made while it runs takes its cores: "
-          "up to seconds on a CPU rasteriser with many lights); an image's time is its checkpoint plus its "
-          "composite time, when `render` stopping there would have it\n"
+          "up to seconds on a CPU rasteriser with many lights), as `render --time` stopping there writes its last "
+          "image: one pass timed, then " << kRenderPasses << " sub-pixel passes or more, as many as a tenth of "
+          "the refinement's time pays for (subpixel_passes in lights_checkpoints.csv), and " << kRenderOutlinePasses
+       << " passes of the surfaces alone for the panels' outlines (EmitterOutlines.h); an image's time is its "
+          "checkpoint plus both composites' time, when `render` stopping there would have it\n"
        << "- path tracer: depth " << kMaxDepth << ", " << threads << " threads, box filter; samples per pixel "
           "doubled from " << kFirstSpp << " (rendering as many again with fresh streams and averaging) until its "
           "time passes Meshlight's budget of " << work.seconds << " s; its time includes the BVH build\n"
@@ -895,7 +918,7 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
           "hold (voxels, proxy); stored_MB: the bench's copies of the checkpoints' snapshots; peak_rss_MB: the "
           "process's peak resident set from just before the session was made to the worker's end "
           "(/proc/self/status VmHWM, reset through /proc/self/clear_refs), less stored_MB; it also holds the "
-          "reference, the GL driver and rss_before_MB. composite_ms: median time of a composite, made alone after "
+          "reference, the GL driver and rss_before_MB. composite_ms: median time of a checkpoint's composites (a timing pass and its sub-pixel passes), made alone after "
           "the run.\n\n"
        << scenesTable(scenes).markdown() << "\n"
        << "Every image of both methods: lights_checkpoints.csv; the references (and their noise), Meshlight's last "

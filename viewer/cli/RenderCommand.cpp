@@ -99,7 +99,7 @@ public:
         CompositorSettings settings = settings_;
         if (check && settings.width * settings.height > 128 * 128)
             settings.width = std::max(1, settings.width / 2), settings.height = std::max(1, settings.height / 2),
-            settings.passes = 1;
+            settings.passes = 1, settings.outlinePasses = 0;
         ImageErrorEstimate e = estimateImageError(compositor_, scene_, camera, s.direct, s.indirect, settings);
         if (expectIndirect && s.indirect.empty()) e.cache = 1;
         return e;
@@ -304,6 +304,10 @@ int runRender(const std::vector<std::string>& args) {
             "the most (a power of two up to 64) whose composite takes at most a tenth of the refinement's time; with "
             "--samples, 4 (the image, like the cache, the same on any machine)",
             std::string("auto"));
+    o.value("outline-passes", "M", "passes of the surfaces alone (no cache mesh: cheap) that resolve the emitters' "
+                                   "outlines: a pixel an emitter covers in part takes the emission and coverage from "
+                                   "M·S² sub-pixels (0: from the sub-pixel passes alone)",
+            std::to_string(kRenderOutlinePasses));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure (a walkthrough's is metered once, "
                               "from its first frame)",
             std::string("0"));
@@ -324,6 +328,7 @@ int runRender(const std::vector<std::string>& args) {
     comp.supersample = o.integer("supersample", 1, 16);
     const bool autoPasses = o.str("subpixel-passes") == "auto";
     comp.passes = autoPasses ? 4 : o.integer("subpixel-passes", 1, 64);
+    comp.outlinePasses = o.integer("outline-passes", 0, 1024);
     comp.photometry = readPhotometryOption(o);
     comp.validate();
     const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));
@@ -529,19 +534,17 @@ int runRender(const std::vector<std::string>& args) {
     // depend on its speed and load (a run under load took 4.75 s instead of
     // 2.1 s and composited more passes than its resumed copies, 2.5% apart).
     if (autoPasses && !walkthrough && radianceOut && !stop.samples) {
-        // What refinement cannot remove is the sub-pixel grid's sampling of
-        // edges (the Cornell box's light: 0.46% of a 256x256 image with 4
-        // passes, 0.2% with 16): the last image takes as many passes as a
-        // tenth of the refinement's time pays for, timed on one pass.
+        // As many passes as a tenth of the refinement's time pays for, timed
+        // on one pass (subpixelPassesWithin).
         CompositorSettings one = comp;
         one.passes = 1;
+        one.outlinePasses = 0;
         const GpuCacheMeshes meshes = compositor.upload(final->direct, final->indirect);
         compositor.setSpecularCache(final->direct, final->indirect);
         const auto t0 = Clock::now();
         compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
         const double pass = secondsSince(t0);
-        int k = output.passes();
-        while (k < 64 && 2 * k * pass <= 0.1 * refineSeconds) k *= 2;
+        const int k = subpixelPassesWithin(pass, refineSeconds, output.passes());
         output.setPasses(k);
         std::printf("sub-pixel passes: %d for the last image (one pass %.3f s; a tenth of %.1f s refined)\n", k, pass,
                     refineSeconds);

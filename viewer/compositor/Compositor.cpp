@@ -1,5 +1,6 @@
 #include "Compositor.h"
 
+#include "EmitterOutlines.h"
 #include "SpecularPaths.h"
 
 #include "core/image/Illuminance.h"
@@ -10,16 +11,24 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <future>
 #include <map>
 #include <numeric>
+#include <optional>
 
 namespace ml {
 
 float textureLodShiftFor(int passes) { return passes > 1 ? float(-0.5 * std::log2(double(passes)) - 1.0) : 0.0f; }
+
+int subpixelPassesWithin(double onePassSeconds, double refineSeconds, int least) {
+    int k = std::clamp(least, 1, 64);
+    while (k < 64 && 2 * k * onePassSeconds <= 0.1 * refineSeconds) k *= 2;
+    return k;
+}
 
 void CompositorSettings::validate() const {
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
@@ -30,6 +39,8 @@ void CompositorSettings::validate() const {
         throw InputError(concat("image ", width, "x", height, " with supersampling ", supersample,
                                 " exceeds 16384 sub-pixels per side: lower --supersample"));
     if (passes < 1 || passes > 64) throw InputError(concat("sub-pixel passes ", passes, " is not within 1..64"));
+    if (outlinePasses < 0 || outlinePasses > 1024)
+        throw InputError(concat("outline passes ", outlinePasses, " is not within 0..1024"));
     photometry.validate();
 }
 
@@ -91,6 +102,54 @@ glm::vec3 toVec3(const Rgb& c) { return glm::vec3(c); }
 // 0: no specular image in this composite; 1: added; 2: alone (SpecularPart).
 int specularCode(SpecularPart p) { return p == SpecularPart::Only ? 2 : 1; }
 
+// What each light's front shows: its radiance times its emission weight.
+std::vector<Rgb> emittedRadiance(const Scene& scene, const LightWeights& weights) {
+    std::vector<Rgb> e;
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        e.push_back(scene.lights[l].radiance * (weights.emission.empty() ? weights.light[l] : weights.emission[l]));
+    return e;
+}
+
+// K passes' grid shifts: pass k moves the grid by ((k + ½)/K − ½,
+// (row(k) + ½)/K − ½) sub-pixels, row a permutation spreading the rows (bit
+// reversal for powers of two, else k·⌊K/2 + 1⌋ mod K when coprime): a rook
+// pattern in each sub-pixel. Two halves of the passes, by the parity of
+// column + row, each span the sub-pixel along both axes (a split by pass
+// number puts one half's rows above the other's); where that parity does
+// not split them (K = 2), by number.
+struct RookPattern {
+    explicit RookPattern(int passes) : passes(passes) {
+        int odds = 0;
+        for (int k = 0; k < passes; ++k) odds += (k + row(k)) % 2;
+        byParity = odds > 0 && odds < passes;
+    }
+    int row(int k) const {
+        if ((passes & (passes - 1)) == 0) {
+            int r = 0;
+            for (int bit = 1, rev = passes >> 1; bit < passes; bit <<= 1, rev >>= 1)
+                if (k & bit) r |= rev;
+            return r;
+        }
+        int step = passes / 2 + 1;
+        while (std::gcd(step, passes) != 1) ++step;
+        return (k * step) % passes;
+    }
+    bool odd(int k) const { return (byParity ? k + row(k) : k) % 2 == 1; }
+    int odds() const {
+        int n = 0;
+        for (int k = 0; k < passes; ++k) n += odd(k);
+        return n;
+    }
+    // Pass k's settings: `s` with its grid shift, in output pixels.
+    CompositorSettings shifted(CompositorSettings s, int k) const {
+        s.shiftX = ((k + 0.5) / passes - 0.5) / s.supersample;
+        s.shiftY = ((row(k) + 0.5) / passes - 0.5) / s.supersample;
+        return s;
+    }
+    int passes;
+    bool byParity = false;
+};
+
 bool sameCamera(const Camera& a, const Camera& b) {
     return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
 }
@@ -151,6 +210,7 @@ struct Compositor::Impl {
     CompositeQuantity quantity = CompositeQuantity::Radiance;
     Photometry photometry;
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
+    EmitterOutlines::Rect surfaceScissor;  // drawSurfacesOnly's: the surface pass draws only there
     float textureLodShift = 0;  // common_textures.glsl's uTextureLodShift for this composite
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
 
@@ -667,10 +727,7 @@ struct Compositor::Impl {
                        : 0;
         if (!scene.lights.empty()) {
             std::vector<glm::vec4> emission;
-            for (size_t l = 0; l < scene.lights.size(); ++l)
-                emission.emplace_back(
-                    toVec3(scene.lights[l].radiance * (weights.emission.empty() ? weights.light[l] : weights.emission[l])),
-                    1.0f);
+            for (const Rgb& e : emittedRadiance(scene, weights)) emission.emplace_back(toVec3(e), 1.0f);
             gl.NamedBufferSubData(lightEmissionBuffer.id(), 0, GLsizeiptr(emission.size() * sizeof(glm::vec4)),
                                   emission.data());
         }
@@ -703,11 +760,55 @@ struct Compositor::Impl {
         composited = resolved = forwarded = false;
     }
 
+    // --- Emitters' outlines (CompositorSettings::outlinePasses) -------------
+    // The surfaces alone, from `camera` with s's grid shift: no cache mesh is
+    // drawn, so a pass costs the scene's triangles, not the cache's. Leaves
+    // nothing composited (the irradiance is not this view's).
+    // Only the sub-pixels of `rect` are drawn.
+    void drawSurfacesOnly(const Camera& camera, const CompositorSettings& s, const EmitterOutlines::Rect& rect) {
+        ensureTargets(s.width, s.height, s.supersample);
+        mvp = clipFromLocal(camera, double(s.width) / s.height, Vec2(2 * s.shiftX / s.width, 2 * s.shiftY / s.height));
+        setFrustum();
+        composed = true;
+        surfaced = false;
+        surfaceScissor = rect;
+        ensureSurface();
+        surfaceScissor = {};
+        composed = surfaced = composited = resolved = forwarded = false;
+    }
+
+    // The sub-pixels of the last surface pass (GL rows, from the bottom):
+    // what each sees, and the emission textures' scale where it has any.
+    // Those of `rect` (empty: all).
+    EmitterOutlines::SubPixels readSurfaceSubPixels(const EmitterOutlines::Rect& rect = {}) {
+        EmitterOutlines::SubPixels p;
+        p.rect = rect;
+        const EmitterOutlines::Rect r =
+            rect.empty() ? EmitterOutlines::Rect{0, 0, t.width * t.supersample, t.height * t.supersample} : rect;
+        p.surface = readRgba(t.surfaceFb.id(), r.x, r.y, r.width, r.height);
+        if (textured)
+            p.emissionScale =
+                readFloats(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1, GL_RGBA, 4, r.x, r.y, r.width, r.height);
+        return p;
+    }
+    // The last composite's sub-pixels (GL rows, from the bottom), and the
+    // image readImage() makes of them.
+    ImageRgb readImage(std::vector<float>& subPixels) {
+        ensureComposite();
+        const int w = t.width * t.supersample, h = t.height * t.supersample;
+        subPixels = readRgba(t.compositeFb.id(), 0, 0, w, h);
+        return boxDownsample(toImage(subPixels, w, h), t.supersample);
+    }
+
     // Pass 1: reflectance, and which light's front is seen, per sub-pixel.
     void ensureSurface() {
         ML_ASSERT(composed, "nothing composited yet");
         if (surfaced) return;
         baseState(t.width * t.supersample, t.height * t.supersample);
+        if (!surfaceScissor.empty()) {
+            gl.Enable(GL_SCISSOR_TEST);
+            gl.Scissor(surfaceScissor.x, surfaceScissor.y, surfaceScissor.width, surfaceScissor.height);
+        }
         const float zero[4] = {0, 0, 0, 0};
         const float farDepth = 0.0f;  // reversed depth
         gl.BindFramebuffer(GL_FRAMEBUFFER, t.surfaceFb.id());
@@ -720,6 +821,7 @@ struct Compositor::Impl {
         gl.UniformMatrix4fv(surfaceProgram.uniform("uClipFromLocal"), 1, GL_FALSE, &mvp[0][0]);
         drawSceneRanges(surfaceProgram);
         gl.Disable(GL_DEPTH_TEST);
+        gl.Disable(GL_SCISSOR_TEST);
         checkGl(gl, "drawing the surfaces");
         surfaced = true;
     }
@@ -1102,64 +1204,57 @@ double Compositor::specularSeconds() const { return impl_->specularSeconds; }
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings, ImageRgb* spread) {
     const int passes = std::max(1, settings.passes);
-    if (passes == 1) {
+    const bool outlines = settings.outlinePasses > 0 && settings.quantity == CompositeQuantity::Radiance &&
+                          settings.specular != SpecularPart::Only && !impl_->scene.lights.empty();
+    if (passes == 1 && !outlines) {
         impl_->traceSpecularFor(camera, weights, settings);
         impl_->compose(camera, meshes, weights, settings);
         ImageRgb image = impl_->readImage();
         if (spread) *spread = ImageRgb(image.width, image.height);
         return image;
     }
-    // Pass k shifts the grid by ((k + ½)/K − ½, (σ(k) + ½)/K − ½) sub-pixels,
-    // σ a permutation spreading the rows (bit reversal for powers of two,
-    // else k·⌊K/2 + 1⌋ mod K when coprime): a rook pattern in each sub-pixel.
-    const auto rows = [passes](int k) {
-        if ((passes & (passes - 1)) == 0) {
-            int r = 0;
-            for (int bit = 1, rev = passes >> 1; bit < passes; bit <<= 1, rev >>= 1)
-                if (k & bit) r |= rev;
-            return r;
-        }
-        int step = passes / 2 + 1;
-        while (std::gcd(step, passes) != 1) ++step;
-        return (k * step) % passes;
-    };
+    std::optional<EmitterOutlines> edges;
+    if (outlines)
+        edges.emplace(settings.width, settings.height, settings.supersample, emittedRadiance(impl_->scene, weights));
+    const RookPattern rook(passes);
+    const int odds = std::max(rook.odds(), passes > 1 ? 1 : 0), evens = passes - odds;
     ImageRgb sum;
-    // The spread compares two halves of the passes, by the parity of their
-    // grid shift's column + row: each half then spans the sub-pixel along
-    // both axes (a split by pass number puts one half's rows above the
-    // other's); where that parity does not split them (K = 2), by number.
-    int odds = 0;
-    for (int k = 0; k < passes; ++k) odds += (k + rows(k)) % 2;
-    const bool byParity = odds > 0 && odds < passes;
-    if (!byParity) odds = passes / 2;
-    const auto isOdd = [&](int k) { return (byParity ? k + rows(k) : k) % 2 == 1; };
     std::vector<double> odd;  // Σ over the odd half
-    CompositorSettings s = settings;
+    std::vector<float> subPixels;
     for (int k = 0; k < passes; ++k) {
-        s.shiftX = ((k + 0.5) / passes - 0.5) / settings.supersample;
-        s.shiftY = ((rows(k) + 0.5) / passes - 0.5) / settings.supersample;
+        const CompositorSettings s = passes > 1 ? rook.shifted(settings, k) : settings;
         impl_->traceSpecularFor(camera, weights, s);
         impl_->compose(camera, meshes, weights, s);
-        const ImageRgb image = impl_->readImage();
+        const ImageRgb image = edges ? impl_->readImage(subPixels) : impl_->readImage();
+        if (edges) edges->addFullPass(subPixels, impl_->readSurfaceSubPixels());
         if (k == 0) sum = image;
         else
             for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += image.data[i];
-        if (spread && isOdd(k)) {
+        if (spread && passes > 1 && rook.odd(k)) {
             odd.resize(image.data.size(), 0.0);
             for (size_t i = 0; i < image.data.size(); ++i) odd[i] += image.data[i];
         }
     }
     if (spread) {
+        *spread = ImageRgb(sum.width, sum.height);
         // With independent errors of one size, the mean of both halves errs
         // by half their difference.
-        const int evens = passes - odds;
-        *spread = ImageRgb(sum.width, sum.height);
-        for (size_t i = 0; i < sum.data.size(); ++i) {
-            const double b = odd[i] / odds, a = (double(sum.data[i]) - odd[i]) / evens;
-            spread->data[i] = float(0.5 * std::abs(a - b));
-        }
+        if (passes > 1)
+            for (size_t i = 0; i < sum.data.size(); ++i) {
+                const double b = odd[i] / odds, a = (double(sum.data[i]) - odd[i]) / evens;
+                spread->data[i] = float(0.5 * std::abs(a - b));
+            }
     }
     for (float& v : sum.data) v /= float(passes);
+    if (edges) {
+        const RookPattern fine(settings.outlinePasses);
+        const EmitterOutlines::Rect bounds = edges->emitterBounds();
+        for (int k = 0; k < settings.outlinePasses && !bounds.empty(); ++k) {
+            impl_->drawSurfacesOnly(camera, fine.shifted(settings, k), bounds);
+            edges->addSurfacePass(impl_->readSurfaceSubPixels(bounds), fine.odd(k));
+        }
+        edges->apply(sum, spread);
+    }
     return sum;
 }
 

@@ -65,6 +65,13 @@ struct CompositorSettings {
     // uses 4, the viewer 1. With several passes, textures are filtered over
     // the samples' spacing, not the sub-pixel's (textureLodShiftFor).
     int passes = 1;
+    // Radiance only: passes of the surfaces alone (no cache mesh, so a
+    // fraction of a full pass's cost), their grid shifted in a rook pattern
+    // of their own, that resolve the emitters' outlines: each pixel an
+    // emitter covers in part takes the emission and coverage from them and
+    // the rest from the full passes (EmitterOutlines.h). 0: none, the
+    // viewer's; render's images take them (--outline-passes).
+    int outlinePasses = 0;
     // The image shifted by this many output pixels (x right, y up); set per
     // pass by composite(), 0 otherwise.
     double shiftX = 0, shiftY = 0;
@@ -95,6 +102,23 @@ struct CompositorSettings {
 // trilinear level, 0.7-0.9% at the samples' spacing, 0.3% at half of it;
 // the composite 9% slower than trilinear.
 float textureLodShiftFor(int passes);
+
+// The sub-pixel passes `render --subpixel-passes auto` gives its last image,
+// and the bench its checkpoints (what `render --time T` would write then):
+// what refinement cannot remove is the sub-pixel grid's sampling of edges
+// (the Cornell box's light: 0.46% of a 256×256 image with 4 passes, 0.2%
+// with 16), so from `least` the count doubles, up to 64, while the doubled
+// count's composite, timed as `onePassSeconds` per pass, takes at most a
+// tenth of `refineSeconds`.
+int subpixelPassesWithin(double onePassSeconds, double refineSeconds, int least);
+
+// render's CompositorSettings::outlinePasses (--outline-passes): 16 passes
+// of the surfaces give an emitter's outline S·16 levels of coverage each
+// way. The office's 12 panels at 320×180, S = 4, 4 sub-pixel passes: the
+// pixels around them err by 6.7% (each against its own value), 5.0% with
+// 16 outline passes, 4.5% with 64, and the 64 cost ~0.1 s more per
+// composite there, up to seconds where emitters span the whole view.
+constexpr int kRenderOutlinePasses = 16;
 
 // Per-mesh RGB factors. A light's factor scales its direct mesh and the
 // radiance its emitting faces show; indirect meshes (one per bounce, not

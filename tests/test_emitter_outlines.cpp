@@ -1,0 +1,156 @@
+// Emitters' outlines (viewer/compositor/EmitterOutlines.h): a pixel an
+// emitter covers in part is rebuilt from the surface-only passes' coverage
+// and emission and the full passes' other sub-pixels. First the rebuild on
+// hand-made sub-pixels (exact arithmetic), then the compositor on a light
+// seen from above, against the pixels' exact coverage.
+#include "TestSamplers.h"
+#include "TestScenes.h"
+#include "cache/IrradianceCache.h"
+#include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/EmitterOutlines.h"
+
+#include "GlTestContext.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+using namespace ml;
+
+namespace {
+
+// One 2×2-sub-pixel pass: a = what each sees (0 nothing, 1 a surface,
+// 2 + l light l), GL rows from the bottom.
+EmitterOutlines::SubPixels seen(const std::vector<float>& a) {
+    EmitterOutlines::SubPixels p;
+    for (float v : a) p.surface.insert(p.surface.end(), {0.5f, 0.5f, 0.5f, v});
+    return p;
+}
+std::vector<float> grey(const std::vector<float>& v) {
+    std::vector<float> rgba;
+    for (float x : v) rgba.insert(rgba.end(), {x, x, x, 1.0f});
+    return rgba;
+}
+
+}  // namespace
+
+TEST(EmitterOutlines, RebuildsAPixelFromCoverageEmissionAndTheRest) {
+    // One pixel, 2×2 sub-pixels, light 0 of radiance 10. The full pass: two
+    // sub-pixels on the light (radiance 10.5: 0.5 besides the emission),
+    // two off it (1 and 3). Surface passes: the light covers 3 sub-pixels in
+    // the odd one, 1 in the even one. c = 4/8, E = 10·c, R = 0.5, B = 2:
+    // 5 + 0.25 + 1 = 6.25. Each half alone: c = 3/4 gives 8.375, c = 1/4
+    // gives 4.125, so the spread is 2.125.
+    EmitterOutlines o(1, 1, 2, {Rgb(10.0)});
+    o.addFullPass(grey({10.5f, 1.0f, 10.5f, 3.0f}), seen({2, 1, 2, 1}));
+    o.addSurfacePass(seen({2, 2, 2, 1}), true);
+    o.addSurfacePass(seen({2, 1, 0, 1}), false);
+    ImageRgb image(1, 1, Rgb(99.0)), spread(1, 1);
+    EXPECT_EQ(o.apply(image, &spread), 1u);
+    EXPECT_NEAR(image.at(0, 0).r, 6.25, 1e-12);
+    EXPECT_NEAR(spread.at(0, 0).g, 2.125, 1e-12);
+}
+
+TEST(EmitterOutlines, PixelsThatSeeNoEmitterKeepTheFullPassesMean) {
+    // Two pixels side by side; only the right one has light 1 in it.
+    EmitterOutlines o(2, 1, 2, {Rgb(5.0), Rgb(8.0)});
+    // Sub-pixels, bottom row first: x = 0..3 across both pixels.
+    o.addFullPass(grey({1, 1, 8, 1, 1, 1, 1, 1}), seen({1, 1, 3, 1, 1, 1, 1, 1}));
+    o.addSurfacePass(seen({1, 1, 3, 3, 1, 1, 1, 1}), false);
+    ImageRgb image(2, 1, Rgb(7.0));
+    EXPECT_EQ(o.apply(image), 1u);
+    EXPECT_EQ(image.at(0, 0).r, 7.0f);
+    // c = 2/4, E = 8·c, R = 0, B = 1.
+    EXPECT_NEAR(image.at(1, 0).r, 4.5, 1e-12);
+}
+
+TEST(EmitterOutlines, APixelTheFullPassesSawOnlyOnTheLightTakesItsNeighboursRest) {
+    // The left pixel is all light in the full pass; the surface pass finds a
+    // quarter of it off the light: its B comes from the 3×3 around it (here
+    // the right pixel's sub-pixels off the light, radiance 2).
+    EmitterOutlines o(2, 1, 2, {Rgb(4.0)});
+    o.addFullPass(grey({4, 4, 2, 2, 4, 4, 2, 2}), seen({2, 2, 1, 1, 2, 2, 1, 1}));
+    o.addSurfacePass(seen({2, 2, 1, 1, 1, 2, 1, 1}), false);
+    ImageRgb image(2, 1, Rgb(0.0));
+    EXPECT_EQ(o.apply(image), 1u);
+    EXPECT_NEAR(image.at(0, 0).r, 0.75 * 4 + 0.25 * 2, 1e-12);
+}
+
+namespace {
+
+// A grey floor (y = 0, 8 × 8) with a light lying on it, facing up: the
+// rectangle [x0, x1] × [z0, z1] at y = 0.001, radiance kLe, no reflectance.
+constexpr double kLe = 50.0;
+constexpr double kX0 = -0.3137, kX1 = 0.2291, kZ0 = -0.1719, kZ1 = 0.3493;
+
+// Facing up (+y): z × x.
+Mesh upQuad(const std::string& name, double x0, double x1, double z0, double z1, double y, uint32_t material) {
+    return test::quadMesh(name, material, Vec3(x0, y, z0), Vec3(0, 0, z1 - z0), Vec3(x1 - x0, 0, 0));
+}
+
+Scene lightOnFloor() {
+    return test::sceneOf("light on a floor",
+                         {Material::diffuse("grey", Rgb(0.5)), Material::diffuse("light", Rgb(0.0), Rgb(kLe))},
+                         {upQuad("floor", -4, 4, -4, 4, 0, 0), upQuad("light", kX0, kX1, kZ0, kZ1, 0.001, 1)});
+}
+
+// Of [a0, a1] the share inside [b0, b1].
+double overlap(double a0, double a1, double b0, double b1) {
+    return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)) / (a1 - a0);
+}
+
+}  // namespace
+
+TEST(EmitterOutlines, CompositeGivesEachPixelItsExactShareOfTheLight) {
+    // Looking straight down from 1.001 above the light (90° view: the plane
+    // y = 0.001 spans [−1, 1]² over 64×64 pixels, x right, z down). The
+    // cache holds E = 2 everywhere, so off the light a pixel is 0.5/π × 2
+    // and each pixel is cov·kLe + (1 − cov)·1/π, cov its exact share of the
+    // rectangle. One full pass of 4×4 sub-pixels gets cov in steps of 1/16
+    // (4 levels along each edge): up to ~1/8 of kLe off on the outline. With
+    // 64 surface passes in a rook pattern the edges get 256 levels each way:
+    // an edge's coverage within 1/256 plus the grid's own sampling, so the
+    // worst outline pixel is asked within 1% of kLe; pixels off the outline
+    // must equal the plain composite's exactly.
+    const Scene scene = lightOnFloor();
+    CacheSettings cs;
+    cs.maxEdgeFraction = 1.0 / 8.0;
+    IrradianceCache cache(scene, cs);
+    test::sampleEveryVertex(cache, [](size_t, const Vec3&, const Vec3&, uint32_t) { return Rgb(2.0); }, 1, 1);
+    const std::vector<IrradianceMeshCopy> meshes = cache.copyMeshes();
+    Camera camera;
+    camera.position = Vec3(0, 1.001, 0);
+    camera.target = Vec3(0, 0.001, 0);
+    camera.up = Vec3(0, 0, -1);
+    camera.fovYDegrees = 90;
+    const int size = 64;
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings s;
+    s.width = s.height = size;
+    s.supersample = 4;
+    const ImageRgb plain = compositor.render(camera, meshes, s);
+    s.outlinePasses = 64;
+    const ImageRgb outlined = compositor.render(camera, meshes, s);
+    double worstPlain = 0, worstOutlined = 0;
+    int outline = 0;
+    for (int py = 0; py < size; ++py)
+        for (int px = 0; px < size; ++px) {
+            const double cov = overlap(-1 + 2.0 * px / size, -1 + 2.0 * (px + 1) / size, kX0, kX1) *
+                               overlap(-1 + 2.0 * py / size, -1 + 2.0 * (py + 1) / size, kZ0, kZ1);
+            const double expected = cov * kLe + (1 - cov) / kPi;
+            if (cov == 0 || cov == 1) {
+                EXPECT_EQ(outlined.at(px, py).g, plain.at(px, py).g) << "pixel " << px << "," << py;
+                EXPECT_NEAR(outlined.at(px, py).g, expected, 1e-4 * kLe) << "pixel " << px << "," << py;
+                continue;
+            }
+            ++outline;
+            worstPlain = std::max(worstPlain, std::abs(plain.at(px, py).g - expected) / kLe);
+            worstOutlined = std::max(worstOutlined, std::abs(outlined.at(px, py).g - expected) / kLe);
+        }
+    std::printf("outline pixels %d, worst error of kLe: plain %.4f, outlined %.4f\n", outline, worstPlain, worstOutlined);
+    EXPECT_GT(outline, 60);
+    EXPECT_LT(worstOutlined, 0.01);
+    // What the outline passes are for: one full pass is several times off.
+    EXPECT_GT(worstPlain, 4 * worstOutlined);
+}
