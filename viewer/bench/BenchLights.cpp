@@ -69,8 +69,6 @@ constexpr double kWalkSpeedup = 5;
 constexpr int kMaxDepth = 8;
 // Sub-pixels per pixel side of the compositor: the production default (render --supersample).
 constexpr int kSupersample = 4;
-// The fewest sub-pixel passes render's last image takes (--subpixel-passes auto).
-constexpr int kRenderPasses = 4;
 // The path tracer's curve starts at 2 samples per pixel, its least (the two
 // halves estimate its noise).
 constexpr int kFirstSpp = 2;
@@ -287,9 +285,9 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
     }
 
     // Each checkpoint composited as `render --time` stopping there writes
-    // its last image: one pass timed, then as many sub-pixel passes as a
-    // tenth of the refinement's time pays for, at least render's 4. Both
-    // composites count in the image's time.
+    // its last image: one pass (with the outline passes) timed, then, where
+    // a tenth of the refinement's time pays for more, as many sub-pixel
+    // passes as it does. Every composite counts in the image's time.
     CompositorSettings comp;
     comp.width = work.width;
     comp.height = work.height;
@@ -301,13 +299,11 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
         const Clock::time_point c = Clock::now();
         const GpuCacheMeshes meshes = compositor.upload(t.direct, t.indirect);
         compositor.setSpecularCache(t.direct, t.indirect);
-        CompositorSettings timing = comp;
-        timing.passes = 1;
-        timing.outlinePasses = 0;
+        comp.passes = 1;
         const Clock::time_point one = Clock::now();
-        image = compositor.composite(camera, meshes, unit, timing);
-        comp.passes = subpixelPassesWithin(secondsSince(one), t.point.seconds - r.cacheBuildSeconds, kRenderPasses);
         image = compositor.composite(camera, meshes, unit, comp);
+        comp.passes = subpixelPassesWithin(secondsSince(one), t.point.seconds - r.cacheBuildSeconds);
+        if (comp.passes > 1) image = compositor.composite(camera, meshes, unit, comp);
         CurvePoint p = t.point;
         p.passes = comp.passes;
         p.compositeSeconds = secondsSince(c);
@@ -843,10 +839,10 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
     for (size_t i = 0; i < work.checkpoints.size(); ++i) md << (i ? ", " : "") << work.checkpoints[i];
     md << " s and composited once the worker has stopped (a composite made while it runs takes its cores: "
           "up to seconds on a CPU rasteriser with many lights), as `render --time` stopping there writes its last "
-          "image: one pass timed, then " << kRenderPasses << " sub-pixel passes or more, as many as a tenth of "
-          "the refinement's time pays for (subpixel_passes in lights_checkpoints.csv), and " << kRenderOutlinePasses
-       << " passes of the surfaces alone for the panels' outlines (EmitterOutlines.h); an image's time is its "
-          "checkpoint plus both composites' time, when `render` stopping there would have it\n"
+          "image: one sub-pixel pass, timed, and " << kRenderOutlinePasses << " passes of the surfaces alone for "
+          "the panels' outlines (EmitterOutlines.h); then, if a tenth of the refinement's time pays for more, as "
+          "many sub-pixel passes as it does (subpixel_passes in lights_checkpoints.csv); an image's time is its "
+          "checkpoint plus its composites' time, when `render` stopping there would have it\n"
        << "- path tracer: depth " << kMaxDepth << ", " << threads << " threads, box filter; samples per pixel "
           "doubled from " << kFirstSpp << " (rendering as many again with fresh streams and averaging) until its "
           "time passes Meshlight's budget of " << work.seconds << " s; its time includes the BVH build\n"

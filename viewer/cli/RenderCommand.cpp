@@ -544,7 +544,7 @@ int runRender(const std::vector<std::string>& args) {
         const auto t0 = Clock::now();
         compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
         const double pass = secondsSince(t0);
-        const int k = subpixelPassesWithin(pass, refineSeconds, output.passes());
+        const int k = subpixelPassesWithin(pass, refineSeconds);
         output.setPasses(k);
         std::printf("sub-pixel passes: %d for the last image (one pass %.3f s; a tenth of %.1f s refined)\n", k, pass,
                     refineSeconds);

@@ -24,8 +24,8 @@ namespace ml {
 
 float textureLodShiftFor(int passes) { return passes > 1 ? float(-0.5 * std::log2(double(passes)) - 1.0) : 0.0f; }
 
-int subpixelPassesWithin(double onePassSeconds, double refineSeconds, int least) {
-    int k = std::clamp(least, 1, 64);
+int subpixelPassesWithin(double onePassSeconds, double refineSeconds) {
+    int k = 1;
     while (k < 64 && 2 * k * onePassSeconds <= 0.1 * refineSeconds) k *= 2;
     return k;
 }

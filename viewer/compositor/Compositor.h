@@ -107,10 +107,12 @@ float textureLodShiftFor(int passes);
 // and the bench its checkpoints (what `render --time T` would write then):
 // what refinement cannot remove is the sub-pixel grid's sampling of edges
 // (the Cornell box's light: 0.46% of a 256×256 image with 4 passes, 0.2%
-// with 16), so from `least` the count doubles, up to 64, while the doubled
+// with 16), so from one the count doubles, up to 64, while the doubled
 // count's composite, timed as `onePassSeconds` per pass, takes at most a
-// tenth of `refineSeconds`.
-int subpixelPassesWithin(double onePassSeconds, double refineSeconds, int least);
+// tenth of `refineSeconds`. The emitters' outlines, the largest of those
+// edges, have passes of their own (outlinePasses), cheap enough for any
+// image.
+int subpixelPassesWithin(double onePassSeconds, double refineSeconds);
 
 // render's CompositorSettings::outlinePasses (--outline-passes): 16 passes
 // of the surfaces give an emitter's outline S·16 levels of coverage each
