@@ -104,6 +104,10 @@ int specularCode(SpecularPart p) { return p == SpecularPart::Only ? 2 : 1; }
 
 // What each light's front shows: its radiance times its emission weight.
 std::vector<Rgb> emittedRadiance(const Scene& scene, const LightWeights& weights) {
+    ML_ASSERT(weights.light.size() == scene.lights.size() &&
+                  (weights.emission.empty() || weights.emission.size() == scene.lights.size()),
+              weights.light.size(), " weights and ", weights.emission.size(), " emission weights for ",
+              scene.lights.size(), " lights");
     std::vector<Rgb> e;
     for (size_t l = 0; l < scene.lights.size(); ++l)
         e.push_back(scene.lights[l].radiance * (weights.emission.empty() ? weights.light[l] : weights.emission[l]));
