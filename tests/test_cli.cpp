@@ -48,6 +48,10 @@ TEST_F(Cli, UnknownCommandAndBadValues) {
     EXPECT_NE(ext.output.find("unsupported output format"), std::string::npos) << ext.output;
     const CommandResult width = runMeshlight("render cornell --width abc --out " + path("x.png"));
     EXPECT_EQ(width.status, 2);
+    const CommandResult outlines = runMeshlight("render cornell --outline-passes -1 --out " + path("x.png"));
+    EXPECT_EQ(outlines.status, 2);
+    EXPECT_NE(outlines.output.find("option --outline-passes: '-1' is not an integer in [0, 1024]"), std::string::npos)
+        << outlines.output;
     EXPECT_EQ(files(), 0u);
 }
 
