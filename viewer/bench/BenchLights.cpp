@@ -170,7 +170,9 @@ struct CurvePoint {
     ImageError error;
     double estimatedError = 0;  // the method's own estimate: the cache's, or the path tracer's noise
     // Meshlight
-    double compositeSeconds = 0;  // a timing pass and the image's `passes` (subpixelPassesWithin)
+    // The one-pass composite (with the outline passes, timed) and, where more
+    // passes pay (subpixelPassesWithin), the composite of `passes`.
+    double compositeSeconds = 0;
     int passes = 0;
     size_t vertices = 0, indirectVertices = 0;  // over every mesh of the snapshot; of those, indirect
     uint64_t samples = 0;                       // estimates and gathers in all
@@ -539,7 +541,7 @@ std::vector<BenchTarget> targetRows(const std::vector<SceneResult>& scenes, cons
         } else {
             // The path tracer's time is a lower bound: met if even that is enough.
             const double atLeast = l.pathLast / *l.meshlight;
-            rows.push_back({speed, concat("ratio >= ", benchNumber(atLeast), ", about ", benchNumber(*l.ratio()),
+            rows.push_back({speed, concat("ratio >= ", benchNumber(atLeast), "; about ", benchNumber(*l.ratio()),
                                           " extrapolated (path tracer ~", benchNumber(l.pathExtrapolated), " s)"),
                             atLeast >= kTargetSpeedup ? "met" : "undecided"});
         }
@@ -914,8 +916,8 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
           "hold (voxels, proxy); stored_MB: the bench's copies of the checkpoints' snapshots; peak_rss_MB: the "
           "process's peak resident set from just before the session was made to the worker's end "
           "(/proc/self/status VmHWM, reset through /proc/self/clear_refs), less stored_MB; it also holds the "
-          "reference, the GL driver and rss_before_MB. composite_ms: median time of a checkpoint's composites (a timing pass and its sub-pixel passes), made alone after "
-          "the run.\n\n"
+          "reference, the GL driver and rss_before_MB. composite_ms: median time of a checkpoint's composites "
+          "(one pass timed, then its sub-pixel passes where more pay), made alone after the run.\n\n"
        << scenesTable(scenes).markdown() << "\n"
        << "Every image of both methods: lights_checkpoints.csv; the references (and their noise), Meshlight's last "
           "image and the path tracer's last, as lights_*.exr.\n\n"
