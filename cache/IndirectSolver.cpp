@@ -61,8 +61,10 @@ double IndirectSolver::share(int bounce) const { return std::pow(settings_.albed
 int IndirectSolver::nextBounce() const {
     int best = 1;
     double worst = -1;
-    for (int b = 1; b <= settings_.bounces; ++b)
-        if (!converged_[size_t(b - 1)] && bounceError_[size_t(b - 1)] > worst) best = b, worst = bounceError_[size_t(b - 1)];
+    for (int b = 1; b <= settings_.bounces; ++b) {
+        const size_t slot = size_t(b - 1);
+        if (!converged_[slot] && bounceError_[slot] > worst) best = b, worst = bounceError_[slot];
+    }
     return best;
 }
 
@@ -218,7 +220,8 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     for (double e : bounceError_)
         if (std::isfinite(e)) sum += e * e;
     report.estimatedError = std::sqrt(sum);
-    report.candidates = allFinished() ? 0 : std::max<size_t>(report.candidates, 1);  // not converged while bounces remain
+    // Not converged while bounces remain.
+    report.candidates = allFinished() ? 0 : std::max<size_t>(report.candidates, 1);
     return report;
 }
 

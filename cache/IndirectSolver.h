@@ -153,8 +153,9 @@ public:
     // Once every bounce has converged: one more refinement level for every
     // bounce's cache (IrradianceCache::tighten), and pass 2 again (every
     // bounce unconverged and unmeasured, so each has a round first), each
-    // bounce's source rebuilt from its predecessor as now refined (bounce 1's from the direct meshes as they are then), so the
-    // sources follow refinement. False, changing nothing, while bounces are
+    // bounce's source rebuilt from its predecessor as now refined (bounce
+    // 1's from the direct meshes as they are then), so the sources follow
+    // refinement. False, changing nothing, while bounces are
     // still being refined or at the last level.
     bool tighten(IndirectEstimator& estimator);
     // The refinement level of bounce 1's cache (0 before any tighten()).

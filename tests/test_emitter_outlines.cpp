@@ -148,7 +148,8 @@ TEST(EmitterOutlines, CompositeGivesEachPixelItsExactShareOfTheLight) {
             worstPlain = std::max(worstPlain, std::abs(plain.at(px, py).g - expected) / kLe);
             worstOutlined = std::max(worstOutlined, std::abs(outlined.at(px, py).g - expected) / kLe);
         }
-    std::printf("outline pixels %d, worst error of kLe: plain %.4f, outlined %.4f\n", outline, worstPlain, worstOutlined);
+    std::printf("outline pixels %d, worst error of kLe: plain %.4f, outlined %.4f\n", outline, worstPlain,
+                worstOutlined);
     EXPECT_GT(outline, 60);
     EXPECT_LT(worstOutlined, 0.01);
     // What the outline passes are for: one full pass is several times off.

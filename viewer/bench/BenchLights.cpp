@@ -589,7 +589,8 @@ BenchTable checkpointsTable(const std::vector<SceneResult>& scenes) {
                       std::to_string(p.passes)});
         for (const CurvePoint& p : s.path)
             t.addRow({s.office.label, lights, "path-tracer", benchNumber(p.seconds), benchPct(p.error.corrected),
-                      benchPct(p.error.raw), "", "", "", std::to_string(p.spp), benchPct(p.estimatedError), "", "", ""});
+                      benchPct(p.error.raw), "", "", "", std::to_string(p.spp), benchPct(p.estimatedError), "", "",
+                      ""});
     }
     return t;
 }

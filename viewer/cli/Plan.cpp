@@ -265,8 +265,8 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
         }
         const CacheSettings& ic = indirect.solver.cache;
         const CacheSettings first = bounceCacheSettings(indirect.solver, 1);
-        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene (%s), then split down to "
-                    "1/%.0f once gathered (linear interpolation reads indirect light dark where it falls towards "
+        std::printf("  indirect caches: one mesh per bounce, edges at most 1/%.0f of the scene (%s), then split down "
+                    "to 1/%.0f once gathered (linear interpolation reads indirect light dark where it falls towards "
                     "corners and contacts, and the gathers' noise hides the curvature that would ask for the splits); "
                     "split tolerance %.3g, noise tolerance %.3g for bounce 1, relaxed by 1/%.3g per further bounce; "
                     "the bounce refined next is the one whose share of the image's error is largest; indirect light "

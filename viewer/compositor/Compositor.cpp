@@ -214,7 +214,6 @@ struct Compositor::Impl {
     CompositeQuantity quantity = CompositeQuantity::Radiance;
     Photometry photometry;
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
-    EmitterOutlines::Rect surfaceScissor;  // drawSurfacesOnly's: the surface pass draws only there
     float textureLodShift = 0;  // common_textures.glsl's uTextureLodShift for this composite
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
 
@@ -773,11 +772,7 @@ struct Compositor::Impl {
         ensureTargets(s.width, s.height, s.supersample);
         mvp = clipFromLocal(camera, double(s.width) / s.height, Vec2(2 * s.shiftX / s.width, 2 * s.shiftY / s.height));
         setFrustum();
-        composed = true;
-        surfaced = false;
-        surfaceScissor = rect;
-        ensureSurface();
-        surfaceScissor = {};
+        drawSurfaces(rect);
         composed = surfaced = composited = resolved = forwarded = false;
     }
 
@@ -808,10 +803,15 @@ struct Compositor::Impl {
     void ensureSurface() {
         ML_ASSERT(composed, "nothing composited yet");
         if (surfaced) return;
+        drawSurfaces();
+        surfaced = true;
+    }
+    // The surface pass from mvp, only within `scissor` if it is not empty.
+    void drawSurfaces(const EmitterOutlines::Rect& scissor = {}) {
         baseState(t.width * t.supersample, t.height * t.supersample);
-        if (!surfaceScissor.empty()) {
+        if (!scissor.empty()) {
             gl.Enable(GL_SCISSOR_TEST);
-            gl.Scissor(surfaceScissor.x, surfaceScissor.y, surfaceScissor.width, surfaceScissor.height);
+            gl.Scissor(scissor.x, scissor.y, scissor.width, scissor.height);
         }
         const float zero[4] = {0, 0, 0, 0};
         const float farDepth = 0.0f;  // reversed depth
@@ -827,7 +827,6 @@ struct Compositor::Impl {
         gl.Disable(GL_DEPTH_TEST);
         gl.Disable(GL_SCISSOR_TEST);
         checkGl(gl, "drawing the surfaces");
-        surfaced = true;
     }
 
     // The composite's inputs and uniforms, for composite.frag and display.frag.
@@ -1221,7 +1220,7 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
     if (outlines)
         edges.emplace(settings.width, settings.height, settings.supersample, emittedRadiance(impl_->scene, weights));
     const RookPattern rook(passes);
-    const int odds = std::max(rook.odds(), passes > 1 ? 1 : 0), evens = passes - odds;
+    const int odds = rook.odds(), evens = passes - odds;  // used with two passes or more: each half has one
     ImageRgb sum;
     std::vector<double> odd;  // Σ over the odd half
     std::vector<float> subPixels;
