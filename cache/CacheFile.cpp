@@ -8,7 +8,7 @@
 // Payload: u64 rounds, u64 samples, u64 detached faces, u32 refinement
 // level (IrradianceCache::tighten), u32 meshes; per
 // mesh: u32 vertices, u32 faces, per vertex 6 f64 (point, normal) and its
-// sample sums (6 f64, 2 u32), per face 3 u32 vertex indices, then u32 grid
+// sample sums (6 f64, 2 u32, f64 Σ 1/reach), per face 3 u32 vertex indices, then u32 grid
 // samples and their sample sums (the grids themselves are made from the
 // scene again).
 // Faces are stored in index order and rebuilt in that order, so vertex and
@@ -34,7 +34,7 @@ using detail::toOm;
 using detail::toVec3;
 
 constexpr char kMagic[16] = {'M', 'E', 'S', 'H', 'L', 'I', 'G', 'H', 'T', '-', 'C', 'A', 'C', 'H', 'E', '\n'};
-constexpr uint32_t kFormatVersion = 2;  // 2: the refinement level
+constexpr uint32_t kFormatVersion = 3;  // 2: the refinement level; 3: the samples' reach
 
 uint64_t fnv1a(const std::string& bytes) {
     uint64_t h = 0xcbf29ce484222325ull;
@@ -86,6 +86,7 @@ void writeStats(Writer& w, const detail::VertexStats& st) {
     w.vec(st.sum);
     w.put(st.sumLum), w.put(st.sumLumSq), w.put(st.sumVisibility);
     w.put(st.count), w.put(st.partial);
+    w.put(st.sumInverseReach);
 }
 
 detail::VertexStats readStats(Reader& r, const std::string& path, const char* what, size_t index, size_t mesh) {
@@ -96,8 +97,10 @@ detail::VertexStats readStats(Reader& r, const std::string& path, const char* wh
     st.sumVisibility = r.get<double>(what);
     st.count = r.get<uint32_t>(what);
     st.partial = r.get<uint32_t>(what);
+    st.sumInverseReach = r.get<double>(what);
     if (!isFinite(st.sum) || !std::isfinite(st.sumLum) || !std::isfinite(st.sumLumSq) ||
-        !(st.sumVisibility >= 0 && st.sumVisibility <= st.count) || st.partial > st.count)
+        !(st.sumVisibility >= 0 && st.sumVisibility <= st.count) || st.partial > st.count ||
+        !(st.sumInverseReach >= 0 && std::isfinite(st.sumInverseReach)))
         throw InputError(concat(path, ": cache file is corrupt (", what, " ", index, " of mesh ", mesh, ")"));
     return st;
 }

@@ -4,12 +4,18 @@
 
 namespace ml {
 
+VertexSample IndirectEstimator::estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
+    VertexSample sample;
+    sample.irradiance = estimate(slot, x, n, seed);
+    return sample;  // visibility 1, never partial: indirect light has no light to see
+}
+
 void IndirectEstimator::estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
-                                      std::vector<Rgb>& results) {
+                                      std::vector<VertexSample>& results) {
     results.resize(requests.size());
     for (size_t i = 0; i < requests.size(); ++i) {
         const SampleRequest& r = requests[i];
-        asBatchRequest(i, [&] { results[i] = estimate(slot, r.x, r.n, r.seed); });
+        asBatchRequest(i, [&] { results[i] = estimateSample(slot, r.x, r.n, r.seed); });
     }
 }
 

@@ -53,10 +53,16 @@ public:
     // source `slot`, drawing its randomness (jitter) from `seed`: one
     // estimate whose mean over seeds is the method's answer.
     virtual Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) = 0;
-    // Every request's estimate from source `slot` (requests[i].mesh is not
-    // used), each exactly what estimate() returns for it; a failure throws
-    // SampleBatchError naming the first failing request.
-    virtual void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests, std::vector<Rgb>& results);
+    // estimate() as a cache vertex's sample: its irradiance, and where the
+    // method traces rays, their reach (VertexSample::reach: how near the
+    // surfaces are, which tells the cache where indirect light may step).
+    // The default knows no reach.
+    virtual VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed);
+    // Every request's estimateSample from source `slot` (requests[i].mesh is
+    // not used), each exactly what it returns for that request; a failure
+    // throws SampleBatchError naming the first failing request.
+    virtual void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
+                               std::vector<VertexSample>& results);
     virtual IndirectStats stats() const = 0;
 };
 

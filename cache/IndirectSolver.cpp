@@ -174,15 +174,10 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         size_t slot;
         Gather(IndirectEstimator& e, size_t s) : estimator(e), slot(s) {}
         VertexSample sample(size_t, const Vec3& x, const Vec3& n, uint32_t seed) override {
-            VertexSample sample;
-            sample.irradiance = estimator.estimate(slot, x, n, seed);
-            return sample;  // visibility 1, never partial: indirect light has no light to see
+            return estimator.estimateSample(slot, x, n, seed);
         }
         void sampleBatch(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results) override {
-            std::vector<Rgb> e;
-            estimator.estimateBatch(slot, requests, e);
-            results.assign(requests.size(), VertexSample{});
-            for (size_t i = 0; i < e.size(); ++i) results[i].irradiance = e[i];
+            estimator.estimateBatch(slot, requests, results);
         }
     } gather(estimator, slot);
     // Each bounce draws its own jitter. While vertices have no sample, a

@@ -74,7 +74,7 @@ std::optional<std::vector<IrradianceMeshCopy>> estimateBounces(const RealtimeMes
     if (settings.bounces <= 0) return bounces;
     const int estimated = methodBounces <= 0 ? settings.bounces : std::min(methodBounces, settings.bounces);
     std::vector<SampleRequest> requests = mesh.points;
-    std::vector<Rgb> values;
+    std::vector<VertexSample> values;
     for (int b = 1; b <= settings.bounces; ++b) {
         if (cancelled && cancelled()) return std::nullopt;
         IrradianceMeshCopy m = mesh.geometry;
@@ -91,7 +91,8 @@ std::optional<std::vector<IrradianceMeshCopy>> estimateBounces(const RealtimeMes
             for (size_t v = 0; v < requests.size(); ++v)
                 requests[v].seed = seedFor(seed, 0x7ea17u, uint32_t(b), uint32_t(v));
             estimator.estimateBatch(slot, requests, values);
-            m.irradiance = values;
+            m.irradiance.resize(values.size());
+            for (size_t v = 0; v < values.size(); ++v) m.irradiance[v] = values[v].irradiance;
             fillHiddenVertices(m);
         } else {
             // The tail, as IndirectSolver::displayMeshes makes it.

@@ -215,10 +215,15 @@ void residuals(const CacheTriMesh& mesh, const std::vector<double>& lum, std::ve
     }
 }
 
-// Whether the light may step between two ends of an edge: the sampler saw a
-// penumbra at either, or their visibilities differ by more than half.
-bool mayStep(const detail::VertexStats& a, const detail::VertexStats& b) {
-    return a.partial > 0 || b.partial > 0 || std::abs(a.meanVisibility() - b.meanVisibility()) > 0.5;
+// Whether the light may step between two ends of an edge `length` long:
+// the sampler saw a penumbra at either, or their visibilities differ by
+// more than half, or the edge is longer than the reach of either end's
+// rays (VertexSample::reach: a surface that near, a contact or a corner,
+// can change the light by its own order along the edge; Ward's validity
+// radius, which his irradiance cache spaces its records by).
+bool mayStep(const detail::VertexStats& a, const detail::VertexStats& b, double length) {
+    return a.partial > 0 || b.partial > 0 || std::abs(a.meanVisibility() - b.meanVisibility()) > 0.5 ||
+           length > std::min(a.reach(), b.reach());
 }
 
 Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, bool collect) {
@@ -268,8 +273,15 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             const double len = glm::length(pa - pb);
             const Vec3 mid = 0.5 * (pa + pb);
             double predicted = 0.25 * std::max(lap[a], lap[b]);
-            if (mayStep(lm.stats[a], lm.stats[b]))
-                predicted = std::max(predicted, 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor));
+            if (mayStep(lm.stats[a], lm.stats[b], len)) {
+                double step = 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor);
+                // As for the residual: a difference within twice the ends'
+                // standard errors may be noise.
+                if (cs.sampleNoise > 0)
+                    step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], cs, white),
+                                                             relativeNoise(lm.stats[b], cs, white)));
+                predicted = std::max(predicted, step);
+            }
             const bool splittable = len > metric.minLength(mid);
             const double seen = metric.weight(mid);
             edgeWeight += seen * len * len;
@@ -494,7 +506,12 @@ std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::ve
         const HH h = mesh.halfedge_handle(e, 0);
         const size_t a = size_t(mesh.from_vertex_handle(h).idx()), b = size_t(mesh.to_vertex_handle(h).idx());
         double err = kSmoothRms * 0.25 * std::max({res[a], res[b], 0.0});
-        if (mayStep(lm.stats[a], lm.stats[b])) err = std::max(err, kStepRms * std::abs(lum[a] - lum[b]));
+        // Steps the sampler saw (penumbrae, visibility jumps), not those
+        // the reach only allows: an edge longer than its ends' reach is a
+        // reason to split it while it can be split (score), not an error
+        // seen; at a corner, where the reach tends to zero, it would stay
+        // counted below the smallest edge refinement makes.
+        if (mayStep(lm.stats[a], lm.stats[b], 0.0)) err = std::max(err, kStepRms * std::abs(lum[a] - lum[b]));
         for (size_t v : {a, b}) sumSq[v] += err * err, edges[v] += 1;
     }
     std::vector<double> out(nv, 0.0);

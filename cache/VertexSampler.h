@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -24,6 +25,13 @@ struct VertexSample {
     double visibility = 1;
     // Some but not all of the light's samples were visible: a penumbra.
     bool partial = false;
+    // How near the surfaces are that the estimate saw: the harmonic mean of
+    // its rays' distances to what they hit (Ward's R; a miss counts as
+    // infinitely far). Irradiance may change by its own order over about
+    // this distance (a contact's shadow, a corner), so an edge longer than
+    // it may hold a step the plane fit cannot predict. Infinity where the
+    // sampler does not know (direct light: its penumbrae say where it steps).
+    double reach = std::numeric_limits<double>::infinity();
 };
 
 // One estimate to take: what sample() takes, for a batch.

@@ -406,6 +406,10 @@ public:
         context_->use();
         return inner_->estimate(slot, x, n, seed);
     }
+    VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override {
+        context_->use();
+        return inner_->estimateSample(slot, x, n, seed);
+    }
     IndirectStats stats() const override { return inner_->stats(); }
 
 private:

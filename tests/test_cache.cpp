@@ -19,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -308,6 +309,43 @@ TEST(CacheRefinement, NewVerticesGoWhereTheSignalSteps) {
             shortest = std::min(shortest, len);
         }
     EXPECT_LE(shortestNear, 0.25 * shortestFar);
+}
+
+// With a sampler whose every sample is noisy (an indirect gather), a
+// vertex's residual less twice its standard error asks for splits: a 30%
+// step in the light, sampled once per vertex (standard error taken as 3%),
+// leaves residuals whose quarter, less the noise, stays under the 4% split
+// tolerance the indirect meshes use. Where the samples report surfaces
+// nearer than the edges are long (VertexSample::reach: a contact, a
+// corner), the light may step along the edge: the difference of its ends,
+// less their noise, is the predicted error, 0.5·0.3/1 − 0.06 ≈ 0.09, and the
+// edges across the step split. The same light without a reach splits far
+// less there.
+TEST(CacheRefinement, AStepBesideANearSurfaceSplitsWhereNoiseHidesItsResidual) {
+    CacheSettings s = coarse();
+    s.sampleNoise = 0.03;
+    s.splitTolerance = 0.04;
+    s.maxSamplesPerVertex = 1;  // the noise stays as assumed: nothing resampled away
+    const auto refined = [&](double reach) {
+        IrradianceCache cache(bench(), s);
+        const size_t base = cache.vertexCount(0);
+        auto sampler = samplerOf([reach](size_t, const Vec3& x, const Vec3&, uint32_t) {
+            VertexSample v;
+            v.irradiance = Rgb(x.x < 0.3 ? 1.0 : 0.7);
+            v.reach = reach;
+            return v;
+        });
+        for (int round = 0; round < 12; ++round) cache.refine(sampler, 400, 1);
+        const IrradianceMeshCopy m = viewOf(cache);
+        const double band = 2 * s.maxEdgeFraction * bench().bounds.diagonal();
+        size_t near = 0;
+        for (size_t v = base; v < m.positions.size(); ++v) near += std::abs(m.positions[v].x - 0.3) < band;
+        return near;
+    };
+    const size_t withReach = refined(0.01), without = refined(std::numeric_limits<double>::infinity());
+    std::printf("new vertices near the step: %zu with a reach of 0.01, %zu without\n", withReach, without);
+    EXPECT_GT(withReach, 200u);
+    EXPECT_GT(withReach, 4 * without);
 }
 
 TEST(CacheRefinement, SplitsAreConformingAndRespectTheMinimumSize) {

@@ -10,6 +10,7 @@
 #include "cache/IrradianceCache.h"
 #include "IndirectReference.h"
 #include "TestSamplers.h"
+#include "core/raytrace/EmbreeScene.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
 #include "gpu_sampling/indirect/RayGather.h"
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -390,6 +392,35 @@ TEST(IndirectConsistency, RayGatherMatchesThePathTracerInCornersAndContacts) {
         EXPECT_NEAR(ratio, 1.0, 0.02 + 2 * se) << points[i].what;
         std::printf("%s: ray gather / path tracer %.4f (path tracer ±%.2f%%)\n", points[i].what, ratio, 100 * se);
     }
+}
+
+// The reach the ray gather reports (VertexSample::reach) is the harmonic
+// mean of its rays' distances to what they hit. Under a parallel plane at
+// height h a cosine-weighted ray at angle θ from the normal travels h/cosθ,
+// and E[cosθ] = 2/3 under cosine weighting, so the reach is exactly 3h/2
+// for an infinite plane. The plane here is 1000h wide: the rays that would
+// reach past its border leave within cosθ < 0.002, a 4·10⁻⁶ share whose
+// 1/distance is under 0.002/h each, so it changes the reach by under 10⁻⁸.
+// 64 × 64 strata estimate E[cosθ] to about 10⁻⁴; 0.2% is allowed. A point
+// with nothing above it knows no reach: infinity.
+TEST(IndirectConsistency, RayGatherReachIsTheHarmonicMeanDistance) {
+    using namespace test;
+    const double h = 0.02, w = 1000 * h;
+    const Scene scene = sceneOf("plates", {Material::diffuse("grey", Rgb(0.5), Rgb(0.0))},
+                                {quadMesh("floor", 0, Vec3(-0.5 * w, 0, -0.5 * w), w * kZ, w * kX),
+                                 quadMesh("ceiling", 0, Vec3(-0.5 * w, h, -0.5 * w), w * kX, w * kZ)});
+    const EmbreeScene rays(scene);
+    const std::vector<char> closed = closedMeshesOf(scene);
+    double reach = 0;
+    gatherCachedRadiance(scene, rays, closed, {}, Vec3(0.0), kY, 64, 7, nullptr, &reach);
+    EXPECT_NEAR(reach, 1.5 * h, 0.002 * 1.5 * h);
+    gatherCachedRadiance(scene, rays, closed, {}, Vec3(0, 2 * h, 0), kY, 16, 7, nullptr, &reach);
+    EXPECT_EQ(reach, std::numeric_limits<double>::infinity());
+    // RayGather's samples carry it.
+    RayGather gather(scene, RayGatherSettings{});
+    gather.setSource(0, {});
+    const VertexSample sample = gather.estimateSample(0, Vec3(0.0), kY, 7);
+    EXPECT_NEAR(sample.reach, 1.5 * h, 0.01 * 1.5 * h);  // 16 × 16 strata
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "cache/GridCache.h"
 #include "cache/IrradianceCache.h"
 
+#include <limits>
 #include <memory>
 
 #include <cstdint>
@@ -21,9 +22,16 @@ struct VertexStats {
     double sumVisibility = 0;
     uint32_t count = 0;
     uint32_t partial = 0;  // samples that saw the light partly occluded
+    double sumInverseReach = 0;  // Σ 1/reach (0 for a sample that knows none)
 
     Rgb mean() const { return count ? sum / double(count) : Rgb(0.0); }
     double meanVisibility() const { return count ? sumVisibility / count : 1.0; }
+    // The harmonic mean of the samples' reach (VertexSample::reach): of
+    // every ray they traced, as each sample's is of its rays'. Infinity
+    // where none knew it.
+    double reach() const {
+        return sumInverseReach > 0 ? count / sumInverseReach : std::numeric_limits<double>::infinity();
+    }
     void add(const VertexSample& s) {
         const double y = luminance(s.irradiance);
         sum += s.irradiance;
@@ -32,6 +40,7 @@ struct VertexStats {
         sumVisibility += s.visibility;
         count += 1;
         partial += s.partial ? 1 : 0;
+        if (s.reach > 0 && s.reach < std::numeric_limits<double>::infinity()) sumInverseReach += 1 / s.reach;
     }
 };
 

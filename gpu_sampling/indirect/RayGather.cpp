@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace ml {
 
@@ -86,7 +87,7 @@ void RayGather::releaseSource(size_t slot) {
 
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
-                         int strata, uint32_t seed, const EmittingFaces* emitting) {
+                         int strata, uint32_t seed, const EmittingFaces* emitting, double* reach) {
     if (emitting && emitting->empty()) emitting = nullptr;
     const Vec3 n = glm::normalize(nIn);
     Vec3 t, b;
@@ -107,6 +108,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
     const int s = strata;
     const SpecularChainSettings chain;
     Rgb sum(0.0);
+    double inverseDistances = 0;  // Σ 1/t over first hits (a miss: 0)
     uint32_t state = hash32(seed ^ 0x2545f491u);
     const auto next = [&state] {
         state = hash32(state + 0x9e3779b9u);
@@ -121,6 +123,10 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
             // surface on the way read on the side the ray arrives on (a
             // closed object's inside is black); a smooth layer's own Kd too.
             followSpecularChain(rays, closedMeshes, origin, w, chain, next, [&](const ChainVertex& v) {
+                // The first surface met, whatever it is: a mirror's
+                // reflection changes with x at its distance too. Not nearer
+                // than the origin's nudge, which bounds 1/t.
+                if (v.layers == 0) inverseDistances += 1 / std::max(v.hit.t, eps);
                 Rgb e(0.0);
                 for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
                 sum += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
@@ -131,17 +137,24 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
                     sum += v.weight * (kPi * v.surface.ke(scene));
             });
         }
+    if (reach)
+        *reach = inverseDistances > 0 ? double(s * s) / inverseDistances : std::numeric_limits<double>::infinity();
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
     return sum / double(s * s);
 }
 
 Rgb RayGather::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
+    return estimateSample(slot, x, n, seed).irradiance;
+}
+
+VertexSample RayGather::estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
     ML_ASSERT(slot < sources_.size() && sources_[slot], "ray gather: source ", slot, " is not built");
     const auto start = std::chrono::steady_clock::now();
     const Source& source = *sources_[slot];
     // Bounce 1 (source 0, direct light) also reads the gathered lights.
-    const Rgb result = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed,
-                                            slot == 0 ? &emitting_ : nullptr);
+    VertexSample result;
+    result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed,
+                                             slot == 0 ? &emitting_ : nullptr, &result.reach);
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

@@ -52,11 +52,13 @@ EmittingFaces emittingFacesOf(const Scene& scene, const std::vector<char>& gathe
 // side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0),
 // plus the emitted radiance (its texture's, as the path tracer reads it)
 // where it lands on the emitting side of a face `emitting` marks (null or
-// empty: none); returns the irradiance. RayGather::estimate's work, and
-// bench indirect's "exact gather of the source".
+// empty: none); returns the irradiance, and in `reach` (when not null) the
+// harmonic mean of the rays' distances to their first hit (VertexSample::
+// reach). RayGather::estimate's work, and bench indirect's "exact gather of
+// the source".
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& n,
-                         int strata, uint32_t seed, const EmittingFaces* emitting = nullptr);
+                         int strata, uint32_t seed, const EmittingFaces* emitting = nullptr, double* reach = nullptr);
 // closedMeshes for gatherCachedRadiance: isClosedMesh of every scene mesh.
 std::vector<char> closedMeshesOf(const Scene& scene);
 
@@ -70,6 +72,7 @@ public:
     void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
     void releaseSource(size_t slot) override;
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
+    VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
     IndirectStats stats() const override;
 
 private:
