@@ -40,8 +40,63 @@ Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
     return {1 - v - w, v, w};
 }
 
-MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance)
+std::vector<Rgb> vertexCurvature(const IrradianceMeshCopy& mesh) {
+    const size_t nv = mesh.positions.size();
+    std::vector<Rgb> out(nv, Rgb(0.0));
+    if (mesh.irradiance.size() != nv || mesh.normals.size() != nv) return out;
+    // Each vertex's neighbours, in index order (the sums do not depend on
+    // the order faces are listed in).
+    std::vector<std::vector<uint32_t>> ring(nv);
+    for (const glm::uvec3& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            ring[t[k]].push_back(t[(k + 1) % 3]);
+            ring[t[k]].push_back(t[(k + 2) % 3]);
+        }
+    constexpr double kCrease = 0.866;  // cos 30°
+    std::vector<uint32_t> kept;
+    for (size_t v = 0; v < nv; ++v) {
+        std::vector<uint32_t>& r = ring[v];
+        std::sort(r.begin(), r.end());
+        r.erase(std::unique(r.begin(), r.end()), r.end());
+        const Vec3 p = mesh.positions[v], n = mesh.normals[v];
+        if (!(glm::length(n) > 0.5)) continue;
+        kept.clear();
+        double meanSq = 0, scale = 0;
+        for (uint32_t u : r) {
+            if (glm::dot(mesh.normals[u], n) < kCrease * glm::length(mesh.normals[u]) * glm::length(n)) continue;
+            const double d2 = glm::dot(mesh.positions[u] - p, mesh.positions[u] - p);
+            if (!(d2 > 0)) continue;
+            kept.push_back(u);
+            meanSq += d2;
+            scale = std::max(scale, std::sqrt(d2));
+        }
+        if (kept.size() < 3) continue;
+        meanSq /= double(kept.size());
+        Vec3 tx, ty;
+        orthonormalBasis(glm::normalize(n), tx, ty);
+        // min Σ (c + gx·x + gy·y − f)² in the tangent plane, offsets over the
+        // ring's size: the fit at the vertex is c = Σ αu fu, with
+        // αu = (A⁻¹ rowu).x.
+        glm::dmat3 a(0.0);
+        std::vector<glm::dvec3> rows;
+        for (uint32_t u : kept) {
+            const Vec3 d = (mesh.positions[u] - p) / scale;
+            rows.emplace_back(1.0, glm::dot(d, tx), glm::dot(d, ty));
+            a += glm::outerProduct(rows.back(), rows.back());
+        }
+        if (!(std::abs(glm::determinant(a)) > 1e-6 * std::pow(double(kept.size()), 3))) continue;
+        const glm::dmat3 inv = glm::inverse(a);
+        Rgb fit(0.0);
+        for (size_t k = 0; k < kept.size(); ++k) fit += (inv * rows[k]).x * mesh.irradiance[kept[k]];
+        out[v] = (mesh.irradiance[v] - fit) / meanSq;
+    }
+    return out;
+}
+
+MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance,
+                                           Interpolation interpolation)
     : mesh_(mesh), cell_(cellSize), tolerance_(tolerance) {
+    if (interpolation == Interpolation::CurvatureCorrected) curvature_ = vertexCurvature(mesh);
     Bounds3 b;
     for (const Vec3& p : mesh.positions) b.extend(p);
     if (b.empty()) return;
@@ -122,7 +177,7 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         constexpr double kSlack = 1e-6;
         if (bv >= -kSlack && bw >= -kSlack && bv + bw <= 1 + kSlack) {
             best = plane * plane;
-            result = (1 - bv - bw) * mesh_.irradiance[i.x] + bv * mesh_.irradiance[i.y] + bw * mesh_.irradiance[i.z];
+            result = interpolate(i, Vec3(1 - bv - bw, bv, bw));
             if (best <= onFace) break;
             continue;
         }
@@ -139,9 +194,25 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         const double d2 = glm::dot(q - p, q - p);
         if (d2 > best) continue;
         best = d2;
-        result = w.x * mesh_.irradiance[i.x] + w.y * mesh_.irradiance[i.y] + w.z * mesh_.irradiance[i.z];
+        result = interpolate(i, w);
     }
     return result;
+}
+
+Rgb MeshIrradianceLookup::interpolate(const glm::uvec3& i, const Vec3& b) const {
+    const Rgb &e0 = mesh_.irradiance[i.x], &e1 = mesh_.irradiance[i.y], &e2 = mesh_.irradiance[i.z];
+    const Rgb linear = b.x * e0 + b.y * e1 + b.z * e2;
+    if (curvature_.empty()) return linear;
+    const Vec3 &p0 = mesh_.positions[i.x], &p1 = mesh_.positions[i.y], &p2 = mesh_.positions[i.z];
+    const Rgb &k0 = curvature_[i.x], &k1 = curvature_[i.y], &k2 = curvature_[i.z];
+    // Σ 4·bi·bj·δij, δij = ¼|eij|²·(κi + κj)/2.
+    const auto edge = [](const Vec3& a, const Vec3& c) { return glm::dot(a - c, a - c); };
+    const Rgb correction = b.x * b.y * edge(p0, p1) * 0.5 * (k0 + k1) + b.y * b.z * edge(p1, p2) * 0.5 * (k1 + k2) +
+                           b.z * b.x * edge(p2, p0) * 0.5 * (k2 + k0);
+    const Rgb bound = (e0 + e1 + e2) * (0.1 / 3);
+    Rgb out;
+    for (int c = 0; c < 3; ++c) out[c] = std::max(0.0, linear[c] + std::clamp(correction[c], -bound[c], bound[c]));
+    return out;
 }
 
 RadianceProxy::RadianceProxy(const Scene& scene, const VoxelGrid& grid) : grid_(grid) {

@@ -57,18 +57,44 @@ private:
 // The point of triangle (a, b, c) closest to p, as barycentrics.
 Vec3 closestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
+// Each vertex's curvature κ of the irradiance a mesh holds, per channel,
+// W·m⁻² per m²: its value less the value at it of the plane fitted (least
+// squares, in its tangent plane) to its neighbours' values, over their mean
+// squared distance. Neighbours across a crease (normals more than 30° apart)
+// are left out; zero where fewer than three are left or they lie on a line.
+// For f = ½c·|x|² about the vertex on a symmetric ring, κ = −c/2, and
+// ¼|e|²·κ = −c|e|²/8 is exactly what linear interpolation misses at the
+// midpoint of an edge e (f(mid) − (f(a) + f(b))/2).
+std::vector<Rgb> vertexCurvature(const IrradianceMeshCopy& mesh);
+
 // Point location in a cache mesh: the irradiance a mesh holds at a point of
 // the scene's surfaces, from the mesh triangle nearest to it among those
 // facing the same side (normals within 60°), linearly interpolated; zero
 // where no such triangle lies within `tolerance` (the mesh does not cover
 // that side, e.g. the back of a wall no light reaches).
+//
+// With `Interpolation::CurvatureCorrected`, the linear interpolation is
+// corrected by the curvature the vertices' values show (vertexCurvature):
+// linear interpolation of a curved signal misses it inside every face by
+// Σ 4·bi·bj·δij, δij the miss at edge ij's midpoint, about ¼|eij|²·κ for a
+// curvature κ (the residual against the plane fitted to the neighbours'
+// values, over their mean squared distance). Irradiance over a room is
+// mostly concave (highest mid-wall, falling to the corners), so the linear
+// reading runs dark, and a gather reading it passes the deficit on, bounce
+// after bounce (the office's second bounce read 1.6% dark from bounce-1
+// meshes of 16 cm edges). The correction is bounded to a tenth of the
+// face's mean value (a step, where the fit is no curvature, is left to the
+// mesh's refinement) and the result to non-negative values.
 class MeshIrradianceLookup {
 public:
-    MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance);
+    enum class Interpolation { Linear, CurvatureCorrected };
+    MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance,
+                         Interpolation interpolation = Interpolation::Linear);
     Rgb at(const Vec3& p, const Vec3& n) const;
     // The records and bins (not the mesh, which the caller keeps).
     size_t memoryBytes() const {
-        return faces_.size() * sizeof(Face) + (binStart_.size() + binFaces_.size()) * sizeof(uint32_t);
+        return faces_.size() * sizeof(Face) + (binStart_.size() + binFaces_.size()) * sizeof(uint32_t) +
+               curvature_.size() * sizeof(Rgb);
     }
 
 private:
@@ -85,8 +111,12 @@ private:
         float n[3], u[3], t[3];
         uint32_t corners[3];
     };
+    // The value at barycentrics b of face corners i, linear or corrected.
+    Rgb interpolate(const glm::uvec3& i, const Vec3& b) const;
+
     const IrradianceMeshCopy& mesh_;
     std::vector<Face> faces_;
+    std::vector<Rgb> curvature_;  // per vertex (vertexCurvature); empty: linear
     Vec3 origin_{0.0};
     double cell_ = 1, tolerance_ = 0;
     std::array<int, 3> dims_{1, 1, 1};

@@ -63,7 +63,8 @@ void RayGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& ir
     // their barycentrics instead of finding each one's closest point).
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
     for (const IrradianceMeshCopy& m : source->meshes) {
-        source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+        source->lookups.push_back(std::make_unique<MeshIrradianceLookup>(
+            m, diagonal / 64, 1e-5 * diagonal, MeshIrradianceLookup::Interpolation::CurvatureCorrected));
         source->pointers.push_back(source->lookups.back().get());
         source->bytes += m.positions.size() * (2 * sizeof(Vec3) + sizeof(Rgb) + 4) + m.triangles.size() * 12 +
                          source->lookups.back()->memoryBytes();

@@ -3,7 +3,9 @@
 //   E(x) ≈ π/N Σ_i Lo(y_i),   Lo(y) = Kd(y)/π · Σ_m E_m(y),
 // with E_m(y) the source meshes' irradiance interpolated at the hit y on the
 // side the ray arrives from (MeshIrradianceLookup, exactly what the cache
-// meshes hold there). Unlike the slice and triangle gathers it draws no
+// meshes hold there, read with the curvature their vertices show: linear
+// interpolation of concave light runs dark, and each bounce would pass that
+// on). Unlike the slice and triangle gathers it draws no
 // proxy: no voxel stands a face off where it is, no slanted face is drawn in
 // steps, and a corner sees its walls at their true distance. So its mean
 // over seeds is the exact one-bounce irradiance of the cached radiance, and
