@@ -24,6 +24,12 @@ CacheSettings IndirectSettings::defaultCache() {
     c.noiseTolerance = 0.03;
     c.maxSamplesPerVertex = 16;
     c.singleSampleNoise = 0;  // no visibility steps: samples are never partial
+    // Cut along contacts (ContactCuts.h): indirect light darkens sharply
+    // where a surface touches or hangs close (within the gap's own length),
+    // and the gathers' noise hides that from refinement. Direct light's
+    // meshes are not cut: the sampler sees a contact's shadow as partial
+    // visibility and refinement follows it.
+    c.contactCloseness = 0.1;
     // One 40×40 jittered slice gather in the Cornell box: 0.5–2% relative
     // spread between seeds; assume 3% until a vertex's second sample
     // measures it. With the noise tolerance equal to it, a vertex is sampled

@@ -1,5 +1,6 @@
 #include "IrradianceCache.h"
 
+#include "ContactCuts.h"
 #include "LightCoverage.h"
 
 #include "core/Error.h"
@@ -41,6 +42,8 @@ void CacheSettings::validate() const {
     if (maxSamplesPerVertex < 1) throw InputError("cache: at least one sample per vertex");
     if (!(singleSampleNoise >= 0 && singleSampleNoise < 1))
         throw InputError(concat("cache single-sample noise ", singleSampleNoise, " is not in [0, 1)"));
+    if (!(contactCloseness >= 0 && contactCloseness <= 1))
+        throw InputError(concat("cache contact closeness ", contactCloseness, " is not in [0, 1]"));
     if (maxVertices < 3) throw InputError(concat("cache vertex budget ", maxVertices, " is below 3"));
     if (maxMemoryBytes < (size_t(1) << 16))
         throw InputError(concat("cache memory budget ", maxMemoryBytes, " bytes is below 64 KiB"));
@@ -87,7 +90,7 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.maxEdgeFraction), f.f64(s.minEdgeFraction), f.f64(s.minEdgePixels);
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
-    f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction);
+    f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction), f.f64(s.contactCloseness);
     return f.h;
 }
 
@@ -147,8 +150,8 @@ bool sceneBehind(const Scene& scene, const Mesh& m, size_t t) {
     return false;
 }
 
-size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheLayout::BackFaces rule,
-                     CacheTriMesh& mesh, size_t& backFaces) {
+size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const std::vector<bool>& skip,
+                     CacheLayout::BackFaces rule, CacheTriMesh& mesh, size_t& backFaces) {
     const auto needsBack = [&](const Mesh& m, size_t t) {
         return rule == CacheLayout::BackFaces::LitFromBehind ? litFromBehind(scene, m, t) : sceneBehind(scene, m, t);
     };
@@ -156,7 +159,7 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheLay
     backFaces = 0;
     for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
         if (skip[mi]) continue;
-        const Mesh& m = scene.meshes[mi];
+        const Mesh& m = meshes[mi];
         // Surfaces lit from both sides (open objects with a light behind)
         // get a reversed copy, facing the other way, with vertices of its own.
         if (!isClosedMesh(m)) {
@@ -205,6 +208,15 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<bool>& skip, CacheLay
         }
     }
     return detached;
+}
+
+// The scene's meshes cut along contacts (ContactCuts.h), or as they are.
+std::vector<Mesh> cutMeshes(const Scene& scene, const std::vector<bool>& gridded, const CacheSettings& settings) {
+    if (!(settings.contactCloseness > 0)) return scene.meshes;
+    ContactCutSettings cut;
+    cut.closeness = settings.contactCloseness;
+    cut.spacing = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
+    return cutAlongContacts(scene, gridded, cut);
 }
 
 // Longest-edge bisection until no edge exceeds maxLength. Edges are split
@@ -291,7 +303,8 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
         s.grids.push_back(std::move(g));
     }
     CacheTriMesh base;
-    s.detachedFaces = buildBaseMesh(scene, gridded, layout.backFaces, base, s.backFaces);
+    s.detachedFaces = buildBaseMesh(scene, cutMeshes(scene, gridded, settings), gridded, layout.backFaces, base,
+                                    s.backFaces);
     bisectLongEdges(base, maxEdge);
     const bool share = layout.coverage && layout.coverage->sharing() && layout.meshes == 0;
     s.sharedMesh = share;
@@ -335,7 +348,7 @@ size_t IrradianceCache::rebuildMesh(size_t l, const Scene& scene) {
     for (const detail::GridObject& g : s.grids) gridded[g.mesh] = true;
     CacheTriMesh base;
     size_t backFaces = 0;
-    buildBaseMesh(scene, gridded, impl_->layout.backFaces, base, backFaces);
+    buildBaseMesh(scene, cutMeshes(scene, gridded, s.settings), gridded, impl_->layout.backFaces, base, backFaces);
     bisectLongEdges(base, s.settings.maxEdgeFraction * s.diagonal);
     layMesh(s, impl_->layout, l, scene, base);
     return before;

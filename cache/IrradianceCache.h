@@ -72,6 +72,12 @@ struct CacheSettings {
     // its light goes to one shared mesh. 0: every light's mesh everywhere.
     // Used when the layout asks for it (CacheLayout::coverage).
     double lightShare = 0.1;
+    // Base meshes are cut along the edges of surfaces touching or hanging
+    // close in front of them (ContactCuts.h): an edge within this fraction
+    // of its length of a surface, typical 0.1 (a panel 2 cm under a ceiling,
+    // 0.6 m wide: 0.033); 0: no cuts (direct light's default; the bounces'
+    // is 0.1, IndirectSettings::defaultCache).
+    double contactCloseness = 0;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
 

@@ -1,5 +1,7 @@
 #include "Plan.h"
 
+#include "cache/ContactCuts.h"
+
 #include "core/image/Photometry.h"
 
 #include "cache/LightCoverage.h"
@@ -57,6 +59,31 @@ CacheSettings readCacheSettings(const Options& o) {
     c.maxVertices = size_t(o.number("max-vertices", 3, 1e9));
     c.validate();
     return c;
+}
+
+// Where the bounces' base meshes are cut along contacts (ContactCuts.h).
+void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
+    if (!(bounces.contactCloseness > 0)) {
+        std::printf("  contact cuts: none (--contact-cuts 0)\n");
+        return;
+    }
+    const double maxEdge = bounces.maxEdgeFraction * scene.bounds.diagonal();
+    std::vector<bool> gridded;
+    for (const Mesh& m : scene.meshes) gridded.push_back(decideGridCache(m, maxEdge).useGrid);
+    ContactCutSettings cut;
+    cut.closeness = bounces.contactCloseness;
+    cut.spacing = maxEdge;
+    ContactCutReport r;
+    cutAlongContacts(scene, gridded, cut, &r);
+    if (r.receivers)
+        std::printf("  contact cuts: the bounces' meshes are cut where a surface touches or hangs within %.3g x its "
+                    "edge's length in front of another (indirect light darkens there within the gap's length, and "
+                    "the gathers' noise hides it from refinement): %zu triangles cut along %zu segments (outlines, "
+                    "penumbra lines of hanging edges, lines either side of touching ones) into %zu, %zu vertices "
+                    "added (cache/ContactCuts.h)\n",
+                    bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices);
+    else
+        std::printf("  contact cuts: none (no surface touches or hangs close in front of another)\n");
 }
 
 // What a light is and how its direct light is sampled, for the plan.
@@ -281,6 +308,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                            "bounce's first pass (its base gathered once) spends at most ",
                            indirect.solver.firstPassGathers, " full gathers: a larger base is gathered first with "
                            "that share of a gather's effort each, then refined at full effort").c_str());
+        printContactCuts(scene, ic);
     }
     printSpecularPass(scene);
     printSpecularMaterials(scene);

@@ -61,6 +61,10 @@ void declareIndirectOptions(Options& o) {
             "the bounce meshes' base edges at most F x the scene diagonal (default: for raytrace the scene's mean "
             "free path 4V/S over 7.5, within 1/16..1/32, with fewer rays as it is finer; 1/8 for the voxel "
             "gathers); plan says which (cache/README.md)");
+    o.value("contact-cuts", "F",
+            "the bounce meshes are cut along the edges of surfaces touching or hanging within F x the edge's length "
+            "in front of them, with lines along the penumbra of a hanging edge (cache/ContactCuts.h); 0: no cuts",
+            concat(IndirectSettings::defaultCache().contactCloseness));
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
     o.value("glow-ratio", "F",
@@ -102,6 +106,7 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.vpl.validate();
     c.glowRatio = o.number("glow-ratio", 0, 0.999);
     if (o.has("indirect-edge")) c.baseEdge = o.number("indirect-edge", 1e-4, 1.0);
+    c.solver.cache.contactCloseness = o.number("contact-cuts", 0, 1);
     c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
     c.bounces.maxBounces = o.integer("max-bounces", 1, 256);
     if (o.has("bounces")) c.bounces.forced = o.integer("bounces", 0, 256);

@@ -1,0 +1,164 @@
+// Discontinuity meshing where a surface hangs close (cache/ContactCuts.h): a
+// panel under a ceiling cuts it along its outline and penumbra lines, no
+// face straddles a cut, the area is kept and the cut mesh stays conforming;
+// touching contacts and hair-thin gaps are left uncut.
+#include "TestScenes.h"
+
+#include "cache/ContactCuts.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace ml {
+namespace {
+
+using test::addQuad;
+using test::kX;
+using test::kY;
+using test::kZ;
+
+// A box [lo, hi] without its bottom face, faces outwards (the Cornell box's blocks).
+Mesh blockMesh(const Vec3& lo, const Vec3& hi) {
+    Mesh m;
+    m.name = "block";
+    const Vec3 s = hi - lo;
+    addQuad(m, 1, Vec3(lo.x, hi.y, lo.z), s.z * kZ, s.x * kX);                 // top, +y
+    addQuad(m, 1, lo, s.z * kZ, s.y * kY);                                    // −x
+    addQuad(m, 1, Vec3(hi.x, lo.y, lo.z), s.y * kY, s.z * kZ);                // +x
+    addQuad(m, 1, lo, s.y * kY, s.x * kX);                                    // −z
+    addQuad(m, 1, Vec3(lo.x, lo.y, hi.z), s.x * kX, s.y * kY);                // +z
+    return m;
+}
+
+std::vector<Material> materials() {
+    return {Material::diffuse("light", Rgb(0.5), Rgb(1.0)), Material::diffuse("grey", Rgb(0.5))};
+}
+
+double totalArea(const Mesh& m) {
+    double a = 0;
+    for (size_t t = 0; t < m.triangles.size(); ++t) a += m.area(t);
+    return a;
+}
+
+// Whether some point of segment (a, b) lies strictly inside a triangle of
+// `m` (in the plane y = const the mesh lies in): then that face straddles
+// the cut. 400 points along the segment.
+bool segmentCrossesAFace(const Mesh& m, const Vec3& a, const Vec3& b) {
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const Triangle3 p = m.triangle(t);
+        for (int k = 1; k < 400; ++k) {
+            const Vec3 q = a + (b - a) * (k / 400.0);
+            // Barycentrics in the xz-plane.
+            const double x0 = p[0].x, z0 = p[0].z;
+            const double d = (p[1].x - x0) * (p[2].z - z0) - (p[2].x - x0) * (p[1].z - z0);
+            const double u = ((q.x - x0) * (p[2].z - z0) - (p[2].x - x0) * (q.z - z0)) / d;
+            const double v = ((p[1].x - x0) * (q.z - z0) - (q.x - x0) * (p[1].z - z0)) / d;
+            const double tol = 1e-9;
+            if (u > tol && v > tol && 1 - u - v > tol) return true;
+        }
+    }
+    return false;
+}
+
+bool hasVertex(const Mesh& m, const Vec3& p) {
+    for (const Vec3& q : m.positions)
+        if (glm::length(q - p) < 1e-9) return true;
+    return false;
+}
+
+// Every edge is used by two faces, or lies on the mesh's border `onBorder`:
+// no T-vertex, no hole (by vertex index, as the cache's mesh joins faces).
+template <class Border>
+void expectConforming(const Mesh& m, Border onBorder) {
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (const glm::uvec3& t : m.triangles)
+        for (int k = 0; k < 3; ++k) ++uses[std::minmax(t[k], t[(k + 1) % 3])];
+    for (const auto& [e, n] : uses) {
+        const Vec3 a = m.positions[e.first], b = m.positions[e.second];
+        if (onBorder(a) && onBorder(b)) EXPECT_EQ(n, 1);
+        else EXPECT_EQ(n, 2) << "edge (" << a.x << ", " << a.z << ") - (" << b.x << ", " << b.z << ")";
+    }
+}
+
+TEST(ContactCuts, ATouchingBlockIsLeftUncut) {
+    // A block standing on the floor (h = 0): the cache's hidden-vertex rule
+    // handles what is under it, and a vertex on the contact would have the
+    // block's side through its sampling point (ContactCuts.h).
+    const Scene scene = test::sceneOf("block", materials(), {test::unitLight(), test::floorMesh(),
+                                                             blockMesh(Vec3(-0.3, 0.0, -0.2), Vec3(0.3, 0.5, 0.2))});
+    ContactCutSettings s;
+    s.spacing = scene.bounds.diagonal() / 32;
+    ContactCutReport report;
+    const std::vector<Mesh> cut = cutAlongContacts(scene, {}, s, &report);
+    for (size_t i = 0; i < cut.size(); ++i) EXPECT_EQ(cut[i].triangles, scene.meshes[i].triangles) << i;
+    EXPECT_EQ(report.receivers, 0u);
+}
+
+// A 2 x 2 ceiling at y = 1 facing down and a 0.6 m panel `h` under it, facing down; a floor.
+Scene panelScene(double h) {
+    return test::sceneOf("panel", materials(),
+                         {test::quadMesh("ceiling", 1, Vec3(-1, 1, -1), 2.0 * kX, 2.0 * kZ),
+                          test::quadMesh("panel", 0, Vec3(-0.3, 1 - h, -0.3), 0.6 * kX, 0.6 * kZ),
+                          test::quadMesh("floor", 1, Vec3(-1, 0, -1), 2.0 * kZ, 2.0 * kX)});
+}
+
+TEST(ContactCuts, APanelUnderACeilingCutsItsOutlineAndPenumbraLines) {
+    const double h = 0.02;
+    const Scene scene = panelScene(h);
+    ContactCutSettings s;
+    s.spacing = 0.5;  // 2h = 0.04 is under half of it: penumbra lines
+    const std::vector<Mesh> cut = cutAlongContacts(scene, {}, s);
+    const Mesh& ceiling = cut[0];
+    EXPECT_NEAR(totalArea(ceiling), 4.0, 1e-12);
+    // The outline, and lines 2h inside and outside it (the penumbra's
+    // bend), which cross at their corners: no face straddles any of them.
+    for (const double half : {0.3, 0.3 - 2 * h, 0.3 + 2 * h})
+        for (int k = 0; k < 4; ++k) {
+            const double sx = (k & 1) ? 1 : -1;
+            // A line x = ±half (k & 2) or z = ±half from −half to +half.
+            const Vec3 a = (k & 2) ? Vec3(sx * half, 1, -half) : Vec3(-half, 1, sx * half);
+            const Vec3 b = (k & 2) ? Vec3(sx * half, 1, half) : Vec3(half, 1, sx * half);
+            EXPECT_TRUE(hasVertex(ceiling, a)) << "corner of line " << half << " side " << k;
+            EXPECT_FALSE(segmentCrossesAFace(ceiling, a, b)) << "line " << half << " side " << k;
+        }
+    expectConforming(ceiling, [](const Vec3& p) { return std::abs(std::abs(p.x) - 1) < 1e-12 ||
+                                                          std::abs(std::abs(p.z) - 1) < 1e-12; });
+    // The panel is not cut by the ceiling (behind it), nor the floor (far).
+    EXPECT_EQ(cut[1].triangles.size(), 2u);
+    EXPECT_EQ(cut[2].triangles.size(), 2u);
+    // With a spacing that already resolves 2h, the outline alone.
+    s.spacing = 0.06;
+    const Mesh coarse = cutAlongContacts(scene, {}, s)[0];
+    EXPECT_FALSE(hasVertex(coarse, Vec3(-0.3 - 2 * h, 1, -0.3 - 2 * h)));
+    EXPECT_TRUE(hasVertex(coarse, Vec3(-0.3, 1, -0.3)));
+    // The same scene gives the same meshes, to the bit.
+    s.spacing = 0.5;
+    const Mesh again = cutAlongContacts(scene, {}, s)[0];
+    EXPECT_EQ(again.positions, ceiling.positions);
+    EXPECT_EQ(again.triangles, ceiling.triangles);
+}
+
+TEST(ContactCuts, AGapUnderAThousandthOfTheSceneIsLeftUncut) {
+    // The scene is 2.2 across: a panel 1 mm under the ceiling (the Cornell
+    // box's light hangs 0.1 mm under its ceiling) cuts nothing.
+    const Scene scene = panelScene(1e-3);
+    ContactCutSettings s;
+    s.spacing = 0.5;
+    ContactCutReport report;
+    const std::vector<Mesh> cut = cutAlongContacts(scene, {}, s, &report);
+    EXPECT_EQ(cut[0].triangles, scene.meshes[0].triangles);
+    EXPECT_EQ(report.receivers, 0u);
+}
+
+TEST(ContactCuts, SkippedMeshesStayButStillCut) {
+    const Scene scene = panelScene(0.02);
+    ContactCutSettings s;
+    s.spacing = 0.5;
+    EXPECT_EQ(cutAlongContacts(scene, {true, false, false}, s)[0].triangles, scene.meshes[0].triangles);
+    // A skipped panel still cuts the ceiling.
+    EXPECT_GT(cutAlongContacts(scene, {false, true, false}, s)[0].triangles.size(), 2u);
+}
+
+}  // namespace
+}  // namespace ml
