@@ -30,6 +30,11 @@ using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::Exact_
 // keeps what is boxed in from darkening its neighbours.
 constexpr double kLeastGap = 1e-3;
 
+// Faces of a cut triangle thinner than this fraction of the scene's size are
+// dropped (a hole too thin for any pixel): the GPU gets positions in floats,
+// 6e-8 of their size, and a face that thin is degenerate there.
+constexpr double kThinnest = 1e-6;
+
 // An edge of some surface, welded by position, with the triangles beside it.
 struct SceneEdge {
     Vec3 a, b;
@@ -435,6 +440,19 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     common &= it == onEdges.end() ? 0 : it->second;
                 }
                 if (common) continue;
+                // So is a face thinner than the float precision positions
+                // reach the GPU with (a crossing rounded next to a vertex):
+                // rasterised, its attributes' gradients overflow.
+                const Cdt::Point& q0 = f->vertex(0)->point();
+                const Cdt::Point& q1 = f->vertex(1)->point();
+                const Cdt::Point& q2 = f->vertex(2)->point();
+                const double area2 = std::abs((q1.x() - q0.x()) * (q2.y() - q0.y()) - (q2.x() - q0.x()) * (q1.y() - q0.y()));
+                const double longest = std::sqrt(std::max({CGAL::squared_distance(q0, q1), CGAL::squared_distance(q1, q2),
+                                                           CGAL::squared_distance(q2, q0)}));
+                if (area2 < kThinnest * diagonal * longest) {
+                    ++rep.dropped;
+                    continue;
+                }
                 keep(t, glm::uvec3(f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()));
                 ++rep.triangles;
             }

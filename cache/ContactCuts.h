@@ -66,6 +66,7 @@ struct ContactCutReport {
     size_t segments = 0;   // cut segments after clipping, penumbra lines included
     size_t triangles = 0;  // triangles those became
     size_t vertices = 0;   // vertices added
+    size_t dropped = 0;    // faces thinner than 1e-6 of the scene (float-degenerate on the GPU) left out
 };
 
 // The scene's meshes, each cut along the edges of surfaces hanging close in

@@ -79,9 +79,9 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
         std::printf("  contact cuts: the bounces' meshes are cut where a surface touches or hangs within %.3g x its "
                     "edge's length in front of another (indirect light darkens there within the gap's length, and "
                     "the gathers' noise hides it from refinement): %zu triangles cut along %zu segments (outlines, "
-                    "penumbra lines of hanging edges, lines either side of touching ones) into %zu, %zu vertices "
-                    "added (cache/ContactCuts.h)\n",
-                    bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices);
+                    "and penumbra lines) into %zu, %zu vertices added, %zu faces thinner than 1e-6 of the scene left "
+                    "out (cache/ContactCuts.h)\n",
+                    bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices, r.dropped);
     else
         std::printf("  contact cuts: none (no surface touches or hangs close in front of another)\n");
 }
