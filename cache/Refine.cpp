@@ -28,6 +28,7 @@
 #include "IrradianceCache.h"
 
 #include "core/Error.h"
+#include "core/TangentPlaneFit.h"
 #include "detail/CacheImpl.h"
 
 #include <algorithm>
@@ -146,34 +147,17 @@ double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, dou
 }
 
 // The value at vertex v of the plane that fits its neighbours' values best
-// (least squares, in v's tangent plane): equal to v's own value for any
-// linear signal, whatever the shape of the ring, also at a border where all
-// neighbours lie on one side. None with fewer than three neighbours off one
-// line.
+// (core/TangentPlaneFit.h); none with fewer than three neighbours off one
+// line. `points` and `fit` are scratch.
 std::optional<double> planeFitAt(const CacheTriMesh& mesh, size_t v, const std::vector<uint32_t>& ring,
-                  const std::vector<double>& value) {
-    const Vec3 p = toVec3(mesh.point(VH(int(v))));
-    Vec3 n = toVec3(mesh.normal(VH(int(v)))), tx, ty;
-    if (!(glm::length(n) > 0.5)) n = Vec3(0, 0, 1);
-    orthonormalBasis(glm::normalize(n), tx, ty);
-    // Normal equations of min Σ (c + gx·x + gy·y − w)², relative to the
-    // ring's size so the test for a singular system is scale-free.
-    double scale = 0;
-    for (uint32_t u : ring) scale = std::max(scale, glm::length(toVec3(mesh.point(VH(int(u)))) - p));
-    if (!(scale > 0)) scale = 1;
-    glm::dmat3 a(0.0);
+                                 const std::vector<double>& value, std::vector<Vec3>& points, TangentPlaneFit& fit) {
+    points.clear();
+    for (uint32_t u : ring) points.push_back(toVec3(mesh.point(VH(int(u)))));
+    if (!fitTangentPlane(toVec3(mesh.point(VH(int(v)))), toVec3(mesh.normal(VH(int(v)))), points, fit))
+        return std::nullopt;
     glm::dvec3 b(0.0);
-    for (uint32_t u : ring) {
-        const Vec3 d = (toVec3(mesh.point(VH(int(u)))) - p) / scale;
-        const glm::dvec3 row(1.0, glm::dot(d, tx), glm::dot(d, ty));
-        a += glm::outerProduct(row, row);
-        b += row * value[u];
-    }
-    // Well-conditioned only with points spread in two directions: the
-    // determinant is then about n³/64 or more for a ring of n unit offsets.
-    const double det = glm::determinant(a);
-    if (ring.size() < 3 || !(std::abs(det) > 1e-6 * std::pow(double(ring.size()), 3))) return std::nullopt;
-    return (glm::inverse(a) * b).x;
+    for (size_t k = 0; k < ring.size(); ++k) b += fit.rows[k] * value[ring[k]];
+    return (fit.inverse * b).x;
 }
 
 std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
@@ -192,14 +176,16 @@ std::vector<double> vertexAreas(const CacheTriMesh& mesh) {
 void residuals(const CacheTriMesh& mesh, const std::vector<double>& lum, std::vector<double>& out) {
     out.assign(mesh.n_vertices(), -1.0);
     std::vector<uint32_t> ring;
+    std::vector<Vec3> points;
+    TangentPlaneFit fit;
     for (auto v : mesh.vertices()) {
         ring.clear();
         for (auto u : mesh.vv_range(v)) ring.push_back(uint32_t(u.idx()));
         if (ring.empty()) continue;
         std::sort(ring.begin(), ring.end());
         const size_t vi = size_t(v.idx());
-        std::optional<double> fit = planeFitAt(mesh, vi, ring, lum);
-        if (!fit) {
+        std::optional<double> value = planeFitAt(mesh, vi, ring, lum, points, fit);
+        if (!value) {
             // Too few neighbours off one line (an object's corner): fit the
             // two-ring instead; if even that is a line, no estimate.
             const std::vector<uint32_t> one = ring;
@@ -208,10 +194,10 @@ void residuals(const CacheTriMesh& mesh, const std::vector<double>& lum, std::ve
                     if (size_t(w.idx()) != vi) ring.push_back(uint32_t(w.idx()));
             std::sort(ring.begin(), ring.end());
             ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-            fit = planeFitAt(mesh, vi, ring, lum);
-            if (!fit) continue;
+            value = planeFitAt(mesh, vi, ring, lum, points, fit);
+            if (!value) continue;
         }
-        out[vi] = std::abs(lum[vi] - *fit);
+        out[vi] = std::abs(lum[vi] - *value);
     }
 }
 

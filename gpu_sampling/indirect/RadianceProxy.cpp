@@ -2,6 +2,7 @@
 
 #include "core/Error.h"
 #include "core/MeshUtil.h"
+#include "core/TangentPlaneFit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -54,6 +55,8 @@ std::vector<Rgb> vertexCurvature(const IrradianceMeshCopy& mesh) {
         }
     constexpr double kCrease = 0.866;  // cos 30°
     std::vector<uint32_t> kept;
+    std::vector<Vec3> points;
+    TangentPlaneFit fit;
     for (size_t v = 0; v < nv; ++v) {
         std::vector<uint32_t>& r = ring[v];
         std::sort(r.begin(), r.end());
@@ -61,34 +64,22 @@ std::vector<Rgb> vertexCurvature(const IrradianceMeshCopy& mesh) {
         const Vec3 p = mesh.positions[v], n = mesh.normals[v];
         if (!(glm::length(n) > 0.5)) continue;
         kept.clear();
-        double meanSq = 0, scale = 0;
+        points.clear();
+        double meanSq = 0;
         for (uint32_t u : r) {
             if (glm::dot(mesh.normals[u], n) < kCrease * glm::length(mesh.normals[u]) * glm::length(n)) continue;
             const double d2 = glm::dot(mesh.positions[u] - p, mesh.positions[u] - p);
             if (!(d2 > 0)) continue;
             kept.push_back(u);
+            points.push_back(mesh.positions[u]);
             meanSq += d2;
-            scale = std::max(scale, std::sqrt(d2));
         }
-        if (kept.size() < 3) continue;
+        // The fit at the vertex is c = Σ αu fu, αu = (A⁻¹ rowu).x.
+        if (!fitTangentPlane(p, n, points, fit)) continue;
         meanSq /= double(kept.size());
-        Vec3 tx, ty;
-        orthonormalBasis(glm::normalize(n), tx, ty);
-        // min Σ (c + gx·x + gy·y − f)² in the tangent plane, offsets over the
-        // ring's size: the fit at the vertex is c = Σ αu fu, with
-        // αu = (A⁻¹ rowu).x.
-        glm::dmat3 a(0.0);
-        std::vector<glm::dvec3> rows;
-        for (uint32_t u : kept) {
-            const Vec3 d = (mesh.positions[u] - p) / scale;
-            rows.emplace_back(1.0, glm::dot(d, tx), glm::dot(d, ty));
-            a += glm::outerProduct(rows.back(), rows.back());
-        }
-        if (!(std::abs(glm::determinant(a)) > 1e-6 * std::pow(double(kept.size()), 3))) continue;
-        const glm::dmat3 inv = glm::inverse(a);
-        Rgb fit(0.0);
-        for (size_t k = 0; k < kept.size(); ++k) fit += (inv * rows[k]).x * mesh.irradiance[kept[k]];
-        out[v] = (mesh.irradiance[v] - fit) / meanSq;
+        Rgb value(0.0);
+        for (size_t k = 0; k < kept.size(); ++k) value += (fit.inverse * fit.rows[k]).x * mesh.irradiance[kept[k]];
+        out[v] = (mesh.irradiance[v] - value) / meanSq;
     }
     return out;
 }
