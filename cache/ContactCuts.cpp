@@ -1,5 +1,5 @@
-// The only translation unit of meshlight_cache that includes CGAL (a CGAL
-// unit costs 10-20 s and over 1 GB to compile).
+// The cache's one CGAL translation unit (10-20 s and over 1 GB to compile),
+// alone in the library meshlight_contact_cuts.
 #include "ContactCuts.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 namespace ml {
 
