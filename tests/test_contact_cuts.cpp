@@ -142,7 +142,7 @@ TEST(ContactCuts, APanelUnderACeilingCutsItsOutlineAndPenumbraLines) {
 
 TEST(ContactCuts, AGapUnderAThousandthOfTheSceneIsLeftUncut) {
     // The scene is 2.2 across: a panel 1 mm under the ceiling (the Cornell
-    // box's light hangs 0.1 mm under its ceiling) cuts nothing.
+    // box's light hangs 0.5 mm under its ceiling) cuts nothing.
     const Scene scene = panelScene(1e-3);
     ContactCutSettings s;
     s.spacing = 0.5;
