@@ -25,7 +25,7 @@ CacheSettings IndirectSettings::defaultCache() {
     c.maxSamplesPerVertex = 16;
     c.singleSampleNoise = 0;  // no visibility steps: samples are never partial
     // Cut along contacts (ContactCuts.h): indirect light darkens sharply
-    // where a surface touches or hangs close (within the gap's own length),
+    // where a surface hangs close (within the gap's own length),
     // and the gathers' noise hides that from refinement. Direct light's
     // meshes are not cut: the sampler sees a contact's shadow as partial
     // visibility and refinement follows it.

@@ -1,6 +1,5 @@
 #include "IrradianceCache.h"
 
-#include "ContactCuts.h"
 #include "LightCoverage.h"
 
 #include "core/Error.h"
@@ -210,13 +209,15 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
     return detached;
 }
 
-// The scene's meshes cut along contacts (ContactCuts.h), or as they are.
-std::vector<Mesh> cutMeshes(const Scene& scene, const std::vector<bool>& gridded, const CacheSettings& settings) {
+// The scene's meshes cut along contacts (ContactCuts.h), or as they are;
+// `gridded` meshes are left as they are.
+std::vector<Mesh> cutMeshes(const Scene& scene, const std::vector<bool>& gridded, const CacheSettings& settings,
+                            ContactCutReport* report = nullptr) {
     if (!(settings.contactCloseness > 0)) return scene.meshes;
     ContactCutSettings cut;
     cut.closeness = settings.contactCloseness;
     cut.spacing = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
-    return cutAlongContacts(scene, gridded, cut);
+    return cutAlongContacts(scene, gridded, cut, report);
 }
 
 // Longest-edge bisection until no edge exceeds maxLength. Edges are split
@@ -268,6 +269,13 @@ void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& sc
 }
 
 }  // namespace
+
+std::vector<Mesh> cacheSurfaces(const Scene& scene, const CacheSettings& settings, ContactCutReport* report) {
+    const double maxEdge = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
+    std::vector<bool> gridded;
+    for (const Mesh& m : scene.meshes) gridded.push_back(decideGridCache(m, maxEdge).useGrid);
+    return cutMeshes(scene, gridded, settings, report);
+}
 
 IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings, const CacheLayout& layout)
     : impl_(std::make_unique<Impl>()) {

@@ -13,6 +13,7 @@
 // OpenMesh stays inside cache/: the public types are Meshlight's own.
 #pragma once
 
+#include "ContactCuts.h"
 #include "VertexSampler.h"
 #include "core/Camera.h"
 #include "core/Scene.h"
@@ -72,11 +73,11 @@ struct CacheSettings {
     // its light goes to one shared mesh. 0: every light's mesh everywhere.
     // Used when the layout asks for it (CacheLayout::coverage).
     double lightShare = 0.1;
-    // Base meshes are cut along the edges of surfaces touching or hanging
-    // close in front of them (ContactCuts.h): an edge within this fraction
-    // of its length of a surface, typical 0.1 (a panel 2 cm under a ceiling,
-    // 0.6 m wide: 0.033); 0: no cuts (direct light's default; the bounces'
-    // is 0.1, IndirectSettings::defaultCache).
+    // Base meshes are cut along the edges of surfaces hanging close in
+    // front of them (ContactCuts.h): an edge within this fraction of its
+    // length of a surface, typical 0.1 (a panel 2 cm under a ceiling, 0.6 m
+    // wide: 0.033); 0: no cuts (direct light's default; the bounces' is 0.1,
+    // IndirectSettings::defaultCache).
     double contactCloseness = 0;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
@@ -131,6 +132,13 @@ struct RefineReport {
     double estimatedError = 0;  // before the round; see IrradianceCache::estimatedError
     bool converged() const { return candidates == 0; }
 };
+
+// The scene's meshes as a cache with `settings` lays its base meshes over
+// them: cut along the surfaces hanging close in front of them where
+// settings.contactCloseness asks (ContactCuts.h), objects with a grid cache
+// (decideGridCache) left as they are; `report`, when given, says what was cut.
+std::vector<Mesh> cacheSurfaces(const Scene& scene, const CacheSettings& settings,
+                                ContactCutReport* report = nullptr);
 
 // Which meshes a cache holds, and which faces of open objects get a reversed
 // copy so that each side keeps its own irradiance.

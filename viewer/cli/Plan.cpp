@@ -1,7 +1,5 @@
 #include "Plan.h"
 
-#include "cache/ContactCuts.h"
-
 #include "core/image/Photometry.h"
 
 #include "cache/LightCoverage.h"
@@ -67,23 +65,17 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
         std::printf("  contact cuts: none (--contact-cuts 0)\n");
         return;
     }
-    const double maxEdge = bounces.maxEdgeFraction * scene.bounds.diagonal();
-    std::vector<bool> gridded;
-    for (const Mesh& m : scene.meshes) gridded.push_back(decideGridCache(m, maxEdge).useGrid);
-    ContactCutSettings cut;
-    cut.closeness = bounces.contactCloseness;
-    cut.spacing = maxEdge;
     ContactCutReport r;
-    cutAlongContacts(scene, gridded, cut, &r);
+    cacheSurfaces(scene, bounces, &r);
     if (r.receivers)
-        std::printf("  contact cuts: the bounces' meshes are cut where a surface touches or hangs within %.3g x its "
-                    "edge's length in front of another (indirect light darkens there within the gap's length, and "
+        std::printf("  contact cuts: the bounces' meshes are cut where a surface hangs within %.3g x its edge's "
+                    "length in front of another (indirect light darkens there within the gap's length, and "
                     "the gathers' noise hides it from refinement): %zu triangles cut along %zu segments (outlines, "
                     "and penumbra lines) into %zu, %zu vertices added, %zu faces thinner than 1e-6 of the scene left "
                     "out (cache/ContactCuts.h)\n",
                     bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices, r.dropped);
     else
-        std::printf("  contact cuts: none (no surface touches or hangs close in front of another)\n");
+        std::printf("  contact cuts: none (no surface hangs close in front of another)\n");
 }
 
 // What a light is and how its direct light is sampled, for the plan.

@@ -62,8 +62,8 @@ void declareIndirectOptions(Options& o) {
             "free path 4V/S over 7.5, within 1/16..1/32, with fewer rays as it is finer; 1/8 for the voxel "
             "gathers); plan says which (cache/README.md)");
     o.value("contact-cuts", "F",
-            "the bounce meshes are cut along the edges of surfaces touching or hanging within F x the edge's length "
-            "in front of them, with lines along the penumbra of a hanging edge (cache/ContactCuts.h); 0: no cuts",
+            "the bounce meshes are cut along the edges of surfaces hanging (between 1e-3 of the scene and F x the "
+            "edge's length) in front of them, with lines along their penumbra (cache/ContactCuts.h); 0: no cuts",
             concat(IndirectSettings::defaultCache().contactCloseness));
     o.value("near-voxels", "K", "triangles, not slices, within K voxels of the gathering point", concat(g.nearVoxels));
     o.value("slice-supersample", "S", "S x S sub-texels per slice texel", concat(g.sliceSupersample));
