@@ -6,6 +6,7 @@
 #include "core/reference/Lambert.h"
 
 #include <algorithm>
+#include <functional>
 
 namespace ml {
 
@@ -23,7 +24,8 @@ SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const
 
 std::string SharedLightSampler::name() const {
     return concat(perLight_->name(), "; lights share a mesh where they give under ", 100 * coverage_->share(),
-                  "% of the light, ", draws_, " lights drawn per shared estimate");
+                  "% of the light, ", draws_, " lights drawn per shared estimate from those of the ", kAskedLights,
+                  " brightest the sampler cannot answer without the GPU, and the rest");
 }
 
 template <class Take>
@@ -61,17 +63,14 @@ bool SharedLightSampler::sampleWithoutGpu(size_t mesh, const Vec3& x, const Vec3
                     out);
 }
 
-template <class Take>
-bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
+// (1 − w_l) U_l of each light reaching x that the shared mesh carries, in
+// light order, into reaching_; their sums.
+void SharedLightSampler::reaching(const Vec3& x, const Vec3& n, Rgb& total, double& all) {
     const size_t lights = scene_.lights.size();
     coverage_->weights(x, weights_);
-    // (1 − w_l) U_l for every light, the total exactly, the draws' CDF by luminance.
-    cdf_.clear();
-    unoccluded_.clear();
-    candidates_.clear();
-    shared_.clear();
-    Rgb total(0.0);
-    double sum = 0;
+    reaching_.clear();
+    total = Rgb(0.0);
+    all = 0;
     size_t next = 0;
     for (size_t l = 0; l < lights; ++l) {
         double w = 0;
@@ -81,39 +80,94 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         const double y = (1 - w) * luminance(full);
         if (!(y > 0)) continue;
         total += (1 - w) * full;
-        sum += y;
-        candidates_.push_back(uint32_t(l));
-        unoccluded_.push_back(full);
-        shared_.push_back(1 - w);
-        cdf_.push_back(sum);
+        all += y;
+        reaching_.push_back({uint32_t(l), 1 - w, y, full});
     }
-    if (!(sum > 0)) {  // nothing shared reaches this point
+}
+
+const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const Vec3& n, uint32_t seed) {
+    const Key key{bits(x.x), bits(x.y), bits(x.z), bits(n.x), bits(n.y), bits(n.z)};
+    if (const auto it = known_.find(key); it != known_.end()) return it->second;
+    if (known_.size() >= kMaxKnown) known_.clear();  // a bound on memory; made again as needed
+    Known& k = known_[key];
+    Rgb total;
+    double all;
+    reaching(x, n, total, all);
+    // Only the brightest are asked (a few microseconds each): the draws'
+    // variance grows with the square of the light left to them. Ties go to
+    // the lower index, so the choice depends on the point alone.
+    double least = 0;
+    if (reaching_.size() > size_t(kAskedLights)) {
+        order_.clear();
+        for (const Reaching& r : reaching_) order_.push_back(r.y);
+        std::nth_element(order_.begin(), order_.begin() + (kAskedLights - 1), order_.end(), std::greater<double>());
+        least = order_[size_t(kAskedLights - 1)];
+    }
+    int asked = 0;
+    for (const Reaching& r : reaching_) {
+        if (r.y < least || asked >= kAskedLights) continue;
+        ++asked;
+        VertexSample e;
+        // A uniform light answered without the GPU is exact whatever the seed.
+        if (textured_[r.light] || !perLight_->sampleWithoutGpu(r.light, x, n, seedFor(seed, 0xc1a55u, r.light), e))
+            continue;
+        k.lights.push_back(r.light);
+        k.occluded += r.shared * glm::max(r.unoccluded - e.irradiance, Rgb(0.0));
+        k.visible += r.y * e.visibility;
+    }
+    return k;
+}
+
+template <class Take>
+bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
+    const Known& k = known(x, n, seed);
+    // Every light's (1 − w_l) U_l, the total exactly; the draws' CDF, by
+    // luminance, over the lights not known.
+    Rgb total;
+    double all;
+    reaching(x, n, total, all);
+    if (!(all > 0)) {  // nothing shared reaches this point
         out = {};
         return true;
     }
-    Rgb occluded(0.0);
-    double visibleSum = 0;
+    cdf_.clear();
+    drawable_.clear();
+    double sum = 0;
+    size_t next = 0;
+    for (size_t i = 0; i < reaching_.size(); ++i) {
+        while (next < k.lights.size() && k.lights[next] < reaching_[i].light) ++next;
+        if (next < k.lights.size() && k.lights[next] == reaching_[i].light) continue;
+        sum += reaching_[i].y;
+        cdf_.push_back(sum);
+        drawable_.push_back(i);
+    }
+    Rgb occluded = k.occluded;
+    double drawnVisible = 0;
     bool partial = false;
-    for (int k = 0; k < draws_; ++k) {
-        // Stratified over [0, 1): draw k in [k/K, (k+1)/K).
-        const double u = (double(k) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(k))) >> 8) / 16777216.0) /
+    for (int d = 0; d < draws_ && sum > 0; ++d) {
+        // Stratified over [0, 1): draw d in [d/K, (d+1)/K).
+        const double u = (double(d) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(d))) >> 8) / 16777216.0) /
                          double(draws_) * sum;
         const size_t c = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin());
-        const size_t i = std::min(c, candidates_.size() - 1);
-        const uint32_t l = candidates_[i];
-        const double p = (cdf_[i] - (i ? cdf_[i - 1] : 0.0)) / sum;
+        const size_t j = std::min(c, cdf_.size() - 1);
+        const Reaching& r = reaching_[drawable_[j]];
+        const uint32_t l = r.light;
+        const double p = (cdf_[j] - (j ? cdf_[j - 1] : 0.0)) / sum;
         VertexSample e;
-        if (!take(l, seedFor(seed, uint32_t(k), l), e)) return false;
+        if (!take(l, seedFor(seed, uint32_t(d), l), e)) return false;
         // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative for a
         // uniform light; a textured one's may be (see the header).
-        const Rgb difference = unoccluded_[i] - e.irradiance;
-        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * shared_[i];
+        const Rgb difference = r.unoccluded - e.irradiance;
+        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * r.shared;
         occluded += o / (p * double(draws_));
-        visibleSum += e.visibility;
+        drawnVisible += e.visibility;
         partial = partial || e.partial;
     }
     out.irradiance = glm::max(total - occluded, Rgb(0.0));
-    out.visibility = std::clamp(visibleSum / double(draws_), 0.0, 1.0);
+    // The visible share of the shared light, weighted as the draws are:
+    // exact for the lights answered without the GPU, the draws' mean for the rest.
+    const double drawnShare = sum > 0 ? sum * drawnVisible / double(draws_) : 0.0;
+    out.visibility = std::clamp((k.visible + drawnShare) / all, 0.0, 1.0);
     out.partial = partial;
     return true;
 }

@@ -12,6 +12,21 @@
 // the CPU, exactly U_l). Noise comes only from occlusion, where refinement
 // resamples it away.
 //
+// Lights answered without the GPU are not drawn. Before drawing, the
+// wrapped sampler is asked for the kAskedLights brightest (1 − w_l) U_l at
+// the point whether it answers them without the GPU (sampleWithoutGpu: in
+// the way of nothing, E_l = U_l; hidden behind one polygon, E_l = 0; a few
+// microseconds each); those lights' O_l is then known and subtracted
+// exactly, and the K draws go to the rest, p_l ∝ (1 − w_l) U_l among them.
+// Still unbiased, and never noisier: a draw's variance is that of the
+// occluded share among the lights drawn from, times the square of their
+// light. Under a desk most lights are hidden behind its top and a few
+// glimpsed past its edge; on the open floor most are in view and a few are
+// hidden by the partition: drawn from all, each draw was all or nothing
+// (blotches on the floor); drawn from the uncertain few, far less. The
+// point's plan (which lights are known, the draws' CDF) depends on the
+// point alone and is kept for the vertex's next samples.
+//
 // A textured light (EmitterTexture.h): U_l is still Lambert's form at the
 // light's mean radiance, now only a control for the textured E_l the wrapped
 // sampler estimates, so O_l = U_l − E_l may be negative (the point sees the
@@ -22,7 +37,10 @@
 #include "DirectSampler.h"
 #include "LightCoverage.h"
 
+#include <array>
+#include <cstring>
 #include <memory>
+#include <unordered_map>
 
 namespace ml {
 
@@ -47,15 +65,53 @@ private:
     template <class Take>
     bool estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out);
 
+    // A light reaching the point, carried (partly) by the shared mesh.
+    struct Reaching {
+        uint32_t light;
+        double shared;  // 1 − w_l
+        double y;       // (1 − w_l) Y(U_l), its draw weight
+        Rgb unoccluded; // U_l
+    };
+    void reaching(const Vec3& x, const Vec3& n, Rgb& total, double& all);
+    // The lights at (x, n) the wrapped sampler answered without the GPU:
+    // asked once per point and kept (a vertex is sampled many times; what is
+    // kept depends on the point alone, so no result depends on it).
+    struct Known {
+        std::vector<uint32_t> lights;  // increasing
+        Rgb occluded{0.0};             // Σ (1 − w_l) O_l over them
+        double visible = 0;            // Σ (1 − w_l) Y(U_l) · visibility over them
+    };
+    const Known& known(const Vec3& x, const Vec3& n, uint32_t seed);
+    using Key = std::array<uint64_t, 6>;
+    struct KeyHash {
+        size_t operator()(const Key& k) const {
+            uint64_t h = 0x9e3779b97f4a7c15ull;
+            for (uint64_t v : k) h = (h ^ v) * 0x100000001b3ull + (h >> 29);
+            return size_t(h);
+        }
+    };
+    static uint64_t bits(double v) {
+        uint64_t b;
+        std::memcpy(&b, &v, sizeof b);
+        return b;
+    }
+    // The brightest lights asked. 48 panels at 5.3 s (render office:panels=8x6, 320x180), direct light's error /
+    // the image's: asking none, 3.86% / 5.48%; 4 lights, 2.74% / 4.75%; 8, 1.46% / 4.33%; 16, within the
+    // reference's noise / 3.99%; all (~40), within noise / 6.67%, for asking took the indirect gathers' time.
+    static constexpr int kAskedLights = 16;
+    // Points kept (each under 200 bytes: some 25 MB at most per sampler).
+    static constexpr size_t kMaxKnown = size_t(1) << 17;
+    std::unordered_map<Key, Known, KeyHash> known_;
+
     const Scene& scene_;
     std::shared_ptr<const LightCoverage> coverage_;
     std::unique_ptr<DirectSampler> perLight_;
     int draws_;
     std::vector<std::pair<uint32_t, double>> weights_;  // scratch
-    std::vector<double> cdf_;
-    std::vector<Rgb> unoccluded_;  // U_l of each candidate
-    std::vector<double> shared_;   // 1 − w_l of each candidate
-    std::vector<uint32_t> candidates_;
+    std::vector<Reaching> reaching_;  // scratch
+    std::vector<double> order_;       // scratch
+    std::vector<double> cdf_;         // scratch: the draws' CDF
+    std::vector<size_t> drawable_;    // scratch: the reaching_ entry of each CDF step
     std::vector<bool> textured_;   // per light: its emission has a texture (EmitterTexture)
 };
 
