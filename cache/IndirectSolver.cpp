@@ -149,7 +149,12 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         const int bounce = int(caches_.size()) + 1;
         // The previous bounce's source is not needed until pass 2.
         if (bounce > 2) releaseSource(estimator, size_t(bounce - 2));
-        caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), bounceCacheLayout()));
+        // Every bounce lays the same surfaces (bounceCacheSettings changes
+        // only tolerances and the smallest edges): cut along contacts once.
+        CacheLayout layout = bounceCacheLayout();
+        if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
+        layout.surfaces = surfaces_;
+        caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
         prepareSource(estimator, bounce, direct, true);
     }
     const bool first = !firstPassDone();
@@ -251,6 +256,7 @@ void IndirectSolver::sceneChanged() {
     std::vector<IrradianceMeshCopy> shown = displayMeshes();
     if (!shown.empty()) stale_ = std::move(shown);
     caches_.clear();
+    surfaces_.reset();
     resetPass2();
     directRefreshed_ = false;
     regathering_ = false;

@@ -217,6 +217,7 @@ private:
     const Scene& scene_;
     IndirectSettings settings_;
     std::vector<std::unique_ptr<IrradianceCache>> caches_;
+    std::shared_ptr<const std::vector<Mesh>> surfaces_;  // what every bounce's cache lays (CacheLayout::surfaces)
     // Pass 2, by slot (bounce − 1): converged at the level in hand; the
     // share of the image's error the bounce's last round began with (its
     // estimated error × ā^(n−1); infinite until it has had a round), which

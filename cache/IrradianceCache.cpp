@@ -311,8 +311,10 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
         s.grids.push_back(std::move(g));
     }
     CacheTriMesh base;
-    s.detachedFaces = buildBaseMesh(scene, cutMeshes(scene, gridded, settings), gridded, layout.backFaces, base,
-                                    s.backFaces);
+    const std::vector<Mesh> cut = layout.surfaces ? std::vector<Mesh>() : cutMeshes(scene, gridded, settings);
+    const std::vector<Mesh>& surfaces = layout.surfaces ? *layout.surfaces : cut;
+    ML_ASSERT(surfaces.size() == scene.meshes.size(), "the cache's surfaces are the scene's meshes");
+    s.detachedFaces = buildBaseMesh(scene, surfaces, gridded, layout.backFaces, base, s.backFaces);
     bisectLongEdges(base, maxEdge);
     const bool share = layout.coverage && layout.coverage->sharing() && layout.meshes == 0;
     s.sharedMesh = share;
