@@ -721,6 +721,7 @@ void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std
 size_t IrradianceCache::sampleUnsampled(VertexSampler& sampler, uint32_t seed,
                                         const std::function<void(size_t, size_t)>& progress) {
     const size_t todo = detail::unsampledCount(impl_->state);
+    const FirstSamples first(sampler);
     // In batches, so that progress is told now and then.
     for (size_t done = 0; done < todo;) {
         done += detail::sampleUnsampled(impl_->state, sampler, seed, 4096);

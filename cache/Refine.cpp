@@ -397,6 +397,7 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
     const size_t unsampled = detail::unsampledCount(s);
     if (unsampled > 0) {
         report.estimatedError = 1;
+        const FirstSamples first(sampler);
         report.estimates = detail::sampleUnsampled(s, sampler, seed, budget);
         report.candidates = unsampled - report.estimates + 1;  // at least the scoring is still to come
         ++s.rounds;

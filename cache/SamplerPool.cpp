@@ -202,6 +202,10 @@ public:
             sampleEachWithoutGpu(*s.direct, requests, results, answered, begin, end);
         });
     }
+    // Every thread's sampler, between batches (when every helper is idle).
+    void firstSamples(bool first) override {
+        for (size_t k = 0; k < pool_.size(); ++k) pool_.set(k).direct->firstSamples(first);
+    }
     // Between batches every helper is idle: its sampler's totals are still.
     DirectPhaseTimes phaseTimes() const override {
         DirectPhaseTimes t;

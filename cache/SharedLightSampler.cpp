@@ -120,7 +120,9 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
 
 template <class Take>
 bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
-    const Known& k = known(x, n, seed);
+    // A first pass draws from every light, asking none (firstSamples).
+    static const Known kNone;
+    const Known& k = firstSamples_ ? kNone : known(x, n, seed);
     // Every light's (1 − w_l) U_l, the total exactly; the draws' CDF, by
     // luminance, over the lights not known.
     Rgb total;

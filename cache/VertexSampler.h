@@ -75,6 +75,27 @@ public:
     // request i's estimate. Errors as for sampleBatch.
     virtual void sampleBatchWithoutGpu(const std::vector<SampleRequest>& requests, std::vector<VertexSample>& results,
                                        std::vector<char>& answered);
+    // Whether the requests that follow are a first pass's (every vertex the
+    // cache was laid with, once: the first complete image), until called
+    // again with false. The cache says so before and after, the same on
+    // every thread and machine. A sampler may then skip work that pays off
+    // only over a point's later samples and its refined neighbours
+    // (SharedLightSampler's asking which lights it can answer exactly), so
+    // that the first image comes sooner. Both estimates must be unbiased;
+    // the default ignores the hint.
+    virtual void firstSamples(bool first) { (void)first; }
+};
+
+// firstSamples(true) for as long as it lives, then false.
+class FirstSamples {
+public:
+    explicit FirstSamples(VertexSampler& sampler) : sampler_(sampler) { sampler_.firstSamples(true); }
+    ~FirstSamples() { sampler_.firstSamples(false); }
+    FirstSamples(const FirstSamples&) = delete;
+    FirstSamples& operator=(const FirstSamples&) = delete;
+
+private:
+    VertexSampler& sampler_;
 };
 
 // Runs f() for request i of a batch: a failure other than an InputError (a
