@@ -90,9 +90,6 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
     if (const auto it = known_.find(key); it != known_.end()) return it->second;
     if (known_.size() >= kMaxKnown) known_.clear();  // a bound on memory; made again as needed
     Known& k = known_[key];
-    Rgb total;
-    double all;
-    reaching(x, n, total, all);
     // Only the brightest are asked (a few microseconds each): the draws'
     // variance grows with the square of the light left to them. Ties go to
     // the lower index, so the choice depends on the point alone.
@@ -120,14 +117,14 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
 
 template <class Take>
 bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
-    // A first pass draws from every light, asking none (firstSamples).
-    static const Known kNone;
-    const Known& k = firstSamples_ ? kNone : known(x, n, seed);
     // Every light's (1 − w_l) U_l, the total exactly; the draws' CDF, by
-    // luminance, over the lights not known.
+    // luminance, over the lights not known. A first pass draws from every
+    // light, asking none (firstSamples).
     Rgb total;
     double all;
     reaching(x, n, total, all);
+    static const Known kNone;
+    const Known& k = firstSamples_ ? kNone : known(x, n, seed);
     if (!(all > 0)) {  // nothing shared reaches this point
         out = {};
         return true;

@@ -79,8 +79,9 @@ private:
         Rgb unoccluded; // U_l
     };
     void reaching(const Vec3& x, const Vec3& n, Rgb& total, double& all);
-    // The lights at (x, n) the wrapped sampler answered without the GPU:
-    // asked once per point and kept (a vertex is sampled many times; what is
+    // The lights at (x, n) the wrapped sampler answered without the GPU,
+    // from reaching_ as reaching() left it for that point: asked once per
+    // point and kept (a vertex is sampled many times; what is
     // kept depends on the point alone, so no result depends on it).
     struct Known {
         std::vector<uint32_t> lights;  // increasing

@@ -231,17 +231,20 @@ std::vector<double> curve(const std::vector<TimedImage>& images, const ImageRgb&
     return e;
 }
 
-double at(const std::vector<TimedImage>& images, const ImageRgb& reference, double seconds) {
-    for (const TimedImage& t : images)
-        if (t.seconds >= seconds - 1e-9) return relativeRmse(t.image, reference);
-    return relativeRmse(images.back().image, reference);
+// The first image at or after `seconds` (the last if none).
+size_t imageAt(const std::vector<TimedImage>& images, double seconds) {
+    for (size_t i = 0; i < images.size(); ++i)
+        if (images[i].seconds >= seconds - 1e-9) return i;
+    return images.size() - 1;
 }
 
-// The error at the first image at or after `seconds`.
+double at(const std::vector<TimedImage>& images, const ImageRgb& reference, double seconds) {
+    return relativeRmse(images[imageAt(images, seconds)].image, reference);
+}
+
+// The error of the first image at or after `seconds`.
 double errorAt(const std::vector<TimedImage>& images, const std::vector<double>& errors, double seconds) {
-    for (size_t i = 0; i < images.size(); ++i)
-        if (images[i].seconds >= seconds - 1e-9) return errors[i];
-    return errors.back();
+    return errors[imageAt(images, seconds)];
 }
 
 // The first time the curve (errors of `images`) is within `level` and stays there.
