@@ -10,6 +10,15 @@
 
 namespace ml {
 
+namespace {
+// Direct light's turn while its estimated error is at least this share of
+// indirect light's.
+constexpr double kDirectWeight = 0.5;
+// The least share of the worker's time either part keeps once indirect
+// light has started (without a sample budget).
+constexpr double kLeastShare = 0.125;
+}  // namespace
+
 void WorkerSettings::validate() const {
     if (!(publishSeconds >= 0 && publishSeconds <= 3600))
         throw InputError(concat("snapshot interval ", publishSeconds, " s is not in [0, 3600]"));
@@ -167,6 +176,8 @@ void CacheWorker::run() {
         double directRate = 0;  // direct samples per second in the last round
         double lastDirectError = 1, lastIndirectError = 1;
         uint64_t rounds = 0, causticWaits = 0;
+        double directSeconds = 0, indirectSeconds = 0;  // each part's rounds since indirect light started
+        bool indirectIdle = false;  // its last step found it converged at its last level: nothing to share
         std::optional<RefinementCamera> lastView;
         uint64_t serial = 0;
         for (;;) {
@@ -190,22 +201,41 @@ void CacheWorker::run() {
             };
             if (settings_.maxSamples && totalSamples() >= settings_.maxSamples) break;
             // Once indirect light is under way, the two share the worker by
-            // their errors: a direct round runs while direct light's error
-            // is at least half of indirect light's (and every eighth round
-            // regardless, so it never stalls).
+            // their errors: direct light's turn while its error is at least
+            // half of indirect light's, indirect light's otherwise, each
+            // keeping at least kLeastShare of the worker so neither stalls.
+            // The share is of time: a direct round (up to 16,384 samples,
+            // ~0.4 s in a 48-panel office) lasts a hundred indirect ones (a
+            // later bounce's 512 gathers of 16 rays, a few ms), and a share
+            // of rounds left indirect light 5% of the worker while its first
+            // passes waited. Under a sample budget the share is of rounds
+            // (one in eight), which no clock decides: the same cache on any
+            // machine. Both share one round while direct light's turn lasts
+            // under a budget, as before.
             // Bounce 1's first pass, once started, runs without direct
             // rounds between: until it is gathered the image lacks all
             // indirect light (a room's ceiling is black), which is more than
             // what the rest of direct light's first pass adds.
             const bool firstBounceDue = indirectStarted && !indirect_->firstBounceGathered();
-            const bool directTurn = !indirectStarted ||
-                                    (!firstBounceDue && (lastDirectError >= 0.5 * lastIndirectError || ++rounds % 8 == 0));
+            const bool directDue = lastDirectError >= kDirectWeight * lastIndirectError;
+            const double shared = directSeconds + indirectSeconds;
+            bool directTurn = !indirectStarted, indirectTurn = true;
+            if (indirectStarted && !firstBounceDue) {
+                if (settings_.maxSamples) {
+                    directTurn = directDue || ++rounds % 8 == 0;
+                } else {
+                    directTurn = indirectIdle ||
+                                 (directDue ? indirectSeconds >= kLeastShare * shared : directSeconds < kLeastShare * shared);
+                    indirectTurn = !directTurn || directConverged;
+                }
+            }
             if (!directConverged && directTurn) {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
                 const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
                 const double took = seconds() - before;
+                if (indirectStarted) directSeconds += took;
                 // Direct samples per second in the last round, for when to
                 // start indirect light. Not smoothed over rounds: the first
                 // pass's first round takes every pair that needs no GPU, a
@@ -253,14 +283,16 @@ void CacheWorker::run() {
                     sourceIncomplete = false;
                 }
                 indirectConverged = false;
-                if (indirectStarted && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
+                if (indirectStarted && indirectTurn && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
                     size_t budget = settings_.indirectBudget;
                     if (budget == 0) {
                         const size_t vertices = indirect_->started() ? indirect_->cache(indirect_->started()).totalVertices()
                                                                      : cache_.totalVertices() / std::max<size_t>(cache_.lightCount(), 1);
                         budget = std::clamp<size_t>(vertices / 8, 16, 512);
                     }
+                    const double before = seconds();
                     const RefineReport r = indirect_->step(*estimator, directMeshes, capped(budget), settings_.seed, view);
+                    indirectSeconds += seconds() - before;
                     indirectConverged = r.converged();
                     if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
@@ -293,6 +325,7 @@ void CacheWorker::run() {
             if (caustics_ && causticConverged && caustics_->level() < settings_.refinementLevels &&
                 caustics_->tighten())
                 causticConverged = false;
+            if (indirect_ && indirectTurn && indirectStarted) indirectIdle = indirectConverged;
             converged = directConverged && indirectConverged && causticConverged;
             if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
                 publish(seconds(), converged, view, serial, pool);
