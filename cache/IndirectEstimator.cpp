@@ -10,12 +10,16 @@ VertexSample IndirectEstimator::estimateSample(size_t slot, const Vec3& x, const
     return sample;  // visibility 1, never partial: indirect light has no light to see
 }
 
+VertexSample IndirectEstimator::estimateRequest(size_t slot, const SampleRequest& r) {
+    return estimateSample(slot, r.x, r.n, r.seed);
+}
+
 void IndirectEstimator::estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                                       std::vector<VertexSample>& results) {
     results.resize(requests.size());
     for (size_t i = 0; i < requests.size(); ++i) {
         const SampleRequest& r = requests[i];
-        asBatchRequest(i, [&] { results[i] = estimateSample(slot, r.x, r.n, r.seed); });
+        asBatchRequest(i, [&] { results[i] = estimateRequest(slot, r); });
     }
 }
 

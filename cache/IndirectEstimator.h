@@ -58,6 +58,13 @@ public:
     // surfaces are, which tells the cache where indirect light may step).
     // The default knows no reach.
     virtual VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed);
+    // estimateSample for a cache vertex's request, which also numbers the
+    // vertex's samples (SampleRequest::stream, index): a method may draw a
+    // vertex's successive estimates as blocks of one sequence, so that
+    // their mean converges faster than independent estimates'. Each
+    // estimate alone must keep the same mean. The default takes
+    // estimateSample(slot, r.x, r.n, r.seed).
+    virtual VertexSample estimateRequest(size_t slot, const SampleRequest& r);
     // Every request's estimateSample from source `slot` (requests[i].mesh is
     // not used), each exactly what it returns for that request; a failure
     // throws SampleBatchError naming the first failing request.

@@ -662,18 +662,23 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
 SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed) {
     SampleRequest r;
     r.mesh = p.mesh;
+    r.numbered = true;
     if (!p.grid) {
         const LightMesh& lm = s.meshes[p.mesh];
         const auto vh = CacheTriMesh::VertexHandle(int(p.index));
         r.x = samplePoint(s, lm.mesh, vh);
         r.n = toVec3(lm.mesh.normal(vh));
-        r.seed = seedFor(seed, p.index, p.mesh, lm.stats[p.index].count);
+        r.index = uint32_t(lm.stats[p.index].count);
+        r.seed = seedFor(seed, p.index, p.mesh, r.index);
+        r.stream = seedFor(seed ^ 0x5eed5eedu, p.index, p.mesh);
     } else {
         const GridObject& o = gridOf(s, p.index);
         const size_t k = p.index - o.firstSample;
         r.x = o.grid->samplePosition(k);
         r.n = o.grid->sampleNormal(k);
-        r.seed = seedFor(seed, kGridSeedBase + p.index, p.mesh, s.meshes[p.mesh].gridStats[p.index].count);
+        r.index = uint32_t(s.meshes[p.mesh].gridStats[p.index].count);
+        r.seed = seedFor(seed, kGridSeedBase + p.index, p.mesh, r.index);
+        r.stream = seedFor(seed ^ 0x5eed5eedu, kGridSeedBase + p.index, p.mesh);
     }
     return r;
 }

@@ -233,12 +233,15 @@ public:
     VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override {
         return pool_.own.indirect->estimateSample(slot, x, n, seed);
     }
+    VertexSample estimateRequest(size_t slot, const SampleRequest& r) override {
+        return pool_.own.indirect->estimateRequest(slot, r);
+    }
     void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                        std::vector<VertexSample>& results) override {
         results.resize(requests.size());
         pool_.forEach(requests.size(), [&](WorkerSamplers& s, size_t i) {
             const SampleRequest& r = requests[i];
-            asBatchRequest(i, [&] { results[i] = s.indirect->estimateSample(slot, r.x, r.n, r.seed); });
+            asBatchRequest(i, [&] { results[i] = s.indirect->estimateRequest(slot, r); });
         });
     }
     // Memory and work of every thread's sources and gathers; build time as

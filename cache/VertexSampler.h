@@ -39,6 +39,15 @@ struct SampleRequest {
     size_t mesh = 0;
     Vec3 x{0.0}, n{0.0, 0.0, 1.0};
     uint32_t seed = 0;
+    // Where `numbered` (a cache vertex's sample): the vertex's own stream
+    // and this sample's number in it (0 for its first). A sampler that
+    // draws its points from a sequence (ScrambledSobol2D) takes block
+    // `index` of stream `stream`, so that a vertex's samples together
+    // stratify its integral more finely with every one. `seed` differs for
+    // every sample; `stream` does not. Not numbered: `seed` alone.
+    bool numbered = false;
+    uint32_t stream = 0;
+    uint32_t index = 0;
 };
 
 // Thrown by sampleBatch: which request failed, and why.

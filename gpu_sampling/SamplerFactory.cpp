@@ -410,6 +410,10 @@ public:
         context_->use();
         return inner_->estimateSample(slot, x, n, seed);
     }
+    VertexSample estimateRequest(size_t slot, const SampleRequest& r) override {
+        context_->use();
+        return inner_->estimateRequest(slot, r);
+    }
     IndirectStats stats() const override { return inner_->stats(); }
 
 private:

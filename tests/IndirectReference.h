@@ -14,6 +14,18 @@
 
 namespace ml::test {
 
+// A source for a gather: `mesh` (its own vertices and normals) holding
+// irradiance `e` everywhere, one sample per vertex.
+inline IrradianceMeshCopy uniformIrradiance(const Mesh& mesh, const Rgb& e) {
+    IrradianceMeshCopy m;
+    m.positions = mesh.positions;
+    m.normals = mesh.normals;
+    m.triangles = mesh.triangles;
+    m.irradiance.assign(mesh.positions.size(), e);
+    m.samples.assign(mesh.positions.size(), 1);
+    return m;
+}
+
 // Indirect irradiance (W·m⁻², RGB) and its standard error.
 struct OneBounce {
     Rgb value{0.0}, error{0.0};

@@ -1,6 +1,7 @@
 // Caustics (issue 16): photons through mirrors and glass into a cache mesh of
 // their own (CausticCache), checked against irradiance known exactly, and
 // the indirect ray gather through a mirror.
+#include "IndirectReference.h"
 #include "SessionRun.h"
 #include "TestScenes.h"
 
@@ -378,13 +379,7 @@ TEST(Caustics, RayGatherFollowsAMirror) {
     const double r = 0.9, e0 = 3.0;
     const Scene scene = sceneOf("gather", {emitter(), grey(), mirror(r)},  // the emitter unused: no light
                                 {test::floorMesh(), quadMesh("mirror", 2, Vec3(-1.5, 1.0, -1.5), 3.0 * kX, 3.0 * kZ)});
-    IrradianceMeshCopy source;
-    const Mesh& floor = scene.meshes[0];
-    source.positions = floor.positions;
-    source.normals = floor.normals;
-    source.triangles = floor.triangles;
-    source.irradiance.assign(floor.positions.size(), Rgb(e0));
-    source.samples.assign(floor.positions.size(), 1);
+    const IrradianceMeshCopy source = test::uniformIrradiance(scene.meshes[0], Rgb(e0));
     const MeshIrradianceLookup lookup(source, 0.1, 1e-6);
     const EmbreeScene rays(scene);
     const std::vector<char> closed = closedMeshesOf(scene);

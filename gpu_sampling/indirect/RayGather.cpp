@@ -4,10 +4,12 @@
 #include "core/Error.h"
 #include "core/MeshUtil.h"
 #include "core/Random.h"
+#include "core/ScrambledSobol.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/SpecularChain.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -88,7 +90,7 @@ void RayGather::releaseSource(size_t slot) {
 
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
-                         int strata, uint32_t seed, const EmittingFaces* emitting, double* reach) {
+                         int strata, const GatherDraw& draw, const EmittingFaces* emitting, double* reach) {
     if (emitting && emitting->empty()) emitting = nullptr;
     const Vec3 n = glm::normalize(nIn);
     Vec3 t, b;
@@ -110,34 +112,39 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
     const SpecularChainSettings chain;
     Rgb sum(0.0);
     double inverseDistances = 0;  // Σ 1/t over first hits (a miss: 0)
-    uint32_t state = hash32(seed ^ 0x2545f491u);
+    uint32_t state = hash32(draw.seed ^ 0x2545f491u);
     const auto next = [&state] {
         state = hash32(state + 0x9e3779b9u);
         return (state >> 8) * (1.0 / 16777216.0);
     };
-    for (int i = 0; i < s; ++i)
-        for (int j = 0; j < s; ++j) {
-            // Cosine-weighted by Malley's method over a jittered stratum.
-            const double u1 = (i + next()) / s, u2 = (j + next()) / s;
-            const Vec3 w = cosineDirection(n, t, b, u1, u2);
-            // Through mirrors and glass to the diffuse surface behind, each
-            // surface on the way read on the side the ray arrives on (a
-            // closed object's inside is black); a smooth layer's own Kd too.
-            followSpecularChain(rays, closedMeshes, origin, w, chain, next, [&](const ChainVertex& v) {
-                // The first surface met, whatever it is: a mirror's
-                // reflection changes with x at its distance too. Not nearer
-                // than the origin's nudge, which bounds 1/t.
-                if (v.layers == 0) inverseDistances += 1 / std::max(v.hit.t, eps);
-                Rgb e(0.0);
-                for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
-                sum += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
-                // A gathered light's face seen from its emitting side: π Le
-                // in this sum's units (π/N Σ L).
-                if (emitting && (*emitting)[v.hit.mesh][v.hit.triangle] &&
-                    glm::dot(v.side, v.surface.geometricNormal) > 0)
-                    sum += v.weight * (kPi * v.surface.ke(scene));
-            });
-        }
+    // A stream per ray count: a vertex's first-pass gathers (fewer rays)
+    // and later ones each number their own blocks.
+    const ScrambledSobol2D sequence(hash32(draw.stream + 0x9e3779b9u * uint32_t(s)));
+    uint32_t block = 1;
+    while (block < uint32_t(s * s)) block <<= 1;
+    const uint32_t first = draw.block * block;
+    for (int k = 0; k < s * s; ++k) {
+        // Cosine-weighted by Malley's method.
+        const std::array<double, 2> u = sequence(first + uint32_t(k));
+        const Vec3 w = cosineDirection(n, t, b, u[0], u[1]);
+        // Through mirrors and glass to the diffuse surface behind, each
+        // surface on the way read on the side the ray arrives on (a
+        // closed object's inside is black); a smooth layer's own Kd too.
+        followSpecularChain(rays, closedMeshes, origin, w, chain, next, [&](const ChainVertex& v) {
+            // The first surface met, whatever it is: a mirror's
+            // reflection changes with x at its distance too. Not nearer
+            // than the origin's nudge, which bounds 1/t.
+            if (v.layers == 0) inverseDistances += 1 / std::max(v.hit.t, eps);
+            Rgb e(0.0);
+            for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
+            sum += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
+            // A gathered light's face seen from its emitting side: π Le
+            // in this sum's units (π/N Σ L).
+            if (emitting && (*emitting)[v.hit.mesh][v.hit.triangle] &&
+                glm::dot(v.side, v.surface.geometricNormal) > 0)
+                sum += v.weight * (kPi * v.surface.ke(scene));
+        });
+    }
     if (reach)
         *reach = inverseDistances > 0 ? double(s * s) / inverseDistances : std::numeric_limits<double>::infinity();
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
@@ -149,12 +156,21 @@ Rgb RayGather::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed
 }
 
 VertexSample RayGather::estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
+    return gather(slot, x, n, GatherDraw(seed));
+}
+
+VertexSample RayGather::estimateRequest(size_t slot, const SampleRequest& r) {
+    if (!r.numbered) return gather(slot, r.x, r.n, GatherDraw(r.seed));
+    return gather(slot, r.x, r.n, GatherDraw(r.seed, r.stream, r.index));
+}
+
+VertexSample RayGather::gather(size_t slot, const Vec3& x, const Vec3& n, const GatherDraw& draw) {
     ML_ASSERT(slot < sources_.size() && sources_[slot], "ray gather: source ", slot, " is not built");
     const auto start = std::chrono::steady_clock::now();
     const Source& source = *sources_[slot];
     // Bounce 1 (source 0, direct light) also reads the gathered lights.
     VertexSample result;
-    result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, seed,
+    result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, draw,
                                              slot == 0 ? &emitting_ : nullptr, &result.reach);
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

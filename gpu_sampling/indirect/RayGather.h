@@ -49,8 +49,20 @@ struct RayGatherSettings {
 using EmittingFaces = std::vector<std::vector<char>>;
 EmittingFaces emittingFacesOf(const Scene& scene, const std::vector<char>& gatheredLights);
 
-// One gather: strata × strata jittered, cosine-weighted rays from x (unit
-// normal n), each taking Kd/π × Σ lookups' irradiance where it lands, on the
+// Where a gather's ray directions come from: block `block` of the
+// scrambled (0,2)-sequence `stream` (ScrambledSobol2D), N = strata² points
+// of a block of 2^⌈log2 N⌉, so the gathers a vertex makes one after another
+// (block 0, 1, 2, ...) stratify its hemisphere together ever finer. `seed`
+// draws the rest (the choices along mirrors and glass). From a seed alone:
+// stream = seed, block 0, one scrambled net per gather.
+struct GatherDraw {
+    GatherDraw(uint32_t seed) : seed(seed), stream(seed) {}  // NOLINT: a seed is a draw of its own
+    GatherDraw(uint32_t seed, uint32_t stream, uint32_t block) : seed(seed), stream(stream), block(block) {}
+    uint32_t seed = 0, stream = 0, block = 0;
+};
+
+// One gather: strata × strata cosine-weighted rays from x (unit
+// normal n), their directions drawn as `draw` says, each taking Kd/π × Σ lookups' irradiance where it lands, on the
 // side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0),
 // plus the emitted radiance (its texture's, as the path tracer reads it)
 // where it lands on the emitting side of a face `emitting` marks (null or
@@ -60,7 +72,8 @@ EmittingFaces emittingFacesOf(const Scene& scene, const std::vector<char>& gathe
 // the source".
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& n,
-                         int strata, uint32_t seed, const EmittingFaces* emitting = nullptr, double* reach = nullptr);
+                         int strata, const GatherDraw& draw, const EmittingFaces* emitting = nullptr,
+                         double* reach = nullptr);
 // closedMeshes for gatherCachedRadiance: isClosedMesh of every scene mesh.
 std::vector<char> closedMeshesOf(const Scene& scene);
 
@@ -75,9 +88,13 @@ public:
     void releaseSource(size_t slot) override;
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
     VertexSample estimateSample(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
+    // A vertex's gathers as successive blocks of its stream (GatherDraw).
+    VertexSample estimateRequest(size_t slot, const SampleRequest& r) override;
     IndirectStats stats() const override;
 
 private:
+    VertexSample gather(size_t slot, const Vec3& x, const Vec3& n, const GatherDraw& draw);
+
     struct Source {
         std::vector<IrradianceMeshCopy> meshes;
         std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
