@@ -71,6 +71,12 @@ public:
     virtual void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                                std::vector<VertexSample>& results);
     virtual IndirectStats stats() const = 0;
+    // How far into its faces a bounce mesh's border vertex is gathered, in
+    // its shortest edge (CacheLayout::borderInset). A thousandth by
+    // default: a voxel gather sees the scene at the voxels' resolution, and
+    // further in its slices' steps show (the furnace's worst pixel 3.7% off
+    // at a twentieth, 3% allowed).
+    virtual double borderInset() const { return 1e-3; }
 };
 
 }  // namespace ml

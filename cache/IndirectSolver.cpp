@@ -152,6 +152,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         // Every bounce lays the same surfaces (bounceCacheSettings changes
         // only tolerances and the smallest edges): cut along contacts once.
         CacheLayout layout = bounceCacheLayout();
+        layout.borderInset = estimator.borderInset();
         if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
         layout.surfaces = surfaces_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));

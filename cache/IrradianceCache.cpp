@@ -285,6 +285,7 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     s.diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     s.sceneFingerprint = detail::sceneFingerprint(scene);
     s.insetBorders = layout.insetBorders;
+    s.borderInset = layout.borderInset;
     if (layout.coverage)
         for (size_t l = 0; l < scene.lights.size(); ++l)
             if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
@@ -628,8 +629,9 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     // see it edge-on and count none of its light; the limit from inside the
     // object, which is what the mesh interpolates, counts it. So such a
     // point is moved a thousandth of its shortest edge into its own faces;
-    // with CacheLayout::insetBorders every border vertex is (a floor's edge
-    // under a wall, which would otherwise see both rooms).
+    // with CacheLayout::insetBorders every border vertex is, by
+    // CacheLayout::borderInset of it (a floor's edge under a wall, which
+    // would otherwise see both rooms).
     const double eps = 1e-9 * s.diagonal;
     const Vec3 own = toVec3(mesh.normal(vh));
     bool onEmitter = false;
@@ -656,7 +658,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     const Vec3 n = toVec3(mesh.normal(vh));
     inward -= glm::dot(inward, n) * n;
     if (!(glm::length(inward) > 0) || !(shortest < kInf)) return x;
-    return x + 1e-3 * shortest * glm::normalize(inward);
+    return x + (s.insetBorders ? s.borderInset : 1e-3) * shortest * glm::normalize(inward);
 }
 
 SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed) {

@@ -152,11 +152,14 @@ struct CacheLayout {
     };
     size_t meshes = 0;  // 0: one per light
     BackFaces backFaces = BackFaces::LitFromBehind;
-    // Sample every vertex on an object's border a hair inside its faces,
-    // not only those an emitter's plane passes through (see position()):
-    // for gathers, to which a floor's edge under a wall would otherwise see
-    // both rooms.
+    // Sample every vertex on an object's border `borderInset` of its
+    // shortest edge inside its faces, not only those an emitter's plane
+    // passes through (a thousandth; see position()): for gathers, to which
+    // a floor's edge under a wall would otherwise see both rooms, and a
+    // block's foot only the sliver of floor beside it
+    // (IndirectEstimator::borderInset).
     bool insetBorders = false;
+    double borderInset = 1e-3;
     // Direct light with lights sharing (LightCoverage.h): when it shares,
     // mesh l < L keeps only the faces where light l has weight, and one more
     // mesh, the shared one, covers the whole scene. Null: a mesh per light

@@ -236,6 +236,7 @@ public:
     VertexSample estimateRequest(size_t slot, const SampleRequest& r) override {
         return pool_.own.indirect->estimateRequest(slot, r);
     }
+    double borderInset() const override { return pool_.own.indirect->borderInset(); }
     void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                        std::vector<VertexSample>& results) override {
         results.resize(requests.size());

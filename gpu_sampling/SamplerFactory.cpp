@@ -415,6 +415,7 @@ public:
         return inner_->estimateRequest(slot, r);
     }
     IndirectStats stats() const override { return inner_->stats(); }
+    double borderInset() const override { return inner_->borderInset(); }
 
 private:
     std::unique_ptr<GlContext> context_;
