@@ -2,6 +2,7 @@
 // (cache/GatheredLights.h): which lights are chosen, that the direct meshes
 // leave them out, that the ray gather adds exactly their light, and that a
 // render is the same either way.
+#include "IndirectReference.h"
 #include "RunCommand.h"
 #include "TempDirTest.h"
 #include "TestScenes.h"
@@ -89,13 +90,7 @@ TEST(GatheredLights, TheirDirectMeshesAreEmptyAndTheSharedMeshLeavesThemOut) {
 TEST(GatheredLights, TheRayGatherAddsExactlyTheirLight) {
     const Scene scene = lampAndGlowingWall();
     const size_t glow = lightNamed(scene, "glow");
-    IrradianceMeshCopy zero;
-    const Mesh& floor = scene.meshes[1];
-    zero.positions = floor.positions;
-    zero.normals.assign(floor.positions.size(), kY);
-    zero.irradiance.assign(floor.positions.size(), Rgb(0.0));
-    zero.samples.assign(floor.positions.size(), 1);
-    for (const auto& t : floor.triangles) zero.triangles.push_back({t.x, t.y, t.z});
+    const IrradianceMeshCopy zero = test::uniformIrradiance(scene.meshes[1], Rgb(0.0));  // the floor, facing +y
 
     RayGatherSettings settings;
     settings.rays = 256;
