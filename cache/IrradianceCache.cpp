@@ -377,10 +377,37 @@ bool IrradianceCache::tighten() {
 
 int IrradianceCache::level() const { return impl_->state.level; }
 
+double IrradianceCache::sampleNoise() const { return detail::effectiveSettings(impl_->state).sampleNoise; }
+
 namespace detail {
+
+double measuredSampleNoise(const CacheState& s) {
+    // Pooled as a ratio of sums, Σ (n−1)·s² / Σ (n−1)·mean²: each vertex's
+    // spread counts by its degrees of freedom and by its light, so the dark
+    // vertices, whose relative spread is large and shown faint, do not
+    // decide it.
+    double spread = 0, level = 0, freedom = 0;
+    const auto add = [&](const VertexStats& st) {
+        if (st.count < 2) return;
+        const double n = st.count, mean = st.sumLum / n;
+        spread += std::max(0.0, st.sumLumSq - st.sumLum * mean);  // (n−1)·s²
+        level += (n - 1) * mean * mean;
+        freedom += n - 1;
+    };
+    for (const LightMesh& lm : s.meshes) {
+        for (const VertexStats& st : lm.stats) add(st);
+        for (const VertexStats& st : lm.gridStats) add(st);
+    }
+    if (freedom < kMeasuredNoiseFreedom || !(level > 0)) return 0;
+    return std::sqrt(spread / level);
+}
 
 CacheSettings effectiveSettings(const CacheState& s) {
     CacheSettings c = s.settings;
+    if (c.sampleNoise > 0) {
+        const double measured = measuredSampleNoise(s);
+        if (measured > 0) c.sampleNoise = std::min(measured, 0.99);
+    }
     if (s.level == 0) return c;
     const double f = std::ldexp(1.0, -s.level);
     c.splitTolerance *= f;

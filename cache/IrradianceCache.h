@@ -64,7 +64,8 @@ struct CacheSettings {
     double singleSampleNoise = 0.002;
     // The relative error of any one sample, for samplers that cannot tell a
     // noisy sample from an exact one (indirect gathers): > 0 makes every
-    // vertex with a single sample count as that noisy. 0 for direct light.
+    // vertex with a single sample count as that noisy, until the cache's
+    // resampled vertices measure it (sampleNoise()). 0 for direct light.
     double sampleNoise = 0;
     // Budgets over all meshes: refinement stops splitting at either.
     // Lights share: a light keeps a mesh of its own only where it gives at
@@ -190,6 +191,12 @@ public:
     bool tighten();
     int level() const;
     static constexpr int kMaxRefinementLevel = 6;
+    // The relative error of one sample that a vertex sampled once is taken
+    // to have: CacheSettings::sampleNoise as assumed, until the vertices
+    // sampled more than once measure it (their spreads pooled, weighted by
+    // their light, over at least 64 degrees of freedom). 0 for a sampler
+    // whose samples can be exact (direct light).
+    double sampleNoise() const;
     // Meshes in all: lightCount(), then the shared mesh if there is one.
     size_t meshCount() const;
     // Meshes of their own: one per light (or per CacheLayout::meshes).

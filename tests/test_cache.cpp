@@ -348,6 +348,37 @@ TEST(CacheRefinement, AStepBesideANearSurfaceSplitsWhereNoiseHidesItsResidual) {
     EXPECT_GT(withReach, 4 * without);
 }
 
+// A sampler whose every sample is noisy is taken to err by the assumed
+// sampleNoise per sample only until the vertices sampled more than once
+// measure it: samples uniform within 1 ± 0.2·√3 (standard deviation 0.2)
+// measure 0.2. Tolerance 7.5%: the pooled estimate is a ratio of sums over
+// the bench's 356 vertices of 4 samples each, ~1,070 degrees of freedom
+// (its relative standard error is 1.3% for this distribution), and the
+// means' own spread lowers it by about 0.2²/2n, 0.5%.
+TEST(CacheRefinement, OneSamplesNoiseIsMeasuredOnceVerticesAreResampled) {
+    constexpr double kSpread = 0.2;
+    auto noisy = samplerOf([](size_t, const Vec3&, const Vec3&, uint32_t seed) {
+        const double u = hash32(seed) * (1.0 / 4294967296.0);
+        return VertexSample{Rgb(1 + kSpread * std::sqrt(3.0) * (2 * u - 1)), 1.0, false};
+    });
+    CacheSettings s = coarse();
+    s.sampleNoise = 0.03;
+    s.noiseTolerance = 1e-3;  // every vertex is sampled again
+    s.splitTolerance = 0.9;   // and none split: the light is uniform
+    s.maxSamplesPerVertex = 4;
+    IrradianceCache cache(bench(), s);
+    cache.refine(noisy, 1 << 20, 1);  // one sample each: nothing measured yet
+    EXPECT_EQ(cache.sampleNoise(), 0.03);
+    for (int round = 0; round < 3; ++round) cache.refine(noisy, 1 << 20, 1);
+    std::printf("measured noise of one sample: %.4f (%zu vertices)\n", cache.sampleNoise(), cache.totalVertices());
+    EXPECT_NEAR(cache.sampleNoise(), kSpread, 0.075 * kSpread);
+    // Direct light's samplers (sampleNoise 0) can be exact: nothing is assumed or measured.
+    s.sampleNoise = 0;
+    IrradianceCache direct(bench(), s);
+    for (int round = 0; round < 4; ++round) direct.refine(noisy, 1 << 20, 1);
+    EXPECT_EQ(direct.sampleNoise(), 0.0);
+}
+
 TEST(CacheRefinement, SplitsAreConformingAndRespectTheMinimumSize) {
     CacheSettings s = coarse();
     IrradianceCache cache(bench(), s);

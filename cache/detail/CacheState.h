@@ -99,9 +99,16 @@ struct CacheState {
     size_t backFaces = 0;         // reversed copies of faces lit from behind
 };
 
+// The relative error of one sample (CacheSettings::sampleNoise) as the
+// cache's own resampled vertices measure it: their spreads pooled, once
+// they have kMeasuredNoiseFreedom degrees of freedom between them; 0 before.
+constexpr double kMeasuredNoiseFreedom = 64;
+double measuredSampleNoise(const CacheState& s);
+
 // The settings at the cache's level: CacheState::level halvings of the
 // split and noise tolerances, and as many doublings of the samples per
-// vertex (at most 4096).
+// vertex (at most 4096). A sampler whose every sample is noisy
+// (sampleNoise > 0) has its assumed noise replaced by the measured one.
 CacheSettings effectiveSettings(const CacheState& s);
 
 // A hash of everything in the scene that the cache depends on: geometry,
