@@ -113,7 +113,7 @@ void IndirectChoice::decide(const Scene& scene) {
             const double shrink = base * 16;
             // From the default, not the current size: decide() may run twice.
             gather.imageSize = std::max(20, int(std::lround(GatherSettings().imageSize * shrink)));
-            baseReason += concat("; ", rayGatherSettings(*this).raysCast(),
+            baseReason += concat("; ", rayGatherSettings(*this).rays,
                                  " rays per gather, fewer as the vertices are more (--gather-size keeps them)");
         }
     }
@@ -151,9 +151,9 @@ std::string IndirectChoice::describe() const {
                                              : concat("its voxel and ", gather.nearVoxels, " more each way"),
                       ")");
     if (method == "raytrace")
-        return concat("raytrace: ", rayGatherSettings(*this).raysCast(),
-                      " cosine-weighted rays (Embree; a vertex's gathers successive blocks of one scrambled Sobol "
-                      "sequence) per gather, reading the cache meshes' radiance where they land (consistent: no proxy)");
+        return concat("raytrace: ", rayGatherSettings(*this).rays,
+                      " stratified cosine-weighted rays (Embree) per gather, reading the cache meshes' radiance where "
+                      "they land (consistent: no proxy)");
     if (method == "volume")
         return concat("volume: order-2 SH probes, ", volume.probes, " along the scene's longest side, each from ",
                       6 * volume.faceSize * volume.faceSize, " cube-map rays (Embree) reading the cache; 8 probes "

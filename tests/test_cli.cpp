@@ -175,30 +175,28 @@ TEST_F(Cli, PlanPrintsWhatWouldBeSimulated) {
 // fraction, with no output. Without it the ray gather's base is the mean
 // free path over 7.5: the Cornell box's 4V/S is 0.367 of its diagonal
 // (5 blocks' worth of faces inside a 555 mm room), so 1/20.4, printed 1/20,
-// with 40 x 16/20.4 = 31 -> 31²/4 = 240 rays asked, cast as 15² rounded up
-// to a power of two: 256 (gatherRayCount); the office's (0.231) gives less
-// than 1/32, so 1/32 and the least 100 rays asked: 128 cast.
+// with 40 x 16/20.4 = 31 -> 31²/4 = 240 rays; the office's (0.231) gives
+// less than 1/32, so 1/32 and the least 100 rays.
 TEST_F(Cli, IndirectEdgeSetsTheBounceMeshesBase) {
     const CommandResult plain = runMeshlight("plan cornell");
     ASSERT_EQ(0, plain.status) << plain.output;
     EXPECT_NE(plain.output.find("indirect caches: one mesh per bounce, edges at most 1/20 of the scene (the mean "
                                 "free path 4V/S over 7.5, 4V/S being 0.367 of the diagonal"),
               std::string::npos) << plain.output;
-    EXPECT_NE(plain.output.find("raytrace: 256 cosine-weighted"), std::string::npos) << plain.output;
+    EXPECT_NE(plain.output.find("raytrace: 240 stratified"), std::string::npos) << plain.output;
     const CommandResult office = runMeshlight("plan office");
     ASSERT_EQ(0, office.status) << office.output;
     EXPECT_NE(office.output.find("edges at most 1/32 of the scene (the mean free path"), std::string::npos)
         << office.output;
-    EXPECT_NE(office.output.find("raytrace: 128 cosine-weighted"), std::string::npos) << office.output;
+    EXPECT_NE(office.output.find("raytrace: 100 stratified"), std::string::npos) << office.output;
     // Once gathered, each base is split down to half its edge (the
     // office's 1/32 to 1/64; the Cornell box's 1/20.4 to 1/40.8).
     EXPECT_NE(office.output.find("then split down to 1/64 once gathered"), std::string::npos) << office.output;
     EXPECT_NE(plain.output.find("then split down to 1/41 once gathered"), std::string::npos) << plain.output;
-    // --gather-size keeps its rays whatever base is chosen: 40²/4 = 400
-    // asked, 512 cast.
+    // --gather-size keeps its rays whatever base is chosen.
     const CommandResult asked = runMeshlight("plan office --gather-size 40");
     ASSERT_EQ(0, asked.status) << asked.output;
-    EXPECT_NE(asked.output.find("raytrace: 512 cosine-weighted"), std::string::npos) << asked.output;
+    EXPECT_NE(asked.output.find("raytrace: 400 stratified"), std::string::npos) << asked.output;
     const CommandResult fine = runMeshlight("plan cornell --indirect-edge 0.03125");
     ASSERT_EQ(0, fine.status) << fine.output;
     EXPECT_NE(fine.output.find("indirect caches: one mesh per bounce, edges at most 1/32 of the scene"),

@@ -16,19 +16,6 @@
 
 namespace ml {
 
-namespace {
-// Strata per side for about `rays` rays.
-int strataFor(double rays) { return std::max(4, int(std::lround(std::sqrt(rays)))); }
-}  // namespace
-
-uint32_t RayGatherSettings::raysCast() const { return gatherRayCount(strataFor(std::max(16.0, double(rays)))); }
-
-uint32_t gatherRayCount(int strata) {
-    uint32_t count = 1;
-    while (count < uint32_t(strata) * uint32_t(strata)) count <<= 1;
-    return count;
-}
-
 void RayGatherSettings::validate() const {
     if (rays < 4 || rays > 65536) throw InputError(concat("ray gather: ", rays, " rays is not within 4..65536"));
 }
@@ -84,15 +71,17 @@ void RayGather::setSource(size_t slot, const std::vector<IrradianceMeshCopy>& ir
         source->bytes += m.positions.size() * (2 * sizeof(Vec3) + sizeof(Rgb) + 4) + m.triangles.size() * 12 +
                          source->lookups.back()->memoryBytes();
     }
-    source->strata = strataFor(std::max(16.0, settings_.rays * std::clamp(importance, 0.0, 1.0)));
+    const double rays = std::max(16.0, settings_.rays * std::clamp(importance, 0.0, 1.0));
+    source->strata = std::max(4, int(std::lround(std::sqrt(rays))));
     sources_[slot] = std::move(source);
     stats_.buildSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     size_t held = 0;
     for (const auto& s : sources_)
         if (s) held += s->bytes;
     stats_.sourceBytes = held;
-    stats_.source = concat(sources_[slot]->meshes.size(), " meshes looked up, ",
-                           gatherRayCount(sources_[slot]->strata), " rays per gather");
+    stats_.source = concat(sources_[slot]->meshes.size(), " meshes looked up, ", sources_[slot]->strata *
+                                                                                   sources_[slot]->strata,
+                           " rays per gather");
 }
 
 void RayGather::releaseSource(size_t slot) {
@@ -129,13 +118,14 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         return (state >> 8) * (1.0 / 16777216.0);
     };
     // A stream per ray count: a vertex's first-pass gathers (fewer rays)
-    // and later ones each number their own blocks, each a whole block.
+    // and later ones each number their own blocks.
     const ScrambledSobol2D sequence(hash32(draw.stream + 0x9e3779b9u * uint32_t(s)));
-    const uint32_t count = gatherRayCount(s);
-    const uint32_t first = draw.block * count;
-    for (uint32_t k = 0; k < count; ++k) {
+    uint32_t block = 1;
+    while (block < uint32_t(s * s)) block <<= 1;
+    const uint32_t first = draw.block * block;
+    for (int k = 0; k < s * s; ++k) {
         // Cosine-weighted by Malley's method.
-        const std::array<double, 2> u = sequence(first + k);
+        const std::array<double, 2> u = sequence(first + uint32_t(k));
         const Vec3 w = cosineDirection(n, t, b, u[0], u[1]);
         // Through mirrors and glass to the diffuse surface behind, each
         // surface on the way read on the side the ray arrives on (a
@@ -156,9 +146,9 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         });
     }
     if (reach)
-        *reach = inverseDistances > 0 ? double(count) / inverseDistances : std::numeric_limits<double>::infinity();
+        *reach = inverseDistances > 0 ? double(s * s) / inverseDistances : std::numeric_limits<double>::infinity();
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
-    return sum / double(count);
+    return sum / double(s * s);
 }
 
 Rgb RayGather::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {

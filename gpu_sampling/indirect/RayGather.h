@@ -32,9 +32,9 @@ class EmbreeScene;
 class MeshIrradianceLookup;
 
 struct RayGatherSettings {
-    // Rays per estimate at importance 1, as √rays × √rays strata rounded
-    // up to a power of two (gatherRayCount); typical 64..1024. A weaker
-    // source (importance s) gets rays × s, at least 16.
+    // Rays per estimate at importance 1, in √rays × √rays cosine strata;
+    // typical 64..1024. A weaker source (importance s) gets rays × s, at
+    // least 16.
     int rays = 256;
     // Per scene light, 1 when the gather of source 0 (bounce 1) adds the
     // light's emitted radiance where its rays land on its emitting side
@@ -42,8 +42,6 @@ struct RayGatherSettings {
     // none.
     std::vector<char> gatheredLights;
     void validate() const;  // InputError unless 4 <= rays <= 65536
-    // The rays a gather at importance 1 casts (gatherRayCount).
-    uint32_t raysCast() const;
 };
 
 // Per scene mesh, per triangle: 1 where a gather adds the face's emitted
@@ -63,13 +61,7 @@ struct GatherDraw {
     uint32_t seed = 0, stream = 0, block = 0;
 };
 
-// The rays a gather of `strata` × `strata` casts: strata² rounded up to a
-// power of two, so that each gather is a whole block of its sequence (a
-// net). The first 100 of a block of 128 points are even only at 1/32 of
-// the square, about 1.8 times a 10 × 10 jittered grid's variance.
-uint32_t gatherRayCount(int strata);
-
-// One gather: gatherRayCount(strata) cosine-weighted rays from x (unit
+// One gather: strata × strata cosine-weighted rays from x (unit
 // normal n), their directions drawn as `draw` says, each taking Kd/π × Σ lookups' irradiance where it lands, on the
 // side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0),
 // plus the emitted radiance (its texture's, as the path tracer reads it)
