@@ -32,8 +32,8 @@ CacheSettings IndirectSettings::defaultCache() {
     c.contactCloseness = 0.1;
     // One 40×40 jittered slice gather in the Cornell box: 0.5–2% relative
     // spread between seeds; assume 3% until the vertices sampled twice
-    // measure it (IrradianceCache::sampleNoise: the ray gather's 100–256
-    // rays measure 5–6% in the Cornell box's first bounce).
+    // measure it (IrradianceCache::sampleNoise: the ray gather measured
+    // 5–6% per gather of 256 rays in the Cornell box's first bounce).
     c.sampleNoise = 0.03;
     return c;
 }
