@@ -76,7 +76,7 @@ public:
     // default: a voxel gather sees the scene at the voxels' resolution, and
     // further in its slices' steps show (the furnace's worst pixel 3.7% off
     // at a twentieth, 3% allowed).
-    virtual double borderInset() const { return 1e-3; }
+    virtual double borderInset() const { return CacheLayout::kDefaultInset; }
 };
 
 }  // namespace ml

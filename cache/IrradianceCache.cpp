@@ -685,7 +685,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     const Vec3 n = toVec3(mesh.normal(vh));
     inward -= glm::dot(inward, n) * n;
     if (!(glm::length(inward) > 0) || !(shortest < kInf)) return x;
-    return x + (s.insetBorders ? s.borderInset : 1e-3) * shortest * glm::normalize(inward);
+    return x + (s.insetBorders ? s.borderInset : CacheLayout::kDefaultInset) * shortest * glm::normalize(inward);
 }
 
 SampleRequest requestFor(const CacheState& s, const PendingSample& p, uint32_t seed) {

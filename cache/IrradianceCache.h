@@ -153,14 +153,17 @@ struct CacheLayout {
     };
     size_t meshes = 0;  // 0: one per light
     BackFaces backFaces = BackFaces::LitFromBehind;
+    // How far a vertex in an emitter's plane is sampled inside its faces, in
+    // its shortest edge, and every border vertex's by default.
+    static constexpr double kDefaultInset = 1e-3;
     // Sample every vertex on an object's border `borderInset` of its
     // shortest edge inside its faces, not only those an emitter's plane
-    // passes through (a thousandth; see position()): for gathers, to which
+    // passes through (kDefaultInset; see position()): for gathers, to which
     // a floor's edge under a wall would otherwise see both rooms, and a
     // block's foot only the sliver of floor beside it
     // (IndirectEstimator::borderInset).
     bool insetBorders = false;
-    double borderInset = 1e-3;
+    double borderInset = kDefaultInset;
     // Direct light with lights sharing (LightCoverage.h): when it shares,
     // mesh l < L keeps only the faces where light l has weight, and one more
     // mesh, the shared one, covers the whole scene. Null: a mesh per light

@@ -82,7 +82,7 @@ struct CacheState {
     double diagonal = 1;          // of the scene's bounds
     std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
-    double borderInset = 1e-3;        // CacheLayout::borderInset
+    double borderInset = CacheLayout::kDefaultInset;  // CacheLayout::borderInset
     uint64_t sceneFingerprint = 0;
     // Which lights are gathered rather than cached (LightCoverage::gathered),
     // folded into the settings' fingerprint in the file: a cache made with
