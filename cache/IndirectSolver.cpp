@@ -107,9 +107,9 @@ CacheLayout bounceCacheLayout() {
     CacheLayout layout;
     layout.meshes = 1;
     // Sides of open surfaces as for direct light: a side no light
-    // reaches gets no copy (and shows black). Faces with any scene
-    // behind them would also copy the insides of open boxes, which
-    // gather little but the voxels' leaks and cost as much as the rest.
+    // reaches gets no copy (and shows black). A gather that keeps a thin
+    // surface's sides apart also copies the backs reflected light reaches
+    // (IndirectSolver::step).
     layout.backFaces = CacheLayout::BackFaces::LitFromBehind;
     layout.insetBorders = true;
     return layout;
@@ -153,6 +153,9 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         // only tolerances and the smallest edges): cut along contacts once.
         CacheLayout layout = bounceCacheLayout();
         layout.borderInset = estimator.borderInset();
+        // The back of a luminaire hung under a ceiling too, not the inside
+        // of an open box (BackFaceReach.h).
+        if (estimator.separatesSides()) layout.backFaces = CacheLayout::BackFaces::ReachedByScene;
         if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
         layout.surfaces = surfaces_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));

@@ -1,10 +1,12 @@
 #include "IrradianceCache.h"
 
+#include "BackFaceReach.h"
 #include "LightCoverage.h"
 
 #include "core/Error.h"
 #include "core/MeshUtil.h"
 #include "core/Random.h"
+#include "core/raytrace/EmbreeScene.h"
 #include "detail/CacheImpl.h"
 
 #include <algorithm>
@@ -151,8 +153,15 @@ bool sceneBehind(const Scene& scene, const Mesh& m, size_t t) {
 
 size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const std::vector<bool>& skip,
                      CacheLayout::BackFaces rule, CacheTriMesh& mesh, size_t& backFaces) {
+    // Rays only for the faces the cheap tests leave undecided, from a
+    // scene built for the first of them.
+    std::unique_ptr<EmbreeScene> rays;
+    Bounds3 object;
     const auto needsBack = [&](const Mesh& m, size_t t) {
-        return rule == CacheLayout::BackFaces::LitFromBehind ? litFromBehind(scene, m, t) : sceneBehind(scene, m, t);
+        if (litFromBehind(scene, m, t)) return true;
+        if (rule == CacheLayout::BackFaces::LitFromBehind || !sceneBehind(scene, m, t)) return false;
+        if (!rays) rays = std::make_unique<EmbreeScene>(scene);
+        return backLooksOutOfObject(*rays, scene, m.triangle(t), object);
     };
     size_t detached = 0;
     backFaces = 0;
@@ -162,6 +171,8 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
         // Surfaces lit from both sides (open objects with a light behind)
         // get a reversed copy, facing the other way, with vertices of its own.
         if (!isClosedMesh(m)) {
+            object = Bounds3();
+            for (const Vec3& p : scene.meshes[mi].positions) object.extend(p);
             std::map<uint32_t, CacheTriMesh::VertexHandle> back;
             for (size_t t = 0; t < m.triangles.size(); ++t) {
                 if (!needsBack(m, t) || !(m.area(t) > 0)) continue;

@@ -147,9 +147,10 @@ struct CacheLayout {
     enum class BackFaces {
         // Faces a light shines on from behind: direct light.
         LitFromBehind,
-        // Faces with any part of the scene behind them (their plane cuts the
-        // scene's bounds): light reflected by any surface may arrive there.
-        SceneBehind,
+        // Those, and faces whose back looks out at the scene beyond their
+        // own object (BackFaceReach.h): light reflected by any surface may
+        // arrive there. Not the insides of open objects.
+        ReachedByScene,
     };
     size_t meshes = 0;  // 0: one per light
     BackFaces backFaces = BackFaces::LitFromBehind;

@@ -237,6 +237,7 @@ public:
         return pool_.own.indirect->estimateRequest(slot, r);
     }
     double borderInset() const override { return pool_.own.indirect->borderInset(); }
+    bool separatesSides() const override { return pool_.own.indirect->separatesSides(); }
     void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                        std::vector<VertexSample>& results) override {
         results.resize(requests.size());

@@ -416,6 +416,7 @@ public:
     }
     IndirectStats stats() const override { return inner_->stats(); }
     double borderInset() const override { return inner_->borderInset(); }
+    bool separatesSides() const override { return inner_->separatesSides(); }
 
 private:
     std::unique_ptr<GlContext> context_;

@@ -2,12 +2,14 @@
 // irradiance functions (no GL): what is split, where, how a saved cache
 // resumes, which files are refused, and what readers of snapshots see.
 #include "cache/CacheWorker.h"
+#include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
 #include "TestSamplers.h"
 #include "TestScenes.h"
 #include "core/Error.h"
 #include "core/Random.h"
 #include "core/scenes/BenchScene.h"
+#include "core/scenes/CornellBox.h"
 
 #include <gtest/gtest.h>
 
@@ -676,4 +678,48 @@ TEST(CacheGrid, ADenseObjectIsSampledOnAGridAndInterpolatedToItsVertices) {
     loaded.load(path);
     expectSameView(m, loaded.copyMesh(0));
     std::filesystem::remove(path);
+}
+
+// A panel hung 2 cm under a ceiling and an open box (no bottom) standing on
+// the floor: indirect light reaches the panel's back (the ceiling above it
+// reflects light that came in from the room), never the box's inside.
+Scene panelAndOpenBox(bool withPanel) {
+    using namespace test;
+    Material grey;
+    grey.name = "grey";
+    grey.kd = Rgb(0.6);
+    Material panel = grey;
+    panel.name = "panel";
+    panel.ke = Rgb(5.0);
+    std::vector<Mesh> meshes = {quadMesh("floor", 0, Vec3(-2, 0, -2), 4.0 * kZ, 4.0 * kX),
+                                quadMesh("ceiling", 0, Vec3(-2, 2.5, -2), 4.0 * kX, 4.0 * kZ)};
+    Mesh box;
+    box.name = "box";
+    const Vec3 lo(0.5, 0, 0.5);
+    const double a = 0.5;
+    addQuad(box, 0, lo + a * kY, a * kZ, a * kX);  // top, facing +y
+    addQuad(box, 0, lo, a * kY, a * kX);           // z = 0.5, facing −z
+    addQuad(box, 0, lo + a * kZ, a * kX, a * kY);  // z = 1, facing +z
+    addQuad(box, 0, lo, a * kZ, a * kY);           // x = 0.5, facing −x
+    addQuad(box, 0, lo + a * kX, a * kY, a * kZ);  // x = 1, facing +x
+    meshes.push_back(box);
+    if (withPanel) meshes.push_back(quadMesh("panel", 1, Vec3(-0.3, 2.48, -0.3), 0.6 * kX, 0.6 * kZ));  // facing down
+    return sceneOf("panel and open box", {grey, panel}, meshes);
+}
+
+TEST(CacheLayout, BounceMeshesCopyTheBacksLightReachesButNotAnOpenBoxsInside) {
+    // Direct light: no light is behind any face, so no copy at all.
+    const Scene scene = panelAndOpenBox(true);
+    EXPECT_EQ(IrradianceCache(scene, CacheSettings{}).backFaceCount(), 0u);
+    // Indirect light: the panel's two triangles get a reversed copy (the
+    // ceiling 2 cm behind them reflects light into the gap), the box's
+    // faces none whichever way they face: their backs see the box and the
+    // floor it closes.
+    CacheLayout layout = bounceCacheLayout();
+    EXPECT_EQ(IrradianceCache(scene, CacheSettings{}, layout).backFaceCount(), 0u);  // as for direct light
+    layout.backFaces = CacheLayout::BackFaces::ReachedByScene;  // the ray gather's
+    EXPECT_EQ(IrradianceCache(scene, CacheSettings{}, layout).backFaceCount(), 2u);
+    EXPECT_EQ(IrradianceCache(panelAndOpenBox(false), CacheSettings{}, layout).backFaceCount(), 0u);
+    // The Cornell box's blocks are open boxes too: its bounces copy nothing.
+    EXPECT_EQ(IrradianceCache(makeCornellBox(), CacheSettings{}, layout).backFaceCount(), 0u);
 }
