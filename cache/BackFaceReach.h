@@ -15,6 +15,10 @@
 // by the floor it stands on. A copy there would be gathered and refined for
 // nothing any camera sees.
 //
+// The object is a scene mesh: where a file merges a luminaire and the
+// ceiling it hangs from into one mesh, the luminaire's back sees only that
+// mesh, and gets no copy (as before this rule).
+//
 // Only for gathers that keep a thin surface's two sides apart
 // (IndirectEstimator::separatesSides: the ray gather): through voxels, a
 // partition's back would gather the light leaking through it.
