@@ -8,7 +8,7 @@
 // from the room, bounces and goes out again. Without a copy that back reads
 // black to every gather, as if its albedo were 0: 192 panels of 0.4 m under
 // the office's ceiling (64% of it) left the office's indirect light 2% too
-// dark and the ceiling between the panels 4% (cache/README.md).
+// dark, the top quarter of its image 4% (cache/README.md).
 //
 // The back of a face that sees only its own object is that object's
 // inside: an open box (the Cornell box's blocks have no bottom) is closed
