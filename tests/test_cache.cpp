@@ -713,8 +713,9 @@ TEST(CacheLayout, BounceMeshesCopyTheBacksLightReachesButNotAnOpenBoxsInside) {
     EXPECT_EQ(IrradianceCache(scene, CacheSettings{}).backFaceCount(), 0u);
     // Indirect light: the panel's two triangles get a reversed copy (the
     // ceiling 2 cm behind them reflects light into the gap), the box's
-    // faces none whichever way they face: their backs see the box and the
-    // floor it closes.
+    // faces none: their backs see only the box and the floor that closes
+    // it. (Wound inwards, its sides would get copies: their backs would
+    // face the room.)
     CacheLayout layout = bounceCacheLayout();
     EXPECT_EQ(IrradianceCache(scene, CacheSettings{}, layout).backFaceCount(), 0u);  // as for direct light
     layout.backFaces = CacheLayout::BackFaces::ReachedByScene;  // the ray gather's
