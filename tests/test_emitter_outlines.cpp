@@ -155,3 +155,51 @@ TEST(EmitterOutlines, CompositeGivesEachPixelItsExactShareOfTheLight) {
     // What the outline passes are for: one full pass is several times off.
     EXPECT_GT(worstPlain, 4 * worstOutlined);
 }
+
+TEST(EmitterOutlines, PartsCompositedTogetherEqualEachCompositedAlone) {
+    // render's EXR layers composite every part of one view together, the
+    // outline passes drawn once per emission (Compositor::composite of
+    // several parts): each image must be bit for bit what compositing its
+    // part alone gives. The light alone (its emission), its direct light
+    // without emission, everything, and nothing: two emissions, each met
+    // twice, so both the drawn and the taken passes are checked.
+    const Scene scene = lightOnFloor();
+    CacheSettings cs;
+    cs.maxEdgeFraction = 1.0 / 8.0;
+    IrradianceCache cache(scene, cs);
+    test::sampleEveryVertex(
+        cache, [](size_t, const Vec3& x, const Vec3&, uint32_t) { return Rgb(2.0 + x.x, 1.0, 0.5 + x.z * x.z); }, 1,
+        1);
+    Camera camera;
+    camera.position = Vec3(0.3, 1.5, 0.2);
+    camera.target = Vec3(0, 0.001, 0);
+    camera.up = Vec3(0, 0, -1);
+    camera.fovYDegrees = 70;
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings s;
+    s.width = 48, s.height = 40;
+    s.supersample = 4;
+    s.passes = 2;
+    s.outlinePasses = 8;
+    const GpuCacheMeshes meshes = compositor.upload(cache.copyMeshes(), {});
+    const size_t lights = scene.lights.size();
+    ASSERT_EQ(1u, lights);
+    LightWeights emission = LightWeights::unit(lights), direct = LightWeights::unit(lights),
+                 nothing = LightWeights::unit(lights);
+    emission.light.assign(lights, Rgb(0.0));
+    emission.emission.assign(lights, Rgb(1.0));  // empty: as the lights' weights
+    emission.indirect = Rgb(0.0);
+    direct.emission.assign(lights, Rgb(0.0));
+    nothing.light.assign(lights, Rgb(0.0));
+    nothing.emission.assign(lights, Rgb(0.0));
+    const std::vector<LightWeights> parts = {emission, direct, LightWeights::unit(lights), nothing};
+    const std::vector<ImageRgb> together = compositor.composite(camera, meshes, parts, s);
+    ASSERT_EQ(parts.size(), together.size());
+    for (size_t p = 0; p < parts.size(); ++p) {
+        const ImageRgb alone = compositor.composite(camera, meshes, parts[p], s);
+        EXPECT_TRUE(alone.data == together[p].data) << "part " << p;
+    }
+    // The parts differ, so the comparison could fail: the light is seen.
+    EXPECT_FALSE(together[0].data == together[1].data);
+    EXPECT_FALSE(together[0].data == together[3].data);
+}

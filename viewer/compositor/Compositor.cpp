@@ -1206,6 +1206,23 @@ double Compositor::specularSeconds() const { return impl_->specularSeconds; }
 
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings, ImageRgb* spread) {
+    return composite(camera, meshes, weights, settings, spread, nullptr);
+}
+
+std::vector<ImageRgb> Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes,
+                                            const std::vector<LightWeights>& parts,
+                                            const CompositorSettings& settings) {
+    // The outlines' surface passes of the first part of each emission,
+    // which the parts after it with the same emission take as they are.
+    std::vector<EmitterOutlines> drawn;
+    std::vector<ImageRgb> images;
+    for (const LightWeights& w : parts) images.push_back(composite(camera, meshes, w, settings, nullptr, &drawn));
+    return images;
+}
+
+ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                               const CompositorSettings& settings, ImageRgb* spread,
+                               std::vector<EmitterOutlines>* drawn) {
     const int passes = std::max(1, settings.passes);
     const bool outlines = settings.outlinePasses > 0 && settings.quantity == CompositeQuantity::Radiance &&
                           settings.specular != SpecularPart::Only && !impl_->scene.lights.empty();
@@ -1250,11 +1267,20 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
     }
     for (float& v : sum.data) v /= float(passes);
     if (edges) {
-        const RookPattern fine(settings.outlinePasses);
-        const EmitterOutlines::Rect bounds = edges->emitterBounds();
-        for (int k = 0; k < settings.outlinePasses && !bounds.empty(); ++k) {
-            impl_->drawSurfacesOnly(camera, fine.shifted(settings, k), bounds);
-            edges->addSurfacePass(impl_->readSurfaceSubPixels(bounds), fine.odd(k));
+        const EmitterOutlines* same = nullptr;
+        if (drawn)
+            for (const EmitterOutlines& o : *drawn)
+                if (!same && o.sharesSurfacePasses(*edges)) same = &o;
+        if (same) {
+            edges->copySurfacePasses(*same);
+        } else {
+            const RookPattern fine(settings.outlinePasses);
+            const EmitterOutlines::Rect bounds = edges->emitterBounds();
+            for (int k = 0; k < settings.outlinePasses && !bounds.empty(); ++k) {
+                impl_->drawSurfacesOnly(camera, fine.shifted(settings, k), bounds);
+                edges->addSurfacePass(impl_->readSurfaceSubPixels(bounds), fine.odd(k));
+            }
+            if (drawn) drawn->push_back(*edges);
         }
         edges->apply(sum, spread);
     }

@@ -28,6 +28,7 @@
 
 namespace ml {
 
+class EmitterOutlines;
 class GlContext;
 
 // What a composited sub-pixel holds (black where no surface is seen).
@@ -240,11 +241,25 @@ public:
     // pixel from its area's mean (ImageErrorEstimate.h); zero with one pass.
     ImageRgb composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                        const CompositorSettings& settings, ImageRgb* spread = nullptr);
+    // composite() of each part of one view (render's EXR layers: the same
+    // meshes, camera and settings, weights differing), each image exactly
+    // what composite() returns for it. The emitters' outline passes
+    // (CompositorSettings::outlinePasses) depend only on the view and the
+    // emission the weights give: they are drawn for the first part of each
+    // emission and taken from it by the rest (every light layer has none:
+    // 16 passes saved per layer).
+    std::vector<ImageRgb> composite(const Camera& camera, const GpuCacheMeshes& meshes,
+                                    const std::vector<LightWeights>& parts, const CompositorSettings& settings);
     // Cache triangles the last compose drew: large meshes' cells out of
     // view are skipped (GpuCacheMeshes::Cell).
     size_t drawnTriangles() const;
 
 private:
+    // composite(), taking the outlines' surface passes from `drawn` where
+    // one there has this part's emission, and adding its own there if not
+    // (null: drawn, not kept).
+    ImageRgb composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
+                       const CompositorSettings& settings, ImageRgb* spread, std::vector<EmitterOutlines>* drawn);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -81,6 +81,24 @@ void EmitterOutlines::addSurfacePass(const SubPixels& seen, bool odd) {
     ++surfacePasses_[half];
 }
 
+bool EmitterOutlines::sharesSurfacePasses(const EmitterOutlines& other) const {
+    return width_ == other.width_ && height_ == other.height_ && supersample_ == other.supersample_ &&
+           emission_ == other.emission_;
+}
+
+void EmitterOutlines::copySurfacePasses(const EmitterOutlines& other) {
+    ML_ASSERT(sharesSurfacePasses(other), "surface passes of other outlines");
+    for (size_t i = 0; i < pixels_.size(); ++i) {
+        Pixel& p = pixels_[i];
+        const Pixel& q = other.pixels_[i];
+        for (int h = 0; h < 2; ++h) {
+            for (int c = 0; c < 3; ++c) p.emitted[h][c] = q.emitted[h][c];
+            p.covered[h] = q.covered[h];
+        }
+    }
+    surfacePasses_[0] = other.surfacePasses_[0], surfacePasses_[1] = other.surfacePasses_[1];
+}
+
 size_t EmitterOutlines::apply(ImageRgb& image, ImageRgb* spread) const {
     ML_ASSERT(image.width == width_ && image.height == height_, "outlines of ", width_, "x", height_, " on a ",
               image.width, "x", image.height, " image");

@@ -65,6 +65,14 @@ public:
     // to do. An emitter thinner than the full passes' sample spacing that
     // none of their samples hit is missed, as it is without the passes.
     Rect emitterBounds() const;
+    // Whether `other`'s surface passes would add here exactly what they
+    // added there: the same image, sub-pixels and emission per light.
+    bool sharesSurfacePasses(const EmitterOutlines& other) const;
+    // Takes `other`'s surface passes instead of drawing them again (a part
+    // of the same view with the same emission: Compositor::composite of
+    // several parts); replaces any this one had. sharesSurfacePasses must
+    // hold.
+    void copySurfacePasses(const EmitterOutlines& other);
 
     // `image`: the full passes' mean. Every pixel where some pass saw an
     // emitter is rebuilt as the file's comment says; with surface passes in

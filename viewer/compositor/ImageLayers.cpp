@@ -77,34 +77,44 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
         w.emission.assign(lights, Rgb(0.0));
         out.noise = compositor.composite(camera, noiseMeshes, w, radiance);
     }
+    // The parts, composited together: the emitters' outline passes are
+    // drawn once for all the parts without emission (Compositor::composite).
+    std::vector<LightWeights> parts;
     LightWeights w = none(lights);
     w.emission.assign(lights, Rgb(1.0));
-    out.emission = composite(w, radiance);
+    parts.push_back(w);  // 0: emission
     w = none(lights);
     w.light.assign(lights, Rgb(1.0));
     w.shared = Rgb(1.0);
-    out.direct = composite(w, radiance);
+    parts.push_back(w);  // 1: direct
     w = none(lights);
     w.indirect = Rgb(1.0);
-    out.indirect = composite(w, radiance);
-
+    parts.push_back(w);  // 2: indirect
     const std::vector<std::string> names = lightLayerNames(scene);
     const size_t own = std::min(lights, layerSettings.maxLightLayers);
     for (size_t l = 0; l < own; ++l) {
         w = none(lights);
         w.light[l] = Rgb(1.0);
-        out.lights.push_back({names[l], composite(w, radiance)});
+        parts.push_back(w);  // 3 + l: light l alone
     }
     if (own < lights) {
         w = none(lights);
         for (size_t l = own; l < lights; ++l) w.light[l] = Rgb(1.0);
-        out.directRest = composite(w, radiance);
+        parts.push_back(w);  // the lights past the cap
     }
-    if (direct.size() > lights) {
+    const bool shared = direct.size() > lights;
+    if (shared) {
         w = none(lights);
         w.shared = Rgb(1.0);
-        out.directShared = composite(w, radiance);
+        parts.push_back(w);  // last: the shared mesh
     }
+    std::vector<ImageRgb> images = compositor.composite(camera, meshes, parts, radiance);
+    out.emission = std::move(images[0]);
+    out.direct = std::move(images[1]);
+    out.indirect = std::move(images[2]);
+    for (size_t l = 0; l < own; ++l) out.lights.push_back({names[l], std::move(images[3 + l])});
+    if (own < lights) out.directRest = std::move(images[3 + own]);
+    if (shared) out.directShared = std::move(images.back());
 
     CompositorSettings reflectance = settings;
     reflectance.quantity = CompositeQuantity::Reflectance;

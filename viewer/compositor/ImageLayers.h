@@ -1,7 +1,11 @@
 // The layers of `render`'s multi-layer EXR: one snapshot composited once in
 // full and once per part, each part by masking the compositor's weights
 // (LightWeights: the meshes of the part weigh 1, the rest 0), the way the
-// viewer shows a light alone. No shader of its own.
+// viewer shows a light alone. No shader of its own. The parts are
+// composited together (Compositor::composite of several parts), so the
+// emitters' outline passes are drawn once for all the parts without
+// emission: the 192-panel office's EXR (--samples 60000, 320×180) took
+// 27.7 s in all, 21.4 s now, the same file bit for bit.
 //
 // Per sub-pixel the compositor adds Kd/π × E per mesh and Le per emitting
 // face, so the parts add up to the beauty image up to float rounding
