@@ -11,16 +11,14 @@
 namespace ml {
 
 namespace {
-// Direct light's error counts as if it were its estimate over this: the
-// worker shares its time as if direct light's error were twice what it
-// estimates (see run()). Under a sample budget, direct light's turn while
-// its estimated error is at least this share of indirect light's.
+// Under a sample budget, direct light's turn while its estimated error is
+// at least this share of indirect light's.
 constexpr double kDirectWeight = 0.5;
 // The least share of the worker's time either part keeps once indirect
 // light has started (without a sample budget).
 constexpr double kLeastShare = 0.125;
 // The longest a direct round should last once indirect light has started.
-constexpr double kDirectRoundSeconds = 1.0;
+constexpr double kDirectRoundSeconds = 0.25;
 // The shares count this much of the worker's most recent time (seconds).
 constexpr double kShareWindow = 8.0;
 }  // namespace
@@ -213,24 +211,19 @@ void CacheWorker::run() {
             if (settings_.maxSamples && totalSamples() >= settings_.maxSamples) break;
             // Once indirect light is under way, the two share the worker's
             // time by their errors e_d and e_i (both relative to direct
-            // light): direct light takes e_d² / (e_d² + (w·e_i)²) of it,
-            // w = kDirectWeight, each part at least kLeastShare so neither
-            // stalls. Both errors fall as the root of the time spent on
-            // them, e² = c / t; the least total c_d/t_d + c_i/t_i for a given
-            // time has t_d / t_i = e_d²/e_i². With w = 1 that lost on the
-            // offices with many lights (48 panels at 16 s: 4.1% against
-            // 3.5%), whose direct light errs by more than it estimates; w =
-            // ½ keeps the equilibrium of the rule before ("direct light's
-            // turn while its error is at least half of indirect light's",
-            // e_d = e_i / 2) and only makes the share smooth. What changed
-            // the back rooms is the weight of indirect light's error (below)
-            // and rounds of at most kDirectRoundSeconds: the rule before
-            // gave direct light 87.5% of their worker, in rounds of 5 s,
-            // while the image showed the first pass's noise in indirect
-            // light (their render at 20 s: 10.0% relative RMSE, 8.05% now;
-            // cache/README.md). The shares count the last kShareWindow
-            // seconds (the first passes' long turns do not decide a minute
-            // later).
+            // light): direct light takes e_d² / (e_d² + e_i²) of it, each
+            // part at least kLeastShare so neither stalls. Both errors fall
+            // as the root of the time spent on them, e² = c / t; the least
+            // total c_d/t_d + c_i/t_i for a given time has t_d / t_i =
+            // √(c_d/c_i) = e_d²/e_i². The shares count the last
+            // kShareWindow seconds (the first passes' long turns do not
+            // decide a minute later). It was "direct light's turn while its
+            // error is at least half of indirect light's": with indirect
+            // light's error weighed by the albedo, that gave direct light
+            // 87.5% of the back rooms' worker while the image showed the
+            // first pass's noise in indirect light (their render at 20 s:
+            // 10.0% relative RMSE, 8.1% now; the offices and the Cornell
+            // box within their run-to-run spread, cache/README.md).
             // The share is of time: a direct round (up to 16,384 samples,
             // ~0.4 s in a 48-panel office) lasts a hundred indirect ones (a
             // later bounce's 512 gathers of 16 rays, a few ms). Under a
@@ -251,8 +244,7 @@ void CacheWorker::run() {
                     directTurn = lastDirectError >= kDirectWeight * lastIndirectError || ++rounds % 8 == 0;
                 } else {
                     const double d2 = lastDirectError * lastDirectError, i2 = lastIndirectError * lastIndirectError;
-                    const double w2 = kDirectWeight * kDirectWeight;
-                    const double share = std::clamp(d2 / std::max(d2 + w2 * i2, 1e-300), kLeastShare, 1 - kLeastShare);
+                    const double share = std::clamp(d2 / std::max(d2 + i2, 1e-300), kLeastShare, 1 - kLeastShare);
                     directTurn = indirectIdle || directSeconds < share * shared;
                     indirectTurn = !directTurn || directConverged;
                 }
