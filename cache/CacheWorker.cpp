@@ -11,16 +11,12 @@
 namespace ml {
 
 namespace {
-// Under a sample budget, direct light's turn while its estimated error is
-// at least this share of indirect light's.
+// Direct light's turn while its estimated error is at least this share of
+// indirect light's.
 constexpr double kDirectWeight = 0.5;
 // The least share of the worker's time either part keeps once indirect
 // light has started (without a sample budget).
 constexpr double kLeastShare = 0.125;
-// The longest a direct round should last once indirect light has started.
-constexpr double kDirectRoundSeconds = 0.25;
-// The shares count this much of the worker's most recent time (seconds).
-constexpr double kShareWindow = 8.0;
 }  // namespace
 
 void WorkerSettings::validate() const {
@@ -179,11 +175,6 @@ void CacheWorker::run() {
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double directRate = 0;  // direct samples per second in the last round
         double lastDirectError = 1, lastIndirectError = 1;
-        // What indirect light's error is worth against direct light's
-        // (bounce 1's light over direct light's), measured every 16th
-        // indirect round.
-        double indirectWeight = 0;
-        uint64_t indirectWeightRounds = 0;
         uint64_t rounds = 0, causticWaits = 0;
         double directSeconds = 0, indirectSeconds = 0;  // each part's rounds since indirect light started
         bool indirectIdle = false;  // its last step found it converged at its last level: nothing to share
@@ -209,58 +200,38 @@ void CacheWorker::run() {
                 return size_t(std::min<uint64_t>(budget, std::max<uint64_t>(left, 1)));
             };
             if (settings_.maxSamples && totalSamples() >= settings_.maxSamples) break;
-            // Once indirect light is under way, the two share the worker's
-            // time by their errors e_d and e_i (both relative to direct
-            // light): direct light takes e_d² / (e_d² + e_i²) of it, each
-            // part at least kLeastShare so neither stalls. Both errors fall
-            // as the root of the time spent on them, e² = c / t; the least
-            // total c_d/t_d + c_i/t_i for a given time has t_d / t_i =
-            // √(c_d/c_i) = e_d²/e_i². The shares count the last
-            // kShareWindow seconds (the first passes' long turns do not
-            // decide a minute later). It was "direct light's turn while its
-            // error is at least half of indirect light's": with indirect
-            // light's error weighed by the albedo, that gave direct light
-            // 87.5% of the back rooms' worker while the image showed the
-            // first pass's noise in indirect light (their render at 20 s:
-            // 10.0% relative RMSE, 8.1% now; the offices and the Cornell
-            // box within their run-to-run spread, cache/README.md).
+            // Once indirect light is under way, the two share the worker by
+            // their errors: direct light's turn while its error is at least
+            // half of indirect light's, indirect light's otherwise, each
+            // keeping at least kLeastShare of the worker so neither stalls.
             // The share is of time: a direct round (up to 16,384 samples,
             // ~0.4 s in a 48-panel office) lasts a hundred indirect ones (a
-            // later bounce's 512 gathers of 16 rays, a few ms). Under a
-            // sample budget it is of rounds, which no clock decides (the
-            // same cache on any machine): direct light's turn while its
-            // error is at least kDirectWeight of indirect light's, and one
-            // round in eight regardless; both share one round while direct
-            // light's turn lasts.
+            // later bounce's 512 gathers of 16 rays, a few ms), and a share
+            // of rounds left indirect light 5% of the worker while its first
+            // passes waited. Under a sample budget the share is of rounds
+            // (one in eight), which no clock decides: the same cache on any
+            // machine. Both share one round while direct light's turn lasts
+            // under a budget, as before.
             // Bounce 1's first pass, once started, runs without direct
             // rounds between: until it is gathered the image lacks all
             // indirect light (a room's ceiling is black), which is more than
             // what the rest of direct light's first pass adds.
             const bool firstBounceDue = indirectStarted && !indirect_->firstBounceGathered();
+            const bool directDue = lastDirectError >= kDirectWeight * lastIndirectError;
             const double shared = directSeconds + indirectSeconds;
             bool directTurn = !indirectStarted, indirectTurn = true;
             if (indirectStarted && !firstBounceDue) {
                 if (settings_.maxSamples) {
-                    directTurn = lastDirectError >= kDirectWeight * lastIndirectError || ++rounds % 8 == 0;
+                    directTurn = directDue || ++rounds % 8 == 0;
                 } else {
-                    const double d2 = lastDirectError * lastDirectError, i2 = lastIndirectError * lastIndirectError;
-                    const double share = std::clamp(d2 / std::max(d2 + i2, 1e-300), kLeastShare, 1 - kLeastShare);
-                    directTurn = indirectIdle || directSeconds < share * shared;
+                    directTurn = indirectIdle ||
+                                 (directDue ? indirectSeconds >= kLeastShare * shared : directSeconds < kLeastShare * shared);
                     indirectTurn = !directTurn || directConverged;
                 }
             }
             if (!directConverged && directTurn) {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
-                // Once the two parts share the worker, a direct round lasts
-                // at most kDirectRoundSeconds at the last round's rate: the
-                // share is kept between rounds, and where a pair costs
-                // milliseconds (the back rooms: 3,768 samples took 5 s) a
-                // round in vertices would hold indirect light off for
-                // seconds at a time. Not under a sample budget, whose
-                // rounds no clock may decide.
-                if (indirectStarted && !settings_.maxSamples && directRate > 0)
-                    budget = std::min(budget, std::max<size_t>(64, size_t(directRate * kDirectRoundSeconds)));
                 const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
                 const double took = seconds() - before;
@@ -272,10 +243,6 @@ void CacheWorker::run() {
                 if (report.estimates > 0 && took > 0) directRate = double(report.estimates) / took;
                 directConverged = report.converged();
                 lastDirectError = report.estimatedError;
-            }
-            if (directSeconds + indirectSeconds > kShareWindow) {
-                const double f = kShareWindow / (directSeconds + indirectSeconds);
-                directSeconds *= f, indirectSeconds *= f;
             }
             bool indirectConverged = true;
             if (indirect_) {
@@ -327,27 +294,7 @@ void CacheWorker::run() {
                     const RefineReport r = indirect_->step(*estimator, directMeshes, capped(budget), settings_.seed, view);
                     indirectSeconds += seconds() - before;
                     indirectConverged = r.converged();
-                    if (indirect_->firstPassDone()) {
-                        // The bounces' error is relative to bounce 1's light;
-                        // the image's share of that light is what the caches
-                        // hold: bounce 1's integral over direct light's.
-                        // The albedo light meets is that ratio in a closed
-                        // room without glowing surfaces; where these
-                        // (GatheredLights) put their light into bounce 1, or
-                        // light leaves the scene, it is not: the back
-                        // rooms' view shows indirect light at 0.48 of direct
-                        // light, 3.4 times their albedo, and weighed by
-                        // that, indirect light waited while its first
-                        // pass's noise was what the image showed.
-                        // Counted in rounds, not seconds: under a sample
-                        // budget no clock may decide whose turn it is.
-                        if (indirectWeightRounds++ % 16 == 0) {
-                            const double d = cache_.integratedLuminance();
-                            const double b = indirect_->cache(1).integratedLuminance();
-                            indirectWeight = d > 0 && b > 0 ? b / d : indirect_->settings().albedo;
-                        }
-                        lastIndirectError = r.estimatedError * indirectWeight;
-                    }
+                    if (indirect_->firstPassDone()) lastIndirectError = r.estimatedError * indirect_->settings().albedo;
                 }
             }
             // A round of photons once direct light's first pass is complete
