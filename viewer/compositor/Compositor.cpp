@@ -1280,9 +1280,11 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
                 impl_->drawSurfacesOnly(camera, fine.shifted(settings, k), bounds);
                 edges->addSurfacePass(impl_->readSurfaceSubPixels(bounds), fine.odd(k));
             }
-            if (drawn) drawn->push_back(*edges);
         }
         edges->apply(sum, spread);
+        // Kept for the parts after this one (moved: this part is done with
+        // it), one per distinct emission: render's layers keep two.
+        if (drawn && !same) drawn->push_back(std::move(*edges));
     }
     return sum;
 }

@@ -247,7 +247,9 @@ public:
     // (CompositorSettings::outlinePasses) depend only on the view and the
     // emission the weights give: they are drawn for the first part of each
     // emission and taken from it by the rest (every light layer has none:
-    // 16 passes saved per layer).
+    // 16 passes saved per layer). Each distinct emission keeps its
+    // EmitterOutlines (120 bytes per pixel) until the call returns: render's
+    // layers have two.
     std::vector<ImageRgb> composite(const Camera& camera, const GpuCacheMeshes& meshes,
                                     const std::vector<LightWeights>& parts, const CompositorSettings& settings);
     // Cache triangles the last compose drew: large meshes' cells out of
