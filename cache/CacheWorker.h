@@ -85,6 +85,13 @@ struct WorkerSettings {
     // indirect (0: no limit); a budget in samples makes a run repeat
     // whatever the machine's speed.
     uint64_t maxSamples = 0;
+    // The worker's schedule reads no clock: direct and indirect light share
+    // it by rounds (as under a sample budget, which implies this) instead of
+    // by time, so the same scene refined again makes the same cache, loaded
+    // machine or not. Time shares are better for an image at a time (the
+    // back rooms' indirect light); tests comparing caches bit for bit across
+    // runs want this.
+    bool repeatable = false;
     // Gathers per indirect round; 0 picks one from the bounce's mesh (an
     // eighth of its vertices, 16 to 512). A gather costs some 30 direct
     // estimates, so rounds of both kinds take comparable time.

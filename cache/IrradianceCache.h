@@ -261,6 +261,12 @@ public:
     // With a view, what it sees weighs 10× more than the rest.
     double estimatedError(const std::optional<RefinementCamera>& view = std::nullopt) const;
 
+    // The luminance of every mesh's irradiance integrated over its surface
+    // (W: vertex means times their areas, unsampled vertices as 0): how
+    // much light the cache holds, to weigh one cache's error against
+    // another's (CacheWorker: indirect light against direct light).
+    double integratedLuminance() const;
+
     // --- A scene that changed (CacheInvalidation.h) ---
     // Forgets the samples of mesh `mesh`'s vertices (and grid samples) at
     // which `which(point, normal)` holds: they are unsampled again, so

@@ -121,19 +121,26 @@ double gridSampleArea(const CacheState& s, size_t g) {
     return o.area / double(o.grid->sampleCount());
 }
 
+// Mesh l's luminance integrated over its surface (W) and that surface's
+// area, from its vertices' means (and its grid samples').
+std::pair<double, double> integrated(const CacheState& s, size_t l, const std::vector<double>& areas) {
+    double sum = 0, area = 0;
+    for (size_t v = 0; v < areas.size(); ++v) {
+        sum += areas[v] * luminance(s.meshes[l].stats[v].mean());
+        area += areas[v];
+    }
+    for (size_t g = 0; g < s.gridSamples; ++g) {
+        const double a = gridSampleArea(s, g);
+        sum += a * luminance(s.meshes[l].gridStats[g].mean());
+        area += a;
+    }
+    return {sum, area};
+}
+
 double whiteLevel(const CacheState& s, const std::vector<std::vector<double>>& areas) {
     double total = 0;
     for (size_t l = 0; l < s.meshes.size(); ++l) {
-        double sum = 0, area = 0;
-        for (size_t v = 0; v < areas[l].size(); ++v) {
-            sum += areas[l][v] * luminance(s.meshes[l].stats[v].mean());
-            area += areas[l][v];
-        }
-        for (size_t g = 0; g < s.gridSamples; ++g) {
-            const double a = gridSampleArea(s, g);
-            sum += a * luminance(s.meshes[l].gridStats[g].mean());
-            area += a;
-        }
+        const auto [sum, area] = integrated(s, l, areas[l]);
         if (area > 0) total += sum / area;
     }
     return 4 * total;
@@ -380,6 +387,13 @@ bool isTouched(const std::vector<char>& touched, FH f) {
 }
 
 }  // namespace
+
+double IrradianceCache::integratedLuminance() const {
+    const CacheState& s = impl_->state;
+    double total = 0;
+    for (size_t l = 0; l < s.meshes.size(); ++l) total += integrated(s, l, vertexAreas(s.meshes[l].mesh)).first;
+    return total;
+}
 
 double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& view) const {
     if (detail::unsampledCount(impl_->state) > 0) return 1;  // not every vertex sampled yet: unknown

@@ -122,6 +122,27 @@ TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
     EXPECT_LT(cache.estimatedError(), 1e-9);
 }
 
+TEST(CacheRefinement, TheLightACacheHoldsIsItsMeshesIntegral) {
+    // What the worker weighs indirect light's error by (bounce 1's light
+    // over direct light's): each vertex's mean times a third of its faces'
+    // area, which for the linear interpolation the meshes show is exactly
+    // each triangle's area times the mean of its corners. Unsampled, a
+    // cache holds nothing; sampled with different light per mesh, the sum
+    // over meshes.
+    IrradianceCache cache(bench(), coarse());
+    EXPECT_EQ(0.0, cache.integratedLuminance());
+    auto linear = samplerOf([](size_t l, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(1 + 0.3 * x.x + 0.2 * x.z + 0.1 * x.y) * double(l + 1), 1.0, false};
+    });
+    cache.refine(linear, 1 << 20, 1);
+    cache.refine(linear, 1 << 20, 1);
+    double expected = 0;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes()) expected += luminance(test::integrate(m));
+    ASSERT_GT(expected, 0.0);
+    // Only the order of the sums differs.
+    EXPECT_NEAR(expected, cache.integratedLuminance(), 1e-9 * expected);
+}
+
 TEST(CacheRefinement, UniformSplitsHalveTheBaseWhereTheLightIsLinear) {
     // The same linear signal with CacheSettings::uniformEdgeFraction half
     // the base edge: no edge asks for a split by its error, yet every lit
