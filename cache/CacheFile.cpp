@@ -8,7 +8,7 @@
 // Payload: u64 rounds, u64 samples, u64 detached faces, u32 refinement
 // level (IrradianceCache::tighten), u32 meshes; per
 // mesh: u32 vertices, u32 faces, per vertex 6 f64 (point, normal) and its
-// sample sums (6 f64, 2 u32, f64 Σ 1/reach), per face 3 u32 vertex indices, then u32 grid
+// sample sums (6 f64, 2 u32, f64 Σ 1/reach, f64 Σ work), per face 3 u32 vertex indices, then u32 grid
 // samples and their sample sums (the grids themselves are made from the
 // scene again).
 // Faces are stored in index order and rebuilt in that order, so vertex and
@@ -34,7 +34,7 @@ using detail::toOm;
 using detail::toVec3;
 
 constexpr char kMagic[16] = {'M', 'E', 'S', 'H', 'L', 'I', 'G', 'H', 'T', '-', 'C', 'A', 'C', 'H', 'E', '\n'};
-constexpr uint32_t kFormatVersion = 3;  // 2: the refinement level; 3: the samples' reach
+constexpr uint32_t kFormatVersion = 4;  // 2: the refinement level; 3: the samples' reach; 4: their work
 
 uint64_t fnv1a(const std::string& bytes) {
     uint64_t h = 0xcbf29ce484222325ull;
@@ -87,6 +87,7 @@ void writeStats(Writer& w, const detail::VertexStats& st) {
     w.put(st.sumLum), w.put(st.sumLumSq), w.put(st.sumVisibility);
     w.put(st.count), w.put(st.partial);
     w.put(st.sumInverseReach);
+    w.put(st.work);
 }
 
 detail::VertexStats readStats(Reader& r, const std::string& path, const char* what, size_t index, size_t mesh) {
@@ -98,7 +99,9 @@ detail::VertexStats readStats(Reader& r, const std::string& path, const char* wh
     st.count = r.get<uint32_t>(what);
     st.partial = r.get<uint32_t>(what);
     st.sumInverseReach = r.get<double>(what);
-    if (!isFinite(st.sum) || !std::isfinite(st.sumLum) || !std::isfinite(st.sumLumSq) ||
+    st.work = r.get<double>(what);
+    if (!(st.count ? st.work > 0 && std::isfinite(st.work) : st.work == 0) ||
+        !isFinite(st.sum) || !std::isfinite(st.sumLum) || !std::isfinite(st.sumLumSq) ||
         !(st.sumVisibility >= 0 && st.sumVisibility <= st.count) || st.partial > st.count ||
         !(st.sumInverseReach >= 0 && std::isfinite(st.sumInverseReach)))
         throw InputError(concat(path, ": cache file is corrupt (", what, " ", index, " of mesh ", mesh, ")"));
@@ -201,9 +204,9 @@ void IrradianceCache::load(const std::string& path) {
     for (uint32_t l = 0; l < meshes; ++l) {
         detail::LightMesh& lm = next.meshes[l];
         const uint32_t nv = p.get<uint32_t>("a mesh header"), nf = p.get<uint32_t>("a mesh header");
-        // Each vertex takes 104 bytes and each face 12: refuse counts the
+        // Each vertex takes 120 bytes and each face 12: refuse counts the
         // file cannot hold before allocating for them.
-        if (uint64_t(nv) * 104 + uint64_t(nf) * 12 > p.remaining())
+        if (uint64_t(nv) * 120 + uint64_t(nf) * 12 > p.remaining())
             throw InputError(concat(path, ": cache file is corrupt (mesh ", l, " announces ", nv, " vertices and ",
                                     nf, " faces, more than the file holds)"));
         lm.stats.resize(nv);
@@ -236,6 +239,12 @@ void IrradianceCache::load(const std::string& path) {
         for (uint32_t g = 0; g < grid; ++g) lm.gridStats[g] = readStats(p, path, "grid sample", g, l);
     }
     if (p.remaining() != 0) throw InputError(concat(path, ": cache file is corrupt (unread bytes at the end)"));
+    // A full estimate's work: the most a vertex's samples took on average
+    // (a vertex sampled only by full estimates has exactly that).
+    for (const detail::LightMesh& lm : next.meshes)
+        for (const auto* stats : {&lm.stats, &lm.gridStats})
+            for (const detail::VertexStats& st : *stats)
+                if (st.count) next.fullWork = std::max(next.fullWork, st.work / st.count);
     impl_->state = std::move(next);
 }
 

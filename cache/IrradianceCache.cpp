@@ -397,11 +397,13 @@ double measuredSampleNoise(const CacheState& s) {
     // spread counts by its degrees of freedom and by its light, so the dark
     // vertices, whose relative spread is large and shown faint, do not
     // decide it.
+    // The spreads are of a unit of work (VertexStats): the noise of a full
+    // estimate, of s.fullWork, is theirs over √fullWork.
     double spread = 0, level = 0, freedom = 0;
     const auto add = [&](const VertexStats& st) {
         if (st.count < 2) return;
-        const double n = st.count, mean = st.sumLum / n;
-        spread += std::max(0.0, st.sumLumSq - st.sumLum * mean);  // (n−1)·s²
+        const double n = st.count, mean = st.meanLuminance();
+        spread += st.spread();  // (n−1)·s²
         level += (n - 1) * mean * mean;
         freedom += n - 1;
     };
@@ -410,7 +412,7 @@ double measuredSampleNoise(const CacheState& s) {
         for (const VertexStats& st : lm.gridStats) add(st);
     }
     if (freedom < kMeasuredNoiseFreedom || !(level > 0)) return 0;
-    return std::sqrt(spread / level);
+    return std::sqrt(spread / level / std::max(s.fullWork, 1e-300));
 }
 
 CacheSettings effectiveSettings(const CacheState& s) {
@@ -556,11 +558,8 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
         out.irradiance.push_back(st.mean());
         out.samples.push_back(st.count);
         Rgb se(0.0);
-        if (st.count >= 2) {
-            const double n = st.count, mean = st.sumLum / n;
-            const double variance = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
-            if (mean > 0) se = st.mean() * (std::sqrt(variance / n) / mean);
-        }
+        const double mean = st.meanLuminance();
+        if (st.count >= 2 && mean > 0) se = st.mean() * (std::sqrt(st.meanVariance()) / mean);
         out.standardError.push_back(se);
     }
     // While the first pass runs, vertices without a sample take their
@@ -626,7 +625,7 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
             // used), or a guess's while that sample has none.
             const double lum = luminance(vertexValues[v]);
             const Rgb se =
-                colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, settings) : kGuessedLightError * lum);
+                colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, settings, impl_->state.fullWork) : kGuessedLightError * lum);
             out.standardError.push_back(st.count >= 2 ? se : Rgb(0.0));
             out.predictedError.push_back(se);
         }
@@ -881,7 +880,9 @@ void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& samp
     ML_ASSERT(isFinite(sample.irradiance), "non-finite irradiance at vertex ", v, " of light ", l);
     ML_ASSERT(sample.visibility >= 0 && sample.visibility <= 1, "visibility ", sample.visibility, " at vertex ",
               v, " of light ", l);
+    ML_ASSERT(sample.work > 0 && std::isfinite(sample.work), "work ", sample.work, " at vertex ", v, " of light ", l);
     s.meshes[l].stats.at(v).add(sample);
+    s.fullWork = std::max(s.fullWork, sample.work);
     s.samples += 1;
 }
 
@@ -889,7 +890,9 @@ void addGridSample(CacheState& s, size_t l, size_t g, const VertexSample& sample
     ML_ASSERT(isFinite(sample.irradiance), "non-finite irradiance at grid sample ", g, " of light ", l);
     ML_ASSERT(sample.visibility >= 0 && sample.visibility <= 1, "visibility ", sample.visibility,
               " at grid sample ", g, " of light ", l);
+    ML_ASSERT(sample.work > 0 && std::isfinite(sample.work), "work ", sample.work, " at grid sample ", g, " of light ", l);
     s.meshes[l].gridStats.at(g).add(sample);
+    s.fullWork = std::max(s.fullWork, sample.work);
     s.samples += 1;
 }
 

@@ -148,9 +148,8 @@ double whiteLevel(const CacheState& s, const std::vector<std::vector<double>>& a
 
 // The relative standard error of a vertex's (or grid sample's) mean, as the
 // scoring uses it; see the top of this file.
-double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, double white) {
-    const double mean = st.count ? st.sumLum / st.count : 0.0;
-    return std::min(detail::meanNoise(st, cs) / (mean + 0.5 * kDarkFloor * white), 1.0);
+double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, double fullWork, double white) {
+    return std::min(detail::meanNoise(st, cs, fullWork) / (st.meanLuminance() + 0.5 * kDarkFloor * white), 1.0);
 }
 
 // The value at vertex v of the plane that fits its neighbours' values best
@@ -255,7 +254,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             // With a sampler whose every sample is noisy, a residual within
             // twice the mean's standard error may be noise, not curvature:
             // resampling, not splitting, is what helps there.
-            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], cs, white));
+            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], cs, s.fullWork, white));
         }
 
         for (auto e : mesh.edges()) {
@@ -271,8 +270,8 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
                 // As for the residual: a difference within twice the ends'
                 // standard errors may be noise.
                 if (cs.sampleNoise > 0)
-                    step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], cs, white),
-                                                             relativeNoise(lm.stats[b], cs, white)));
+                    step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], cs, s.fullWork, white),
+                                                             relativeNoise(lm.stats[b], cs, s.fullWork, white)));
                 predicted = std::max(predicted, step);
             }
             const bool splittable = len > metric.minLength(mid);
@@ -297,7 +296,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
 
         for (size_t v = 0; v < nv; ++v) {
             const detail::VertexStats& st = lm.stats[v];
-            const double rel = relativeNoise(st, cs, white);
+            const double rel = relativeNoise(st, cs, s.fullWork, white);
             const double seen = metric.weight(toVec3(mesh.point(VH(int(v)))));
             noiseErr += seen * areas[l][v] * rel * rel;
             noiseWeight += seen * areas[l][v];
@@ -307,7 +306,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
         }
         for (size_t g = 0; g < s.gridSamples; ++g) {
             const detail::VertexStats& st = lm.gridStats[g];
-            const double rel = relativeNoise(st, cs, white), area = gridSampleArea(s, g);
+            const double rel = relativeNoise(st, cs, s.fullWork, white), area = gridSampleArea(s, g);
             const detail::GridObject& o = detail::gridOf(s, g);
             const double seen = metric.weight(o.grid->samplePosition(g - o.firstSample));
             noiseErr += seen * area * rel * rel;
@@ -475,17 +474,16 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
 
 namespace detail {
 
-double meanNoise(const VertexStats& st, const CacheSettings& cs) {
-    if (st.count >= 2) {
-        const double n = st.count, mean = st.sumLum / n;
-        const double var = std::max(0.0, (st.sumLumSq - st.sumLum * mean) / (n - 1));
-        return std::sqrt(var / n);
-    }
+double meanNoise(const VertexStats& st, const CacheSettings& cs, double fullWork) {
+    if (st.count >= 2) return std::sqrt(st.meanVariance());
     // A penumbra seen once: its spread is unknown, so assume the sampler's
     // per-sample error relative to the unoccluded irradiance (E / visibility).
-    if (st.count == 1 && st.partial) return cs.singleSampleNoise * st.sumLum / std::max(st.sumVisibility, 0.01);
-    // A sampler whose every sample is noisy (a jittered gather).
-    if (st.count == 1 && cs.sampleNoise > 0) return cs.sampleNoise * st.sumLum;
+    const double mean = st.meanLuminance();
+    if (st.count == 1 && st.partial) return cs.singleSampleNoise * mean / std::max(st.sumVisibility, 0.01);
+    // A sampler whose every sample is noisy (a jittered gather); a cheaper
+    // one (a first pass's gather of fewer rays) more so.
+    if (st.count == 1 && cs.sampleNoise > 0)
+        return cs.sampleNoise * mean * (fullWork > st.work ? std::sqrt(fullWork / st.work) : 1.0);
     return 0;
 }
 
@@ -521,7 +519,7 @@ std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::ve
         // A vertex not sampled yet shows its neighbours' light (copyMesh):
         // a guess, assumed off by kGuessedLightError of itself.
         const double noise =
-            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs);
+            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs, s.fullWork);
         out[v] = std::sqrt(interpolation + noise * noise);
     }
     return out;

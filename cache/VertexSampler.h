@@ -32,6 +32,12 @@ struct VertexSample {
     // it may hold a step the plane fit cannot predict. Infinity where the
     // sampler does not know (direct light: its penumbrae say where it steps).
     double reach = std::numeric_limits<double>::infinity();
+    // What the estimate cost, in the sampler's own units (a ray gather's
+    // rays): its variance goes as the inverse, so a vertex's mean weighs
+    // its samples by it (VertexStats), and a first pass's cheap gather
+    // counts for what it is against a full one. 1 where every estimate of
+    // a cache costs the same.
+    double work = 1;
 };
 
 // One estimate to take: what sample() takes, for a batch.

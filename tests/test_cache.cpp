@@ -402,6 +402,61 @@ TEST(CacheRefinement, OneSamplesNoiseIsMeasuredOnceVerticesAreResampled) {
     EXPECT_EQ(direct.sampleNoise(), 0.0);
 }
 
+// A vertex's samples weigh by their work (VertexSample::work: a ray
+// gather's rays), their variance going as its inverse: a first pass's
+// cheap gather counts for less in the mean and for more in the noise.
+// Exact: one sample of 2 at work 1 and one of 1 at work 3 make a mean of
+// (2 + 3) / 4 = 1.25 and Σ w (y − ȳ)² = 0.5625 + 0.1875 = 0.75, so the
+// mean's variance is 0.75 / (2 − 1) / 4 = 0.1875.
+TEST(CacheRefinement, SamplesWeighByTheirWork) {
+    int round = 0;
+    auto sampler = samplerOf([&round](size_t, const Vec3&, const Vec3&, uint32_t) {
+        VertexSample v;
+        v.irradiance = Rgb(round == 0 ? 2.0 : 1.0);
+        v.work = round == 0 ? 1.0 : 3.0;
+        return v;
+    });
+    CacheSettings s = coarse();
+    s.sampleNoise = 0.03;
+    s.noiseTolerance = 1e-3;  // every vertex is sampled again
+    s.splitTolerance = 0.9;   // and none split: the light is uniform
+    s.maxSamplesPerVertex = 2;
+    IrradianceCache cache(bench(), s);
+    cache.refine(sampler, 1 << 20, 1);
+    round = 1;
+    cache.refine(sampler, 1 << 20, 1);
+    const IrradianceMeshCopy m = viewOf(cache);
+    ASSERT_GT(m.positions.size(), 0u);
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+        ASSERT_EQ(m.samples[v], 2u);
+        EXPECT_EQ(m.irradiance[v], Rgb(1.25));
+        EXPECT_NEAR(m.standardError[v].g, std::sqrt(0.1875), 1e-12);
+    }
+}
+
+// Samples whose spread goes as 1/√work (0.4 at work 1, 0.2 at work 4)
+// measure one full sample's noise (work 4, the most a sample took) as 0.2:
+// the pooled spread is of a unit of work. Tolerance as above (7.5%).
+TEST(CacheRefinement, TheMeasuredNoiseIsAFullSamples) {
+    int round = 0;
+    auto sampler = samplerOf([&round](size_t, const Vec3&, const Vec3&, uint32_t seed) {
+        const double u = hash32(seed) * (1.0 / 4294967296.0), work = round == 0 ? 1.0 : 4.0;
+        VertexSample v;
+        v.irradiance = Rgb(1 + 0.4 / std::sqrt(work) * std::sqrt(3.0) * (2 * u - 1));
+        v.work = work;
+        return v;
+    });
+    CacheSettings s = coarse();
+    s.sampleNoise = 0.03;
+    s.noiseTolerance = 1e-3;
+    s.splitTolerance = 0.9;
+    s.maxSamplesPerVertex = 4;
+    IrradianceCache cache(bench(), s);
+    for (; round < 4; ++round) cache.refine(sampler, 1 << 20, 1);
+    std::printf("measured noise of a full sample: %.4f\n", cache.sampleNoise());
+    EXPECT_NEAR(cache.sampleNoise(), 0.2, 0.075 * 0.2);
+}
+
 TEST(CacheRefinement, SplitsAreConformingAndRespectTheMinimumSize) {
     CacheSettings s = coarse();
     IrradianceCache cache(bench(), s);

@@ -46,8 +46,10 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
 // The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:
 // measured from two samples on; assumed from the settings for a single
 // sample that saw a penumbra or came from a sampler whose every sample is
-// noisy; 0 otherwise (the exact sampler outside penumbrae).
-double meanNoise(const VertexStats& st, const CacheSettings& cs);
+// noisy, CacheSettings::sampleNoise for a sample of `fullWork`
+// (CacheState::fullWork; a cheaper one's is larger by √(fullWork / w)); 0
+// otherwise (the exact sampler outside penumbrae).
+double meanNoise(const VertexStats& st, const CacheSettings& cs, double fullWork);
 // The error each vertex of mesh `l` predicts for the irradiance shown
 // around it, in luminance (W·m⁻²), as an RMS over its faces: its noise and
 // the interpolation error of its edges (Refine.cpp), or a guess's

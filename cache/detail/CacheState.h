@@ -6,6 +6,7 @@
 #include "cache/GridCache.h"
 #include "cache/IrradianceCache.h"
 
+#include <algorithm>
 #include <limits>
 #include <memory>
 
@@ -14,17 +15,28 @@
 
 namespace ml::detail {
 
-// The running sums of one vertex's samples.
+// The running sums of one vertex's samples, each weighed by its work w
+// (VertexSample::work; 1 for samplers whose estimates all cost the same,
+// where these are the plain sums). A sample's variance is σ²/w, σ² that of
+// a sample of unit work; the mean weighed by w has the least variance,
+// σ²/Σw, and Σ w (y − ȳ)² / (n − 1) estimates σ².
 struct VertexStats {
-    Rgb sum{0.0};          // Σ irradiance
-    double sumLum = 0;     // Σ luminance
-    double sumLumSq = 0;   // Σ luminance², for the standard error of the mean
+    Rgb sum{0.0};          // Σ w·irradiance
+    double sumLum = 0;     // Σ w·luminance
+    double sumLumSq = 0;   // Σ w·luminance², for the standard error of the mean
     double sumVisibility = 0;
     uint32_t count = 0;
     uint32_t partial = 0;  // samples that saw the light partly occluded
     double sumInverseReach = 0;  // Σ 1/reach (0 for a sample that knows none)
+    double work = 0;       // Σ w
 
-    Rgb mean() const { return count ? sum / double(count) : Rgb(0.0); }
+    Rgb mean() const { return count ? sum / work : Rgb(0.0); }
+    double meanLuminance() const { return count ? sumLum / work : 0.0; }
+    // Σ w (y − ȳ)²: n − 1 times the estimate of σ², a unit of work's
+    // variance (0 below two samples).
+    double spread() const { return count >= 2 ? std::max(0.0, sumLumSq - sumLum * meanLuminance()) : 0.0; }
+    // The variance of the mean, σ²/Σw, from two samples on.
+    double meanVariance() const { return count >= 2 ? spread() / double(count - 1) / work : 0.0; }
     double meanVisibility() const { return count ? sumVisibility / count : 1.0; }
     // The harmonic mean of the samples' reach (VertexSample::reach): of
     // every ray they traced, as each sample's is of its rays'. Infinity
@@ -33,10 +45,11 @@ struct VertexStats {
         return sumInverseReach > 0 ? count / sumInverseReach : std::numeric_limits<double>::infinity();
     }
     void add(const VertexSample& s) {
-        const double y = luminance(s.irradiance);
-        sum += s.irradiance;
-        sumLum += y;
-        sumLumSq += y * y;
+        const double y = luminance(s.irradiance), w = s.work;
+        sum += w * s.irradiance;
+        sumLum += w * y;
+        sumLumSq += w * y * y;
+        work += w;
         sumVisibility += s.visibility;
         count += 1;
         partial += s.partial ? 1 : 0;
@@ -97,6 +110,10 @@ struct CacheState {
     uint64_t samples = 0;
     size_t detachedFaces = 0;     // non-manifold input faces given vertices of their own
     size_t backFaces = 0;         // reversed copies of faces lit from behind
+    // The most work a sample took (VertexSample::work): a full estimate's,
+    // which CacheSettings::sampleNoise and its measure speak of. Found
+    // again from the sums when loaded.
+    double fullWork = 0;
 };
 
 // The relative error of one sample (CacheSettings::sampleNoise) as the

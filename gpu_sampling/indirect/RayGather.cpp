@@ -172,6 +172,9 @@ VertexSample RayGather::gather(size_t slot, const Vec3& x, const Vec3& n, const 
     VertexSample result;
     result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, draw,
                                              slot == 0 ? &emitting_ : nullptr, &result.reach);
+    // Its rays: a first pass's cheaper gather (fewer rays) weighs less in a
+    // vertex's mean and counts as noisier (VertexStats).
+    result.work = double(source.strata) * source.strata;
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
