@@ -19,10 +19,14 @@ constexpr double kDirectWeight = 0.5;
 // The least share of the worker's time either part keeps once indirect
 // light has started (without a sample budget).
 constexpr double kLeastShare = 0.125;
-// The longest a direct round should last once indirect light has started.
-constexpr double kDirectRoundSeconds = 1.0;
+// The longest a direct or indirect round should last once indirect light
+// has started (without a sample budget).
+constexpr double kRoundSeconds = 1.0;
 // The shares count this much of the worker's most recent time (seconds).
 constexpr double kShareWindow = 8.0;
+// Publishing a snapshot takes at most this share of the worker's time
+// (WorkerSettings::publishSeconds).
+constexpr double kPublishShare = 0.1;
 }  // namespace
 
 void WorkerSettings::validate() const {
@@ -177,9 +181,13 @@ void CacheWorker::run() {
             if (caustics_) m.push_back(caustics_->copyMesh());
             return m;
         };
-        double lastPublish = -1e30;
+        double lastPublish = -1e30, publishCost = 0;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double directRate = 0;  // direct samples per second in the last round
+        // Gathers per second in the last indirect round, and whether that
+        // round was in a first pass (whose gathers may be far cheaper).
+        double gatherRate = 0;
+        bool gatherRateFirstPass = true;
         double lastDirectError = 1, lastIndirectError = 1;
         // What indirect light's error is worth against direct light's
         // (bounce 1's light over direct light's), measured every 16th
@@ -227,7 +235,7 @@ void CacheWorker::run() {
             // turn while its error is at least half of indirect light's",
             // e_d = e_i / 2) and only makes the share smooth. What changed
             // the back rooms is the weight of indirect light's error (below)
-            // and rounds of at most kDirectRoundSeconds: the rule before
+            // and rounds of at most kRoundSeconds: the rule before
             // gave direct light 87.5% of their worker, in rounds of 5 s,
             // while the image showed the first pass's noise in indirect
             // light (their render at 20 s: 10.0% relative RMSE, 8.05% now;
@@ -265,14 +273,14 @@ void CacheWorker::run() {
                 size_t budget = settings_.roundBudget;
                 if (budget == 0) budget = std::clamp<size_t>(cache_.totalVertices() / 32, 256, 16384);
                 // Once the two parts share the worker, a direct round lasts
-                // at most kDirectRoundSeconds at the last round's rate: the
+                // at most kRoundSeconds at the last round's rate: the
                 // share is kept between rounds, and where a pair costs
                 // milliseconds (the back rooms: 3,768 samples took 5 s) a
                 // round in vertices would hold indirect light off for
                 // seconds at a time. Not under a sample budget, whose
                 // rounds no clock may decide.
                 if (indirectStarted && !byRounds && directRate > 0)
-                    budget = std::min(budget, std::max<size_t>(64, size_t(directRate * kDirectRoundSeconds)));
+                    budget = std::min(budget, std::max<size_t>(64, size_t(directRate * kRoundSeconds)));
                 const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
                 const double took = seconds() - before;
@@ -333,11 +341,31 @@ void CacheWorker::run() {
                     if (budget == 0) {
                         const size_t vertices = indirect_->started() ? indirect_->cache(indirect_->started()).totalVertices()
                                                                      : cache_.totalVertices() / std::max<size_t>(cache_.lightCount(), 1);
-                        budget = std::clamp<size_t>(vertices / 8, 16, 512);
+                        // An eighth of the bounce's vertices, as many as
+                        // kRoundSeconds allow at the last round's rate: a
+                        // round also scores the bounce's mesh, which cost
+                        // the back rooms' 72,000-vertex bounce 65 ms a
+                        // round, against 25 ms for 512 gathers of 16 rays,
+                        // so rounds of at most 512 spent most of indirect
+                        // light's share scoring (their render at 20 s:
+                        // 8.2% relative RMSE, 4.9% with this; the 48-panel
+                        // office at 16 s 3.4-3.6%, the same). Under a sample
+                        // budget at most 512, as before: no clock decides.
+                        budget = std::clamp<size_t>(vertices / 8, 16, byRounds ? 512 : 16384);
+                        const bool rateHolds = gatherRate > 0 && gatherRateFirstPass == !indirect_->firstPassDone();
+                        if (!byRounds)
+                            budget = std::min(budget, rateHolds ? std::max<size_t>(512, size_t(gatherRate * kRoundSeconds))
+                                                                : size_t(512));
                     }
+                    const bool firstPassRound = !indirect_->firstPassDone();
                     const double before = seconds();
                     const RefineReport r = indirect_->step(*estimator, directMeshes, capped(budget), settings_.seed, view);
-                    indirectSeconds += seconds() - before;
+                    const double took = seconds() - before;
+                    indirectSeconds += took;
+                    if (r.estimates > 0 && took > 0) {
+                        gatherRate = double(r.estimates) / took;
+                        gatherRateFirstPass = firstPassRound;
+                    }
                     indirectConverged = r.converged();
                     if (indirect_->firstPassDone()) {
                         // The bounces' error is relative to bounce 1's light;
@@ -392,9 +420,18 @@ void CacheWorker::run() {
                 causticConverged = false;
             if (indirect_ && indirectTurn && indirectStarted) indirectIdle = indirectConverged;
             converged = directConverged && indirectConverged && causticConverged;
-            if (converged || seconds() - lastPublish >= settings_.publishSeconds || published_ == 0) {
-                publish(seconds(), converged, view, serial, pool);
+            // Snapshots copy and score every mesh: in the back rooms and the
+            // 48-panel office (10^5 vertices and more) one took 0.13-0.22 s,
+            // and at one every 0.25 s (or after each longer round) they
+            // took 22% of the worker's time. Not sooner than the last one's
+            // cost over kPublishShare, then.
+            const double interval =
+                settings_.publishSeconds > 0 ? std::max(settings_.publishSeconds, publishCost / kPublishShare) : 0.0;
+            if (converged || seconds() - lastPublish >= interval || published_ == 0) {
+                const double before = seconds();
+                publish(before, converged, view, serial, pool);
                 lastPublish = seconds();
+                publishCost = lastPublish - before;
             }
         }
         publish(seconds(), converged, lastView, serial, pool);

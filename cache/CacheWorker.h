@@ -79,7 +79,11 @@ struct WorkerSettings {
     // stays a small part of each round.
     size_t roundBudget = 0;
     // Snapshots are published after a round at most this often (seconds);
-    // always after the first and the last round.
+    // always after the first and the last round. A snapshot copies every
+    // mesh and scores its error: where that costs more than a tenth of this
+    // (a tenth of a second and more with 10^5 vertices and more), they come
+    // further apart, so that publishing keeps at most a tenth of the
+    // worker's time. 0: after every round, whatever it costs.
     double publishSeconds = 0.25;
     // Stop on your own after this many estimates in all, direct and
     // indirect (0: no limit); a budget in samples makes a run repeat
@@ -92,9 +96,10 @@ struct WorkerSettings {
     // back rooms' indirect light); tests comparing caches bit for bit across
     // runs want this.
     bool repeatable = false;
-    // Gathers per indirect round; 0 picks one from the bounce's mesh (an
-    // eighth of its vertices, 16 to 512). A gather costs some 30 direct
-    // estimates, so rounds of both kinds take comparable time.
+    // Gathers per indirect round; 0 picks one from the bounce's mesh: an
+    // eighth of its vertices, 16 to 16,384, and no more than a second's at
+    // the last round's rate (512 at least; at most 512 under a sample
+    // budget or `repeatable`, which no clock may decide).
     size_t indirectBudget = 0;
     // Sampling threads, each with samplers of its own (SamplerPool); 0: one
     // per core. The cache a sample budget makes does not depend on it.
