@@ -371,6 +371,18 @@ TEST(CacheRefinement, AStepBesideANearSurfaceSplitsWhereNoiseHidesItsResidual) {
     EXPECT_GT(withReach, 4 * without);
 }
 
+// Noisy samplers' settings (3% assumed per sample) under which every vertex
+// is sampled again, up to `samples` times, and none split (the light these
+// tests give is uniform).
+CacheSettings resampledUnsplit(uint32_t samples) {
+    CacheSettings s = coarse();
+    s.sampleNoise = 0.03;
+    s.noiseTolerance = 1e-3;
+    s.splitTolerance = 0.9;
+    s.maxSamplesPerVertex = samples;
+    return s;
+}
+
 // A sampler whose every sample is noisy is taken to err by the assumed
 // sampleNoise per sample only until the vertices sampled more than once
 // measure it: samples uniform within 1 ± 0.2·√3 (standard deviation 0.2)
@@ -384,11 +396,7 @@ TEST(CacheRefinement, OneSamplesNoiseIsMeasuredOnceVerticesAreResampled) {
         const double u = hash32(seed) * (1.0 / 4294967296.0);
         return VertexSample{Rgb(1 + kSpread * std::sqrt(3.0) * (2 * u - 1)), 1.0, false};
     });
-    CacheSettings s = coarse();
-    s.sampleNoise = 0.03;
-    s.noiseTolerance = 1e-3;  // every vertex is sampled again
-    s.splitTolerance = 0.9;   // and none split: the light is uniform
-    s.maxSamplesPerVertex = 4;
+    CacheSettings s = resampledUnsplit(4);
     IrradianceCache cache(bench(), s);
     cache.refine(noisy, 1 << 20, 1);  // one sample each: nothing measured yet
     EXPECT_EQ(cache.sampleNoise(), 0.03);
@@ -416,11 +424,7 @@ TEST(CacheRefinement, SamplesWeighByTheirWork) {
         v.work = round == 0 ? 1.0 : 3.0;
         return v;
     });
-    CacheSettings s = coarse();
-    s.sampleNoise = 0.03;
-    s.noiseTolerance = 1e-3;  // every vertex is sampled again
-    s.splitTolerance = 0.9;   // and none split: the light is uniform
-    s.maxSamplesPerVertex = 2;
+    CacheSettings s = resampledUnsplit(2);
     IrradianceCache cache(bench(), s);
     cache.refine(sampler, 1 << 20, 1);
     round = 1;
@@ -446,11 +450,7 @@ TEST(CacheRefinement, TheMeasuredNoiseIsAFullSamples) {
         v.work = work;
         return v;
     });
-    CacheSettings s = coarse();
-    s.sampleNoise = 0.03;
-    s.noiseTolerance = 1e-3;
-    s.splitTolerance = 0.9;
-    s.maxSamplesPerVertex = 4;
+    CacheSettings s = resampledUnsplit(4);
     IrradianceCache cache(bench(), s);
     for (; round < 4; ++round) cache.refine(sampler, 1 << 20, 1);
     std::printf("measured noise of a full sample: %.4f\n", cache.sampleNoise());
