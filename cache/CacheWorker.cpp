@@ -351,8 +351,8 @@ void CacheWorker::run() {
                         // round, against 25 ms for 512 gathers of 16 rays,
                         // so rounds of at most 512 spent most of indirect
                         // light's share scoring (their render at 20 s:
-                        // 8.2% relative RMSE, 4.9% with this; the 48-panel
-                        // office at 16 s 3.4-3.6%, the same). Under a sample
+                        // 8.2% relative RMSE, 5.0-5.1% with this; the 48-
+                        // panel office at 16 s 3.5-3.7%, the same). Under a sample
                         // budget at most 512, as before: no clock decides.
                         budget = std::clamp<size_t>(vertices / 8, 16, byRounds ? 512 : 16384);
                         const bool rateHolds = gatherRate > 0 && gatherRateFirstPass == !indirect_->firstPassDone();
@@ -430,8 +430,9 @@ void CacheWorker::run() {
             // took 22% of the worker's time. Not sooner than the last one's
             // cost over kPublishShare, then, unless a tenth of the time since
             // the start is sooner: early every round changes the image much
-            // (with snapshots 2 s apart from the start, `bench lights`' 12-
-            // panel office reached 10% at 4.1 s instead of 2.8 s).
+            // (with snapshots up to 2 s apart from the start, `bench lights`'
+            // walkthrough took 12.2 s instead of 9.3 s, and its 48-panel
+            // office reached 10% at 6.3 s instead of 4.2 s).
             const double interval =
                 settings_.publishSeconds > 0
                     ? std::max(settings_.publishSeconds, std::min(publishCost / kPublishShare, kPublishShare * seconds()))
