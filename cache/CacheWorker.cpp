@@ -339,6 +339,7 @@ void CacheWorker::run() {
                 }
                 indirectConverged = false;
                 if (indirectStarted && indirectTurn && !(settings_.maxSamples && totalSamples() >= settings_.maxSamples)) {
+                    const bool firstPassRound = !indirect_->firstPassDone();
                     size_t budget = settings_.indirectBudget;
                     if (budget == 0) {
                         const size_t vertices = indirect_->started() ? indirect_->cache(indirect_->started()).totalVertices()
@@ -355,13 +356,13 @@ void CacheWorker::run() {
                         // panel office at 16 s 3.5-3.7%, the same). Under a sample
                         // budget at most 512, as before: no clock decides.
                         budget = std::clamp<size_t>(vertices / 8, 16, byRounds ? 512 : 16384);
-                        const bool rateHolds = gatherRate > 0 && gatherRateFirstPass == !indirect_->firstPassDone();
-                        const double roundSeconds = std::clamp(kPublishShare * seconds(), 0.25, kRoundSeconds);
-                        if (!byRounds)
+                        if (!byRounds) {
+                            const bool rateHolds = gatherRate > 0 && gatherRateFirstPass == firstPassRound;
+                            const double roundSeconds = std::clamp(kPublishShare * seconds(), 0.25, kRoundSeconds);
                             budget = std::min(budget, rateHolds ? std::max<size_t>(512, size_t(gatherRate * roundSeconds))
                                                                 : size_t(512));
+                        }
                     }
-                    const bool firstPassRound = !indirect_->firstPassDone();
                     const double before = seconds();
                     const RefineReport r = indirect_->step(*estimator, directMeshes, capped(budget), settings_.seed, view);
                     const double took = seconds() - before;
