@@ -105,6 +105,20 @@ CacheLayout bounceCacheLayout();
 // mean, two rings deep. A dark corner, dark like its neighbours, is kept.
 void fillHiddenVertices(IrradianceMeshCopy& mesh);
 
+// `mesh` (bounce k's light) reshaped as the bounces after it are guessed,
+// each a ratio of the one before: after bounce 1, half its own shape and
+// half its area-weighted mean; after a later bounce, its own shape. Bounce
+// 1 carries direct light's pattern (an office's ceiling, which no panel
+// lights, holds the most of it, its floor little), and the bounces after it
+// tend, as a power iteration does, to the transport's dominant shape, near
+// uniform where surfaces see each other (progressive radiosity's ambient
+// term, Cohen et al. 1988); bounce 2 is most of the way there. Measured
+// (320x180, before bounce 2 is shown): the 12-panel office 19.9% relative
+// RMSE with bounce 1's shape, 13.1% uniform, 13.4% half and half; the
+// Cornell box (256x256) 10.4%, 9.5%, 8.2%. After bounce 2, its own shape
+// (Cornell 2.9%) beats half its mean (3.1%) and the mean (4.6%).
+void shapeAsLaterBounces(IrradianceMeshCopy& mesh, int bounce);
+
 class IndirectSolver {
 public:
     IndirectSolver(const Scene& scene, const IndirectSettings& settings);

@@ -87,8 +87,9 @@ struct CacheSettings {
 };
 
 // The relative error assumed for light a copy shows but no sample has
-// measured: a vertex filled from its sampled neighbours, the missing
-// bounces' tail, a bounce reflecting a direct light still partly filled.
+// measured: a vertex filled from its sampled neighbours, a bounce
+// reflecting a direct light still partly filled (the missing bounces' tail
+// has its own, IndirectSolver::displayMeshes).
 // Measured (test_image_error): with 0.25 the image's estimate is 0.78x the
 // path tracer's error on the Cornell box with bounce 1 shown early (3.7%)
 // and 0.97x on a small office in its first pass (10.8%); 0.5 made them

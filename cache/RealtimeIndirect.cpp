@@ -98,6 +98,7 @@ std::optional<std::vector<IrradianceMeshCopy>> estimateBounces(const RealtimeMes
             // The tail, as IndirectSolver::displayMeshes makes it.
             const double r = std::clamp(settings.tailAlbedo, 0.0, 0.999);
             m.irradiance = bounces.back().irradiance;
+            shapeAsLaterBounces(m, b - 1);
             for (Rgb& e : m.irradiance) e *= r;
         }
         bounces.push_back(std::move(m));

@@ -556,5 +556,27 @@ TEST(PassTwo, TheBounceWithTheLargestShareOfTheErrorGoesFirst) {
     EXPECT_GE(secondSources, 3u);  // the first pass's, pass 2's, and at least one rebuilt as bounce 1 grew
 }
 
+// The tail's shape (shapeAsLaterBounces): after bounce 1, half of each
+// vertex's light and half the area-weighted mean; after a later bounce,
+// unchanged. Two triangles of areas 1 and 3 sharing an edge: vertex areas
+// (a third of each face) 1/3, 4/3, 4/3, 1; the mean of 0, 6, 6, 12 so
+// weighted is (0 + 8 + 8 + 12) / 4 = 7. Exact arithmetic up to rounding.
+TEST(TailShape, AfterBounceOneHalfTheLightIsTheAreaMean) {
+    IrradianceMeshCopy m;
+    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 2, 0), Vec3(3, 2, 0)};
+    m.normals.assign(4, Vec3(0, 0, 1));
+    m.triangles = {glm::uvec3(0, 1, 2), glm::uvec3(1, 3, 2)};
+    m.irradiance = {Rgb(0.0), Rgb(6.0), Rgb(6.0), Rgb(12.0, 0.0, 12.0)};
+    IrradianceMeshCopy later = m;
+    shapeAsLaterBounces(later, 2);
+    for (size_t v = 0; v < 4; ++v) EXPECT_EQ(later.irradiance[v], m.irradiance[v]);
+    shapeAsLaterBounces(m, 1);
+    const Rgb mean = (Rgb(0.0) * (1.0 / 3) + Rgb(6.0) * (8.0 / 3) + Rgb(12.0, 0.0, 12.0)) / 4.0;
+    const std::vector<Rgb> before = {Rgb(0.0), Rgb(6.0), Rgb(6.0), Rgb(12.0, 0.0, 12.0)};
+    for (size_t v = 0; v < 4; ++v)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(m.irradiance[v][c], 0.5 * (before[v][c] + mean[c]), 1e-12);
+    EXPECT_NEAR(mean.x, 7.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace ml
