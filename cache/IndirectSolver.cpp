@@ -249,6 +249,7 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     // the Cornell box when only bounce 1 was gathered again). Each first
     // pass runs again in order, each from its predecessor gathered anew.
     for (auto& c : caches_) c->resetSamples();
+    ++epoch_;
     regathering_ = true;
     restarted_ = true;
     resetPass2();
@@ -260,6 +261,7 @@ void IndirectSolver::sceneChanged() {
     std::vector<IrradianceMeshCopy> shown = displayMeshes();
     if (!shown.empty()) stale_ = std::move(shown);
     caches_.clear();
+    ++epoch_;
     surfaces_.reset();
     resetPass2();
     directRefreshed_ = false;
@@ -336,15 +338,41 @@ void fillHiddenVertices(IrradianceMeshCopy& mesh) {
     }
 }
 
+IndirectSolver::BounceMemo& IndirectSolver::memo(int bounce) const {
+    const IrradianceCache& c = *caches_.at(size_t(bounce - 1));
+    if (memo_.size() < caches_.size()) memo_.resize(caches_.size());
+    BounceMemo& m = memo_[size_t(bounce - 1)];
+    const std::array<uint64_t, 5> state{c.rounds(), uint64_t(c.level()), c.totalSamples(), uint64_t(c.totalVertices()),
+                                        epoch_};
+    if (m.state != state) m = BounceMemo{state, std::nullopt, std::nullopt, std::nullopt, std::nullopt};
+    return m;
+}
+
+const IrradianceMeshCopy& IndirectSolver::rawCopy(int bounce) const {
+    BounceMemo& m = memo(bounce);
+    if (!m.raw) m.raw = caches_[size_t(bounce - 1)]->copyMesh(0);
+    return *m.raw;
+}
+
+// The raw copy is kept only where the ratio of displayMeshes asked for it.
+const IrradianceMeshCopy& IndirectSolver::filledCopy(int bounce) const {
+    BounceMemo& m = memo(bounce);
+    if (!m.filled) {
+        m.filled = m.raw ? *m.raw : caches_[size_t(bounce - 1)]->copyMesh(0);
+        fillHiddenVertices(*m.filled);
+    }
+    return *m.filled;
+}
+
 IrradianceMeshCopy IndirectSolver::copyMesh(int bounce) const {
-    IrradianceMeshCopy v = caches_.at(size_t(bounce - 1))->copyMesh(0);
-    fillHiddenVertices(v);
-    return v;
+    std::lock_guard<std::mutex> lock(memoMutex_);
+    return filledCopy(bounce);
 }
 
 std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
+    std::lock_guard<std::mutex> lock(memoMutex_);
     std::vector<IrradianceMeshCopy> v;
-    for (int b = 1; b <= started(); ++b) v.push_back(copyMesh(b));
+    for (int b = 1; b <= started(); ++b) v.push_back(filledCopy(b));
     return v;
 }
 
@@ -370,12 +398,12 @@ bool IndirectSolver::firstBounceGathered() const {
     return !caches_.empty() && caches_.front()->unsampledCount() == 0;
 }
 
-// Bounce k + 1's mean irradiance (luminance) over its gathered vertices
-// against bounce k's over all of its (the same base mesh; copies as the
-// caches hold them); nullopt where either has nothing.
 // The relative error assumed for the tail's ratio r (displayMeshes).
 constexpr double kTailRatioError = 0.05;
 
+// Bounce k + 1's mean irradiance (luminance) over its gathered vertices
+// against bounce k's over all of its (the same base mesh; copies as the
+// caches hold them); nullopt where either has nothing.
 static std::optional<double> meanRatio(const IrradianceMeshCopy& k, const IrradianceMeshCopy& n) {
     double sumK = 0, sumN = 0;
     for (const Rgb& e : k.irradiance) sumK += luminance(e);
@@ -387,6 +415,11 @@ static std::optional<double> meanRatio(const IrradianceMeshCopy& k, const Irradi
 }
 
 std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
+    std::lock_guard<std::mutex> lock(memoMutex_);
+    return displayMeshesLocked();
+}
+
+std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
     if (!stale_.empty() && !firstBounceShown()) return stale_;
     // The bounces whose first pass is complete, bounce 1 from a sixteenth
     // of it on; a bounce 1 being gathered again (restart) counts, its copies
@@ -401,20 +434,16 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
     // (as bounce 1 is shown): its first pass visits vertices in a scattered
     // order and its copies fill the rest from gathered neighbours, whose
     // predicted error (kGuessedLightError) the estimate carries.
-    // Each copy is made once: the ratio reads them before their hidden
-    // vertices are filled (copyMesh).
-    std::vector<IrradianceMeshCopy> v;
-    for (int b = 1; b <= complete; ++b) v.push_back(caches_[size_t(b - 1)]->copyMesh(0));
+    // The ratio reads the copies before their hidden vertices are filled.
     std::optional<double> ratio;
+    int shown = complete;
     if (gatheredEnoughToShow(complete)) {
-        IrradianceMeshCopy next = caches_[size_t(complete)]->copyMesh(0);
-        ratio = meanRatio(v.back(), next);
-        if (ratio) {
-            v.push_back(std::move(next));
-            ++complete;
-        }
+        ratio = meanRatio(rawCopy(complete), rawCopy(complete + 1));
+        if (ratio) ++shown;
     }
-    for (IrradianceMeshCopy& m : v) fillHiddenVertices(m);
+    std::vector<IrradianceMeshCopy> v;
+    for (int b = 1; b <= shown; ++b) v.push_back(filledCopy(b));
+    complete = shown;
     if (complete == 0 || complete >= settings_.bounces) return v;
     // The bounces still to come, each r times the one before: Σ_{j=1..N−k} r^j
     // times the last bounce shown, k. r is measured once bounce k is shown
@@ -481,9 +510,19 @@ size_t IndirectSolver::memoryBytes() const {
 double IndirectSolver::estimatedError(const std::optional<RefinementCamera>& view) const {
     if (settings_.bounces == 0) return 0;
     if (!firstPassDone()) return 1;
+    std::lock_guard<std::mutex> lock(memoMutex_);
+    const auto sameView = [](const std::optional<RefinementCamera>& a, const std::optional<RefinementCamera>& b) {
+        if (!a || !b) return !a && !b;
+        const Camera &x = a->camera, &y = b->camera;
+        return x.position == y.position && x.target == y.target && x.up == y.up && x.fovYDegrees == y.fovYDegrees &&
+               a->width == b->width && a->height == b->height;
+    };
     double worst = 0;
-    for (size_t b = 0; b < caches_.size(); ++b)
-        worst = std::max(worst, caches_[b]->estimatedError(view) * share(int(b) + 1));
+    for (size_t b = 0; b < caches_.size(); ++b) {
+        BounceMemo& m = memo(int(b) + 1);
+        if (!m.error || !sameView(m.view, view)) m.error = caches_[b]->estimatedError(view), m.view = view;
+        worst = std::max(worst, *m.error * share(int(b) + 1));
+    }
     return worst;
 }
 
