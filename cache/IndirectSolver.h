@@ -183,7 +183,8 @@ public:
     // What the image shows while bounces are missing: the bounces whose
     // first pass is complete and, for the ones still to come, one more mesh,
     // the last complete bounce k times Σ_{j=1..N−k} r^j (each bounce carries
-    // about r = tailAlbedo of the one before): all the light is in the image from the
+    // about r = tailAlbedo of the one before), shaped as shapeAsLaterBounces
+    // says: all the light is in the image from the
     // first bounce on, its distribution approximate until the bounces are
     // gathered. A bounce being gathered is not shown until it is complete,
     // except bounce 1 (see firstBounceShown).
