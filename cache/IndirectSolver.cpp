@@ -458,7 +458,6 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
     double tail = 0, term = 1;
     for (int j = 1; j <= settings_.bounces - complete; ++j) tail += term *= a;
     IrradianceMeshCopy rest = v.back();
-    const std::vector<Rgb> own = rest.irradiance;
     shapeAsLaterBounces(rest, complete);
     for (Rgb& e : rest.irradiance) e *= tail;
     // The tail is a model, not a measurement: its error is assumed to be
@@ -472,7 +471,7 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
     // tail, as before, read 3.5%, 13.3% and 4.1% there.
     rest.predictedError.resize(rest.irradiance.size());
     for (size_t i = 0; i < rest.irradiance.size(); ++i) {
-        const Rgb shape = glm::abs(rest.irradiance[i] - tail * own[i]);
+        const Rgb shape = glm::abs(rest.irradiance[i] - tail * v.back().irradiance[i]);
         const Rgb scale = kTailRatioError * rest.irradiance[i];
         rest.predictedError[i] = glm::sqrt(shape * shape + scale * scale);
     }
