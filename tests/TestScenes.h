@@ -49,6 +49,18 @@ inline Scene sceneOf(std::string name, std::vector<Material> materials, std::vec
     return scene;
 }
 
+// Material 0 emits `ke` (Kd 0), material 1 is grey (Kd 0.5): the pair
+// unitLight() and floorMesh() are drawn with.
+inline std::vector<Material> lightAndGrey(double ke = 1.0) {
+    Material light, grey;
+    light.name = "light";
+    light.kd = Rgb(0.0);
+    light.ke = Rgb(ke);
+    grey.name = "grey";
+    grey.kd = Rgb(0.5);
+    return {light, grey};
+}
+
 // The bench's parts (core/scenes/BenchScene.h) as meshes of their own, for
 // scenes whose material 0 emits and material 1 is grey: the light, 1 × 1 at
 // y = 1 (x, z ∈ [−0.5, 0.5]) facing down, and the floor, 3 × 3 at y = 0

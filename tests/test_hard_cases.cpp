@@ -55,15 +55,7 @@ namespace {
 
 // Material 0 emits (Ke = 1, so irradiance = cosine-weighted solid angle),
 // material 1 is grey.
-std::vector<Material> materials() {
-    Material light, grey;
-    light.name = "light";
-    light.kd = Rgb(0.0);
-    light.ke = Rgb(1.0);
-    grey.name = "grey";
-    grey.kd = Rgb(0.5);
-    return {light, grey};
-}
+std::vector<Material> materials() { return test::lightAndGrey(); }
 
 // A closed box, faces outwards.
 Mesh boxMesh(const std::string& name, const Vec3& lo, const Vec3& hi) {

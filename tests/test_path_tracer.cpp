@@ -202,6 +202,91 @@ TEST(PathTracer, DirectIrradianceMatchesExactInTheCornellBox) {
     expectDirectMatchesExact(makeCornellBox(), points);
 }
 
+// --- faces back to back ------------------------------------------------------------
+
+namespace {
+
+// The bench's light (1 × 1 at y = 1, facing down) with its twin facing up on
+// the same corners, as exporters write a double-sided panel, in either
+// order, over the floor: the sampled panel and its twin are two lights
+// (core/Scene.h), the twin emitting away from the floor.
+Scene twinPanelScene(bool twinFirst) {
+    Mesh panel;
+    panel.name = "panel";
+    const Vec3 corner(-0.5, 1.0, -0.5);
+    if (twinFirst) test::addQuad(panel, 0, corner, test::kZ, test::kX);  // facing up
+    test::addQuad(panel, 0, corner, test::kX, test::kZ);                  // facing down
+    if (!twinFirst) test::addQuad(panel, 0, corner, test::kZ, test::kX);
+    return test::sceneOf("twin panel", test::lightAndGrey(4.0), {panel, test::floorMesh()});
+}
+
+}  // namespace
+
+TEST(EmbreeScene, OfFacesBackToBackTheRayMeetsTheOneFacingIt) {
+    // Embree returns either of two triangles at the same distance; before
+    // this rule, rays from below met the panel's up-facing twin (its back)
+    // in one of the two orders. 400 rays each way, through the whole panel.
+    for (const bool twinFirst : {false, true}) {
+        const Scene scene = twinPanelScene(twinFirst);
+        const EmbreeScene rays(scene);
+        int wrong = 0;
+        for (int i = 0; i < 20; ++i)
+            for (int k = 0; k < 20; ++k) {
+                const Vec3 x(-0.475 + 0.05 * i, 0.0, -0.475 + 0.05 * k);
+                for (const double dir : {1.0, -1.0}) {
+                    const Vec3 origin = x + Vec3(0.0, dir > 0 ? 0.5 : 1.5, 0.0);
+                    const Vec3 d(0.0, dir, 0.0);
+                    RayHit hit;
+                    ASSERT_TRUE(rays.intersect(origin, d, 0.0, 10.0, hit)) << i << "," << k;
+                    const SurfacePoint s = rays.surface(hit);
+                    EXPECT_NEAR(s.position.y, 1.0, 1e-12);
+                    wrong += glm::dot(s.geometricNormal, d) >= 0;  // its back faces the ray
+                }
+            }
+        EXPECT_EQ(wrong, 0) << (twinFirst ? "twin first" : "twin second");
+    }
+}
+
+TEST(PathTracer, ADoubleSidedPanelLightsAsItsFacingSide) {
+    // Under the twinned panel the image's estimator (next-event estimation
+    // and BSDF-sampled hits, by MIS) must give the floor the direct light of
+    // the down-facing panel alone: before the rule above, BSDF-sampled rays
+    // met the twin's back in one order and that half of the estimate was
+    // lost. Depth 1, a camera looking down at the floor, against the exact
+    // irradiance (Kd/π·E per pixel), pooled over the image: 4σ.
+    for (const bool twinFirst : {false, true}) {
+        const Scene scene = twinPanelScene(twinFirst);
+        const EmbreeScene rays(scene);
+        const ExactDirect exact(scene);
+        Camera camera;
+        camera.position = Vec3(0.0, 0.9, 0.0);
+        camera.target = Vec3(0.0, 0.0, 0.0);
+        camera.up = Vec3(0, 0, 1);
+        camera.fovYDegrees = 40;
+        PathTracerSettings settings;
+        settings.maxDepth = 1;
+        const ReferenceImage r = PathTracer(rays, settings).render(camera, 4, 4, 512);
+        // Each pixel's exact value at its centre ray's floor point; the
+        // irradiance is smooth over a pixel (0.16 of the panel across), so
+        // the mean over the image, not each pixel, is compared.
+        double traced = 0, expected = 0, se2 = 0;
+        const double f = std::tan(glm::radians(camera.fovYDegrees) / 2);
+        const Mat4 world = glm::inverse(camera.view());
+        for (int j = 0; j < 4; ++j)
+            for (int i = 0; i < 4; ++i) {
+                const double ndcX = (i + 0.5) / 2 - 1, ndcY = 1 - (j + 0.5) / 2;
+                const Vec3 d = glm::normalize(Vec3(world * Vec4(ndcX * f, ndcY * f, -1.0, 0.0)));
+                const Vec3 x = camera.position + (camera.position.y / -d.y) * d;
+                Rgb e(0.0);
+                for (size_t l = 0; l < scene.lights.size(); ++l) e += exact.irradiance(l, x, test::kY);
+                expected += 0.5 / kPi * e.g;
+                traced += r.radiance.at(i, j).g;
+                se2 += r.standardError.at(i, j).g * r.standardError.at(i, j).g;
+            }
+        EXPECT_NEAR(traced, expected, 4 * std::sqrt(se2) + 0.01 * expected) << (twinFirst ? "twin first" : "twin second");
+    }
+}
+
 // --- determinism ----------------------------------------------------------------
 
 TEST(PathTracer, SameSeedGivesTheSameImageWhateverTheThreadCount) {

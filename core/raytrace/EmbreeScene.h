@@ -82,7 +82,8 @@ public:
     const Scene& scene() const;
 
     // The closest hit of origin + t·direction, t in (tNear, tFar); false when
-    // nothing is hit. `direction` need not be unit (t is in its units).
+    // nothing is hit. `direction` need not be unit (t is in its units). Of
+    // faces back to back there (within rayOffset), the one facing the ray.
     // Thread-safe: any number of threads may query at once.
     bool intersect(const Vec3& origin, const Vec3& direction, double tNear, double tFar, RayHit& hit,
                    const RayFilter& filter = {}) const;
