@@ -105,6 +105,14 @@ public:
         return e;
     }
     bool expectIndirect = false;  // the session computes indirect light
+    // The composites at the settings' sub-pixel passes that the last image
+    // of `s` written to `path` takes: the estimate's beauty, and every
+    // layer of a layered EXR (layerComposites).
+    size_t compositesPerPass(const std::string& path, const CacheSnapshot& s) const {
+        if (quantity_ == OutputQuantity::Lux) return 1;
+        if (outputFormat(path) != ImageFormat::Exr || !layers_) return 1;
+        return 1 + layerComposites(scene_, s.direct.size(), compositor_.hasSpecularPass(), *layers_);
+    }
     int passes() const { return settings_.passes; }
     void setPasses(int passes) { settings_.passes = passes; }
     // Composites `s` from `camera` and writes it to `path`; returns the
@@ -535,7 +543,11 @@ int runRender(const std::vector<std::string>& args) {
     // 2.1 s and composited more passes than its resumed copies, 2.5% apart).
     if (autoPasses && !walkthrough && radianceOut && !stop.samples) {
         // As many passes as a tenth of the refinement's time pays for, timed
-        // on one pass (subpixelPassesWithin).
+        // on one pass (subpixelPassesWithin) and counted over every
+        // composite the image takes: a layered EXR composites each light's
+        // layer at those passes too. Counting the beauty alone, the back
+        // rooms' `--time 240` (240×135) took 32 passes, and its last image,
+        // with 16 lights' layers, 127 s after 241 s of refinement.
         CompositorSettings one = comp;
         one.passes = 1;
         one.outlinePasses = 0;
@@ -544,10 +556,12 @@ int runRender(const std::vector<std::string>& args) {
         const auto t0 = Clock::now();
         compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
         const double pass = secondsSince(t0);
-        const int k = subpixelPassesWithin(pass, refineSeconds);
+        const size_t composites = output.compositesPerPass(lastPath, *final);
+        const int k = subpixelPassesWithin(pass * double(composites), refineSeconds);
         output.setPasses(k);
-        std::printf("sub-pixel passes: %d for the last image (one pass %.3f s; a tenth of %.1f s refined)\n", k, pass,
-                    refineSeconds);
+        std::printf("sub-pixel passes: %d for the last image (one pass %.3f s, %zu composites; a tenth of %.1f s "
+                    "refined)\n",
+                    k, pass, composites, refineSeconds);
     }
     ImageErrorEstimate finalEstimate;
     if (radianceOut || !logPath.empty()) {

@@ -123,6 +123,13 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
     return out;
 }
 
+size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers) {
+    const size_t lights = scene.lights.size();
+    const size_t own = std::min(lights, layers.maxLightLayers);
+    const size_t parts = 3 + own + (own < lights ? 1 : 0) + (directMeshes > lights ? 1 : 0);
+    return 3 + (specularPass ? 1 : 0) + parts;
+}
+
 std::vector<ImageLayer> RenderLayers::exrLayers() const {
     std::vector<ImageLayer> layers = {ImageLayer::rgb("", beauty), ImageLayer::rgb("emission", emission),
                                       ImageLayer::rgb("direct", direct), ImageLayer::rgb("indirect", indirect)};

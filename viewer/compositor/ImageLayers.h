@@ -72,6 +72,15 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
                           const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
                           const LayerSettings& layers);
 
+// How many composites renderLayers makes at the settings' sub-pixel passes
+// (the illuminance is one pass): the beauty, the specular pass where there
+// is one, the noise, the reflectance, and one per part (emission, direct,
+// indirect, each light with a layer of its own, the lights past the cap,
+// the shared mesh). What a sub-pixel pass of a layered EXR costs, in
+// composites: `render` budgets its last image's passes by it (the back
+// rooms' 16 lights make 25).
+size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers);
+
 // "light.<name>" per light: the name with every character other than a
 // letter, a digit or '_' made '_' (EXR tools split layers at '.'), "light<i>"
 // when that leaves it empty, and "_2", "_3", ... on a name already taken.
