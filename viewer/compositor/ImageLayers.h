@@ -78,7 +78,7 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
 // indirect, each light with a layer of its own, the lights past the cap,
 // the shared mesh). What a sub-pixel pass of a layered EXR costs, in
 // composites: `render` budgets its last image's passes by it (the back
-// rooms' 16 lights make 25).
+// rooms' 16 lights and their shared mesh make 23).
 size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers);
 
 // "light.<name>" per light: the name with every character other than a
