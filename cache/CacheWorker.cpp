@@ -118,13 +118,13 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
     snap->vertices = cache_.totalVertices();
     snap->samples = cache_.totalSamples();
     snap->rounds = cache_.rounds();
-    // Only this thread changes the cache while the worker lives, and each
-    // change adds a round, a level, a sample or a vertex: an unchanged cache
-    // seen from the same camera keeps its score.
-    const std::array<uint64_t, 5> state{cache_.rounds(), uint64_t(cache_.level()), cache_.totalSamples(),
-                                        uint64_t(cache_.totalVertices()), cameraSerial};
-    if (!lastDirectError_ || lastDirectError_->first != state) lastDirectError_ = {state, cache_.estimatedError(view)};
-    snap->directError = lastDirectError_->second;
+    // Only this thread changes the cache while the worker lives: an
+    // unchanged cache (IrradianceCache::changeKey) seen from the same camera
+    // keeps its score.
+    const std::array<uint64_t, 4> key = cache_.changeKey();
+    if (!lastDirectError_ || lastDirectError_->cache != key || lastDirectError_->camera != cameraSerial)
+        lastDirectError_ = KeptScore{key, cameraSerial, cache_.estimatedError(view)};
+    snap->directError = lastDirectError_->error;
     if (indirect_) {
         snap->indirect = indirect_->displayMeshes();
         // While direct light's first pass is incomplete, bounce 1 reflects

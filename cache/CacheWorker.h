@@ -195,12 +195,16 @@ private:
     std::exception_ptr failure_;
     uint64_t published_ = 0;
     // Direct light's estimated error in the last snapshot, and the state it
-    // was scored in: rounds (each refine counts one), level, samples,
-    // vertices, camera serial. While only indirect light works (a bounce's
-    // first pass runs with no direct rounds) snapshots reuse it: scoring
-    // took 32 of a snapshot's 75 ms in the office, every 0.33 s, on the
-    // thread whose helpers wait meanwhile.
-    std::optional<std::pair<std::array<uint64_t, 5>, double>> lastDirectError_;
+    // was scored in: the cache's change key and the camera's serial. While
+    // only indirect light works (a bounce's first pass runs with no direct
+    // rounds) snapshots reuse it: scoring took 32 of a snapshot's 75 ms in
+    // the office, every 0.33 s, on the thread whose helpers wait meanwhile.
+    struct KeptScore {
+        std::array<uint64_t, 4> cache{};  // IrradianceCache::changeKey
+        uint64_t camera = 0;              // setCamera's serial
+        double error = 0;
+    };
+    std::optional<KeptScore> lastDirectError_;
 };
 
 }  // namespace ml

@@ -342,9 +342,9 @@ IndirectSolver::BounceMemo& IndirectSolver::memo(int bounce) const {
     const IrradianceCache& c = *caches_.at(size_t(bounce - 1));
     if (memo_.size() < caches_.size()) memo_.resize(caches_.size());
     BounceMemo& m = memo_[size_t(bounce - 1)];
-    const std::array<uint64_t, 5> state{c.rounds(), uint64_t(c.level()), c.totalSamples(), uint64_t(c.totalVertices()),
-                                        epoch_};
-    if (m.state != state) m = BounceMemo{state, std::nullopt, std::nullopt, std::nullopt, std::nullopt};
+    const std::array<uint64_t, 4> key = c.changeKey();
+    if (m.cache != key || m.epoch != epoch_)
+        m = BounceMemo{key, epoch_, std::nullopt, std::nullopt, std::nullopt, std::nullopt};
     return m;
 }
 

@@ -257,11 +257,12 @@ private:
     // 4.3 s of the worker's 20 (21 snapshots): the bounces' display copies
     // 1.95 s, their copies while first passes run 0.69 s, their scores
     // 0.88 s. With this, 2.2 s for 26 (0.83, 0.30 and 0.25 s).
-    // Each change of a cache adds a round, a level, a sample or a vertex
-    // (or resets its samples, restart()); `epoch_` counts the changes that
-    // replace caches.
+    // Kept while the cache's change key (IrradianceCache::changeKey) and
+    // `epoch_` stay: epoch_ counts what the key does not see, restart()
+    // resetting the samples and sceneChanged() replacing the caches.
     struct BounceMemo {
-        std::array<uint64_t, 5> state{};  // rounds, level, samples, vertices, epoch
+        std::array<uint64_t, 4> cache{};  // IrradianceCache::changeKey
+        uint64_t epoch = 0;
         std::optional<IrradianceMeshCopy> raw, filled;  // copyMesh(0); its hidden vertices filled
         std::optional<RefinementCamera> view;           // of `error`
         std::optional<double> error;

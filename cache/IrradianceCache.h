@@ -19,6 +19,7 @@
 #include "core/Scene.h"
 #include "core/SceneChange.h"
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -218,6 +219,14 @@ public:
     size_t gridObjectCount() const;
     uint64_t totalSamples() const;
     uint64_t rounds() const;  // refinement rounds so far
+    // Rounds, level, samples and vertices: every change of the cache adds a
+    // round, a level, a sample or a vertex (resetSamples aside, which those
+    // who keep copies count themselves), so a copy or score made from the
+    // cache stays valid while this is the same (CacheWorker's direct score,
+    // IndirectSolver's bounce copies).
+    std::array<uint64_t, 4> changeKey() const {
+        return {rounds(), uint64_t(level()), totalSamples(), uint64_t(totalVertices())};
+    }
     size_t unsampledCount() const;  // vertices (and grid samples) without a sample yet
     // The shading point of a vertex: where and facing where it is sampled
     // (on an object's border that an emitter meets, a thousandth of its
