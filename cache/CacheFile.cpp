@@ -8,8 +8,9 @@
 // Payload: u64 rounds, u64 samples, u64 detached faces, u32 refinement
 // level (IrradianceCache::tighten), u32 meshes; per
 // mesh: u32 vertices, u32 faces, per vertex 6 f64 (point, normal) and its
-// sample sums (6 f64, 2 u32, f64 Σ 1/reach, f64 Σ work), per face 3 u32 vertex indices, then u32 grid
-// samples and their sample sums (the grids themselves are made from the
+// sample sums (6 f64, 2 u32, f64 Σ 1/reach, f64 Σ work, f64 Σ work·own
+// variance, u32 samples that measured their own), per face 3 u32 vertex
+// indices, then u32 grid samples and their sample sums (the grids themselves are made from the
 // scene again).
 // Faces are stored in index order and rebuilt in that order, so vertex and
 // face indices survive a round trip; only halfedge numbering may differ,
@@ -34,7 +35,8 @@ using detail::toOm;
 using detail::toVec3;
 
 constexpr char kMagic[16] = {'M', 'E', 'S', 'H', 'L', 'I', 'G', 'H', 'T', '-', 'C', 'A', 'C', 'H', 'E', '\n'};
-constexpr uint32_t kFormatVersion = 4;  // 2: the refinement level; 3: the samples' reach; 4: their work
+constexpr uint32_t kFormatVersion = 5;  // 2: the refinement level; 3: the samples' reach; 4: their work;
+                                        // 5: their own variance
 
 uint64_t fnv1a(const std::string& bytes) {
     uint64_t h = 0xcbf29ce484222325ull;
@@ -88,6 +90,7 @@ void writeStats(Writer& w, const detail::VertexStats& st) {
     w.put(st.count), w.put(st.partial);
     w.put(st.sumInverseReach);
     w.put(st.work);
+    w.put(st.sumOwnVariance), w.put(st.ownCount);
 }
 
 detail::VertexStats readStats(Reader& r, const std::string& path, const char* what, size_t index, size_t mesh) {
@@ -100,10 +103,13 @@ detail::VertexStats readStats(Reader& r, const std::string& path, const char* wh
     st.partial = r.get<uint32_t>(what);
     st.sumInverseReach = r.get<double>(what);
     st.work = r.get<double>(what);
+    st.sumOwnVariance = r.get<double>(what);
+    st.ownCount = r.get<uint32_t>(what);
     if (!(st.count ? st.work > 0 && std::isfinite(st.work) : st.work == 0) ||
         !isFinite(st.sum) || !std::isfinite(st.sumLum) || !std::isfinite(st.sumLumSq) ||
         !(st.sumVisibility >= 0 && st.sumVisibility <= st.count) || st.partial > st.count ||
-        !(st.sumInverseReach >= 0 && std::isfinite(st.sumInverseReach)))
+        !(st.sumInverseReach >= 0 && std::isfinite(st.sumInverseReach)) ||
+        !(st.sumOwnVariance >= 0 && std::isfinite(st.sumOwnVariance)) || st.ownCount > st.count)
         throw InputError(concat(path, ": cache file is corrupt (", what, " ", index, " of mesh ", mesh, ")"));
     return st;
 }

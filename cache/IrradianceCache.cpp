@@ -392,35 +392,80 @@ double IrradianceCache::sampleNoise() const { return detail::effectiveSettings(i
 
 namespace detail {
 
-double measuredSampleNoise(const CacheState& s) {
+namespace {
+
+// The sums behind MeasuredNoise and NoiseModel, over every vertex and grid
+// sample.
+struct NoiseSums {
+    double spread = 0, level = 0, freedom = 0;  // the resampled ones
+    double ownSpread = 0, ownExpected = 0, ownFreedom = 0;  // ...of them, those whose samples measured their own
+    double ownLevel = 0, ownVariance = 0;  // every sampled one whose samples measured their own
+};
+
+NoiseSums noiseSums(const CacheState& s) {
     // Pooled as a ratio of sums, Σ (n−1)·s² / Σ (n−1)·mean²: each vertex's
     // spread counts by its degrees of freedom and by its light, so the dark
     // vertices, whose relative spread is large and shown faint, do not
-    // decide it.
+    // decide it. The own variances' scale likewise, Σ (n−1)·s² over
+    // Σ (n−1)·own.
     // The spreads are of a unit of work (VertexStats): the noise of a full
     // estimate, of s.fullWork, is theirs over √fullWork.
-    double spread = 0, level = 0, freedom = 0;
+    NoiseSums sums;
     const auto add = [&](const VertexStats& st) {
+        if (st.count == 0) return;
+        const double n = st.count, mean = st.meanLuminance(), own = st.ownUnitVariance();
+        if (own >= 0) sums.ownLevel += mean * mean, sums.ownVariance += own;
         if (st.count < 2) return;
-        const double n = st.count, mean = st.meanLuminance();
-        spread += st.spread();  // (n−1)·s²
-        level += (n - 1) * mean * mean;
-        freedom += n - 1;
+        sums.spread += st.spread();  // (n−1)·s²
+        sums.level += (n - 1) * mean * mean;
+        sums.freedom += n - 1;
+        if (own < 0) return;
+        sums.ownSpread += st.spread();
+        sums.ownExpected += (n - 1) * own;
+        sums.ownFreedom += n - 1;
     };
     for (const LightMesh& lm : s.meshes) {
         for (const VertexStats& st : lm.stats) add(st);
         for (const VertexStats& st : lm.gridStats) add(st);
     }
-    if (freedom < kMeasuredNoiseFreedom || !(level > 0)) return 0;
-    return std::sqrt(spread / level / std::max(s.fullWork, 1e-300));
+    return sums;
+}
+
+MeasuredNoise measured(const NoiseSums& sums, double fullWork) {
+    MeasuredNoise m;
+    if (sums.freedom >= kMeasuredNoiseFreedom && sums.level > 0)
+        m.relative = std::sqrt(sums.spread / sums.level / std::max(fullWork, 1e-300));
+    if (sums.ownFreedom >= kMeasuredNoiseFreedom && sums.ownExpected > 0) m.ownScale = sums.ownSpread / sums.ownExpected;
+    return m;
+}
+
+double effectiveSampleNoise(const CacheSettings& settings, const MeasuredNoise& m) {
+    return settings.sampleNoise > 0 && m.relative > 0 ? std::min(m.relative, 0.99) : settings.sampleNoise;
+}
+
+}  // namespace
+
+MeasuredNoise measureNoise(const CacheState& s) { return measured(noiseSums(s), s.fullWork); }
+
+NoiseModel noiseModel(const CacheState& s) {
+    const NoiseSums sums = noiseSums(s);
+    const MeasuredNoise m = measured(sums, s.fullWork);
+    NoiseModel model;
+    model.singleSampleNoise = s.settings.singleSampleNoise;
+    model.sampleNoise = effectiveSampleNoise(s.settings, m);
+    model.fullWork = s.fullWork;
+    if (m.ownScale >= 0)
+        model.ownScale = m.ownScale;
+    else if (sums.ownVariance > 0)
+        // Unit variance sampleNoise²·mean²·fullWork on the mean, as the
+        // settings assume of every vertex.
+        model.ownScale = model.sampleNoise * model.sampleNoise * s.fullWork * sums.ownLevel / sums.ownVariance;
+    return model;
 }
 
 CacheSettings effectiveSettings(const CacheState& s) {
     CacheSettings c = s.settings;
-    if (c.sampleNoise > 0) {
-        const double measured = measuredSampleNoise(s);
-        if (measured > 0) c.sampleNoise = std::min(measured, 0.99);
-    }
+    if (c.sampleNoise > 0) c.sampleNoise = effectiveSampleNoise(c, measureNoise(s));
     if (s.level == 0) return c;
     const double f = std::ldexp(1.0, -s.level);
     c.splitTolerance *= f;
@@ -537,6 +582,10 @@ size_t fillRings(const detail::CacheTriMesh& mesh, IrradianceMeshCopy& out, std:
     return done;
 }
 
+// The vertex's noise is measured, not assumed: by its samples' spread (two
+// or more) or by their own variance (VertexSample::ownVariance).
+bool measuredNoise(const detail::VertexStats& st) { return st.count >= 2 || st.ownUnitVariance() >= 0; }
+
 // A luminance `value` (an error, W·m⁻²) as RGB in the colour of `mean`,
 // whose luminance is `lum`; grey where the mean is black.
 Rgb colourOf(const Rgb& mean, double lum, double value) { return lum > 0 ? mean * (value / lum) : Rgb(value); }
@@ -545,6 +594,8 @@ Rgb colourOf(const Rgb& mean, double lum, double value) { return lum > 0 ? mean 
 
 IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     const detail::LightMesh& lm = impl_->state.meshes.at(l);
+    const detail::NoiseModel noise = detail::noiseModel(impl_->state);
+    const std::vector<double> own = detail::ringOwnVariances(lm);
     IrradianceMeshCopy out;
     const size_t n = lm.mesh.n_vertices();
     out.positions.reserve(n);
@@ -557,10 +608,10 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
         const detail::VertexStats& st = lm.stats[size_t(v.idx())];
         out.irradiance.push_back(st.mean());
         out.samples.push_back(st.count);
-        Rgb se(0.0);
         const double mean = st.meanLuminance();
-        if (st.count >= 2 && mean > 0) se = st.mean() * (std::sqrt(st.meanVariance()) / mean);
-        out.standardError.push_back(se);
+        out.standardError.push_back(mean > 0 && measuredNoise(st)
+                                        ? st.mean() * (detail::meanNoise(st, noise, own[size_t(v.idx())]) / mean)
+                                        : Rgb(0.0));
     }
     // While the first pass runs, vertices without a sample take their
     // sampled neighbours' mean, ring after ring: a copy is a complete image,
@@ -604,7 +655,6 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     // Grid-cached objects: their own triangles, irradiance interpolated from
     // the grid's samples; a vertex counts the samples of its heaviest one.
     std::vector<Rgb> sampleMeans, vertexValues;
-    const CacheSettings settings = detail::effectiveSettings(impl_->state);
     for (const detail::GridObject& g : impl_->state.grids) {
         const uint32_t first = uint32_t(out.positions.size());
         sampleMeans.clear();
@@ -625,8 +675,8 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
             // used), or a guess's while that sample has none.
             const double lum = luminance(vertexValues[v]);
             const Rgb se =
-                colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, settings, impl_->state.fullWork) : kGuessedLightError * lum);
-            out.standardError.push_back(st.count >= 2 ? se : Rgb(0.0));
+                colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, noise) : kGuessedLightError * lum);
+            out.standardError.push_back(measuredNoise(st) ? se : Rgb(0.0));
             out.predictedError.push_back(se);
         }
         for (const glm::uvec3& t : g.triangles) out.triangles.push_back(t + glm::uvec3(first));

@@ -105,9 +105,11 @@ struct IrradianceMeshCopy {
     std::vector<Rgb> irradiance;           // W·m⁻², mean of the samples
     std::vector<uint32_t> samples;         // samples averaged at each vertex
     // The standard error of each vertex's mean, W·m⁻²: the relative spread of
-    // its samples' luminance applied to its RGB mean; 0 where it has fewer
-    // than two samples (its noise is not measured). Empty in copies made
-    // elsewhere (tests, sources built by hand): read as 0.
+    // its samples' luminance, pooled with their own variance where they
+    // measured it (a ray gather's rays), applied to its RGB mean; 0 where
+    // its noise is not measured (fewer than two samples that did not
+    // measure their own). Empty in copies made elsewhere (tests, sources
+    // built by hand): read as 0.
     std::vector<Rgb> standardError;
     // The error each vertex predicts for the irradiance shown around it,
     // W·m⁻², as an RMS over its faces: its noise and its edges'

@@ -148,8 +148,8 @@ double whiteLevel(const CacheState& s, const std::vector<std::vector<double>>& a
 
 // The relative standard error of a vertex's (or grid sample's) mean, as the
 // scoring uses it; see the top of this file.
-double relativeNoise(const detail::VertexStats& st, const CacheSettings& cs, double fullWork, double white) {
-    return std::min(detail::meanNoise(st, cs, fullWork) / (st.meanLuminance() + 0.5 * kDarkFloor * white), 1.0);
+double relativeNoise(const detail::VertexStats& st, const detail::NoiseModel& noise, double white, double own) {
+    return std::min(detail::meanNoise(st, noise, own) / (st.meanLuminance() + 0.5 * kDarkFloor * white), 1.0);
 }
 
 // The value at vertex v of the plane that fits its neighbours' values best
@@ -220,6 +220,7 @@ bool mayStep(const detail::VertexStats& a, const detail::VertexStats& b, double 
 
 Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, bool collect) {
     const CacheSettings cs = effectiveSettings(s);
+    const detail::NoiseModel noise = detail::noiseModel(s);
     std::vector<std::vector<double>> areas;
     for (const LightMesh& lm : s.meshes) areas.push_back(vertexAreas(lm.mesh));
     Scoring out;
@@ -243,6 +244,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             t[v] = displayLevel(lum[v], white);
         }
         residuals(mesh, lum, res);
+        const std::vector<double> own = ringOwnVariances(lm);
         for (size_t vi = 0; vi < nv; ++vi) {
             if (!(res[vi] >= 0)) continue;  // no fit there
             // The residual is an interpolation error in irradiance, where the
@@ -254,7 +256,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             // With a sampler whose every sample is noisy, a residual within
             // twice the mean's standard error may be noise, not curvature:
             // resampling, not splitting, is what helps there.
-            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], cs, s.fullWork, white));
+            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], noise, white, own[vi]));
         }
 
         for (auto e : mesh.edges()) {
@@ -270,8 +272,8 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
                 // As for the residual: a difference within twice the ends'
                 // standard errors may be noise.
                 if (cs.sampleNoise > 0)
-                    step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], cs, s.fullWork, white),
-                                                             relativeNoise(lm.stats[b], cs, s.fullWork, white)));
+                    step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], noise, white, own[a]),
+                                                             relativeNoise(lm.stats[b], noise, white, own[b])));
                 predicted = std::max(predicted, step);
             }
             const bool splittable = len > metric.minLength(mid);
@@ -296,7 +298,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
 
         for (size_t v = 0; v < nv; ++v) {
             const detail::VertexStats& st = lm.stats[v];
-            const double rel = relativeNoise(st, cs, s.fullWork, white);
+            const double rel = relativeNoise(st, noise, white, own[v]);
             const double seen = metric.weight(toVec3(mesh.point(VH(int(v)))));
             noiseErr += seen * areas[l][v] * rel * rel;
             noiseWeight += seen * areas[l][v];
@@ -306,7 +308,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
         }
         for (size_t g = 0; g < s.gridSamples; ++g) {
             const detail::VertexStats& st = lm.gridStats[g];
-            const double rel = relativeNoise(st, cs, s.fullWork, white), area = gridSampleArea(s, g);
+            const double rel = relativeNoise(st, noise, white, st.ownUnitVariance()), area = gridSampleArea(s, g);
             const detail::GridObject& o = detail::gridOf(s, g);
             const double seen = metric.weight(o.grid->samplePosition(g - o.firstSample));
             noiseErr += seen * area * rel * rel;
@@ -474,27 +476,52 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
 
 namespace detail {
 
-double meanNoise(const VertexStats& st, const CacheSettings& cs, double fullWork) {
+std::vector<double> ringOwnVariances(const LightMesh& lm) {
+    const CacheTriMesh& mesh = lm.mesh;
+    std::vector<double> out(mesh.n_vertices(), -1.0);
+    for (auto v : mesh.vertices()) {
+        const double own = lm.stats[size_t(v.idx())].ownUnitVariance();
+        if (own < 0) continue;
+        double sum = own, n = 1;
+        for (auto u : mesh.vv_range(v)) {
+            const double o = lm.stats[size_t(u.idx())].ownUnitVariance();
+            if (o >= 0) sum += o, n += 1;
+        }
+        out[size_t(v.idx())] = std::max(own, sum / n);
+    }
+    return out;
+}
+
+double meanNoise(const VertexStats& st, const NoiseModel& m, double own) {
+    // Samples that measured their own variance: it, scaled to what the
+    // cache's resampled vertices measure, and the vertex's own spread
+    // between its samples, each by its degrees of freedom.
+    if (st.ownUnitVariance() >= 0 && own >= 0 && m.ownScale >= 0) {
+        const double unit = (st.spread() + kOwnVarianceFreedom * m.ownScale * own) /
+                            (double(st.count - 1) + kOwnVarianceFreedom);
+        return std::sqrt(std::max(unit, 0.0) / st.work);
+    }
     if (st.count >= 2) return std::sqrt(st.meanVariance());
     // A penumbra seen once: its spread is unknown, so assume the sampler's
     // per-sample error relative to the unoccluded irradiance (E / visibility).
     const double mean = st.meanLuminance();
-    if (st.count == 1 && st.partial) return cs.singleSampleNoise * mean / std::max(st.sumVisibility, 0.01);
+    if (st.count == 1 && st.partial) return m.singleSampleNoise * mean / std::max(st.sumVisibility, 0.01);
     // A sampler whose every sample is noisy (a jittered gather); a cheaper
     // one (a first pass's gather of fewer rays) more so.
-    if (st.count == 1 && cs.sampleNoise > 0)
-        return cs.sampleNoise * mean * (fullWork > st.work ? std::sqrt(fullWork / st.work) : 1.0);
+    if (st.count == 1 && m.sampleNoise > 0)
+        return m.sampleNoise * mean * (m.fullWork > st.work ? std::sqrt(m.fullWork / st.work) : 1.0);
     return 0;
 }
 
 std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum) {
-    const CacheSettings cs = effectiveSettings(s);
+    const detail::NoiseModel noise = detail::noiseModel(s);
     const LightMesh& lm = s.meshes[l];
     const CacheTriMesh& mesh = lm.mesh;
     const size_t nv = mesh.n_vertices();
     ML_ASSERT(lum.size() == nv, lum.size(), " values for ", nv, " vertices");
     std::vector<double> res, sumSq(nv, 0.0), edges(nv, 0.0);
     residuals(mesh, lum, res);
+    const std::vector<double> own = ringOwnVariances(lm);
     // Linear interpolation of a smooth signal errs most at an edge's
     // midpoint, by a quarter of the larger residual of its ends (see the
     // top of this file), and by e·4t(1−t) along it: an RMS of e·√(8/15) =
@@ -518,9 +545,9 @@ std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::ve
         const double interpolation = edges[v] > 0 ? sumSq[v] / edges[v] : 0.0;
         // A vertex not sampled yet shows its neighbours' light (copyMesh):
         // a guess, assumed off by kGuessedLightError of itself.
-        const double noise =
-            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], cs, s.fullWork);
-        out[v] = std::sqrt(interpolation + noise * noise);
+        const double vertexNoise =
+            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], noise, own[v]);
+        out[v] = std::sqrt(interpolation + vertexNoise * vertexNoise);
     }
     return out;
 }

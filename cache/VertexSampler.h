@@ -38,6 +38,15 @@ struct VertexSample {
     // counts for what it is against a full one. 1 where every estimate of
     // a cache costs the same.
     double work = 1;
+    // The variance of this estimate's luminance, (W·m⁻²)², as its own parts
+    // scatter: a gather's rays taken as independent draws. Its rays are
+    // stratified, which makes the true variance smaller by a factor that
+    // differs from place to place and that the cache measures where it
+    // resamples (detail::NoiseModel). What it tells is where one estimate
+    // is likely off: a vertex whose few rays found a bright patch among
+    // dark ones. < 0 where the sampler does not measure it (direct light's
+    // samplers, the voxel gathers).
+    double ownVariance = -1;
 };
 
 // One estimate to take: what sample() takes, for a batch.

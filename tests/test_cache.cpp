@@ -438,6 +438,81 @@ TEST(CacheRefinement, SamplesWeighByTheirWork) {
     }
 }
 
+// A sampler that measures each sample's own variance (a ray gather's rays'
+// scatter, VertexSample::ownVariance) says which vertices are noisy from
+// their first sample: until resampling measures the noise, the assumed
+// sampleNoise (3%) is spread over the vertices by their own variances,
+// scaled so that Σ noise² = sampleNoise²·Σ mean² (exact here: every mean is
+// 1, so a vertex's standard error is √(0.03²·N·own / Σ own)); and the
+// vertices whose samples scattered are resampled first. Here the samples
+// of the vertices not facing up (the blocks' sides and the wall, not the
+// floor and the tops) say 10% and the rest 0.1%: a budget of half those
+// vertices resamples them only. Without the own variances every vertex
+// would count 3% and the resamples would go by area and light.
+TEST(CacheRefinement, VerticesWhoseSamplesScatteredAreResampledFirst) {
+    const auto ownVariance = [](const Vec3& n) { return n.y > 0.5 ? 1e-6 : 0.01; };
+    auto sampler = samplerOf([&](size_t, const Vec3&, const Vec3& n, uint32_t) {
+        VertexSample v;
+        v.irradiance = Rgb(1.0);
+        v.ownVariance = ownVariance(n);
+        return v;
+    });
+    IrradianceCache cache(bench(), resampledUnsplit(2));
+    cache.refine(sampler, 1 << 20, 1);
+    size_t vertices = 0, noisy = 0;
+    double sumOwn = 0;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (const Vec3& n : m.normals) vertices++, noisy += !(n.y > 0.5), sumOwn += ownVariance(n);
+    ASSERT_GT(noisy, 20u);
+    ASSERT_LT(noisy, vertices / 2);
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (size_t v = 0; v < m.positions.size(); ++v)
+            EXPECT_NEAR(m.standardError[v].g, std::sqrt(0.03 * 0.03 * double(vertices) * ownVariance(m.normals[v]) / sumOwn),
+                        1e-12);
+    const RefineReport r = cache.refine(sampler, noisy / 2, 2);
+    EXPECT_EQ(r.resamples, noisy / 2);
+    size_t resampled = 0, resampledQuiet = 0;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (size_t v = 0; v < m.positions.size(); ++v)
+            if (m.samples[v] == 2) resampled++, resampledQuiet += m.normals[v].y > 0.5;
+    EXPECT_EQ(resampled, noisy / 2);
+    EXPECT_EQ(resampledQuiet, 0u);
+}
+
+// Once the vertices are resampled, the own variances' scale is measured:
+// their samples' spreads pooled, over what their own variances said
+// (Σ (n−1)·s² / Σ (n−1)·own), and each vertex's variance pools its spread
+// (n − 1 degrees of freedom) with its own variance so scaled
+// (kOwnVarianceFreedom = 2). Exact: every vertex sampled 1.0 then 1.2
+// (Σ (y − ȳ)² = 0.02), the samples of those facing up saying 0.04 each
+// and the rest 0.01; so the scale is 0.02·N / Σ own, and a
+// vertex's standard error √((0.02 + 2·scale·own) / 3 / 2).
+TEST(CacheRefinement, TheOwnVariancesScaleIsMeasuredAndPooledWithTheSpread) {
+    int round = 0;
+    const auto ownVariance = [](const Vec3& n) { return n.y > 0.5 ? 0.04 : 0.01; };
+    auto sampler = samplerOf([&](size_t, const Vec3&, const Vec3& n, uint32_t) {
+        VertexSample v;
+        v.irradiance = Rgb(round == 0 ? 1.0 : 1.2);
+        v.ownVariance = ownVariance(n);
+        return v;
+    });
+    IrradianceCache cache(bench(), resampledUnsplit(2));
+    cache.refine(sampler, 1 << 20, 1);
+    round = 1;
+    cache.refine(sampler, 1 << 20, 1);
+    double vertices = 0, sumOwn = 0;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (size_t v = 0; v < m.positions.size(); ++v) {
+            ASSERT_EQ(m.samples[v], 2u);
+            vertices += 1, sumOwn += ownVariance(m.normals[v]);
+        }
+    ASSERT_GE(vertices, 64.0);  // kMeasuredNoiseFreedom
+    const double scale = 0.02 * vertices / sumOwn;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (size_t v = 0; v < m.positions.size(); ++v)
+            EXPECT_NEAR(m.standardError[v].g, std::sqrt((0.02 + 2 * scale * ownVariance(m.normals[v])) / 3 / 2), 1e-12);
+}
+
 // Samples whose spread goes as 1/√work (0.4 at work 1, 0.2 at work 4)
 // measure one full sample's noise (work 4, the most a sample took) as 0.2:
 // the pooled spread is of a unit of work. Tolerance as above (7.5%).

@@ -426,6 +426,40 @@ TEST(IndirectConsistency, RayGatherReachIsTheHarmonicMeanDistance) {
     EXPECT_NEAR(sample.reach, 1.5 * h, 0.01 * 1.5 * h);  // 16 × 16 strata
 }
 
+// The variance a gather reports of itself (VertexSample::ownVariance) is
+// its rays' as independent draws, Σ (c − c̄)² / (N(N − 1)). Under a wide
+// glowing ceiling (Le = 1, read as a gathered light's emission) every ray
+// brings π: no scatter, 0. With only the ceiling's half x < 0 glowing, a
+// share f of the rays brings π and the rest 0, so the gather returns πf
+// and its variance is exactly π²·f(1 − f)/(N − 1), whatever f the
+// stratified directions make (about a half).
+TEST(IndirectConsistency, RayGatherReportsItsRaysScatter) {
+    using namespace test;
+    const double h = 0.02, w = 1000 * h;
+    const int strata = 16;
+    const double n = strata * strata;
+    for (const bool half : {false, true}) {
+        const Material lamp = Material::diffuse("lamp", Rgb(0.0), Rgb(1.0));
+        const Material other = Material::diffuse("other", Rgb(0.0), Rgb(half ? 0.0 : 1.0));
+        const Scene scene = sceneOf("ceiling", {lamp, other},
+                                    {quadMesh("glowing half", 0, Vec3(-0.5 * w, h, -0.5 * w), 0.5 * w * kX, w * kZ),
+                                     quadMesh("other half", 1, Vec3(0, h, -0.5 * w), 0.5 * w * kX, w * kZ)});
+        const EmbreeScene rays(scene);
+        const std::vector<char> closed = closedMeshesOf(scene);
+        const EmittingFaces emitting = {{1, 1}, {1, 1}};
+        double variance = -1;
+        const double e = luminance(gatherCachedRadiance(scene, rays, closed, {}, Vec3(0.0), kY, strata, 7, &emitting,
+                                                        nullptr, &variance));
+        const double f = e / kPi;
+        if (!half) {
+            EXPECT_NEAR(f, 1.0, 1e-4);  // the rays past the ceiling's border: a 4·10⁻⁶ share
+        } else {
+            EXPECT_NEAR(f, 0.5, 0.05);
+        }
+        EXPECT_NEAR(variance, kPi * kPi * f * (1 - f) / (n - 1), 1e-9) << (half ? "half lit" : "lit");
+    }
+}
+
 // ScrambledSobol2D: every aligned block of 2^m points is a (0,m,2)-net,
 // whatever the scrambling: each elementary interval of area 2^-m (2^a by
 // 2^(m−a) cells, every a) holds exactly one point. That is the property a

@@ -44,12 +44,30 @@ size_t unsampledCount(const CacheState& s);
 // pass then covers every object and every light evenly). Returns how many.
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget);
 // The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:
-// measured from two samples on; assumed from the settings for a single
-// sample that saw a penumbra or came from a sampler whose every sample is
-// noisy, CacheSettings::sampleNoise for a sample of `fullWork`
-// (CacheState::fullWork; a cheaper one's is larger by √(fullWork / w)); 0
-// otherwise (the exact sampler outside penumbrae).
-double meanNoise(const VertexStats& st, const CacheSettings& cs, double fullWork);
+// - where its samples measured their own variance (a ray gather's), `own`
+//   (a unit of work's: VertexStats::ownUnitVariance, or ringOwnVariances')
+//   scaled by NoiseModel::ownScale, pooled with the samples' spread from
+//   two samples on (kOwnVarianceFreedom);
+// - otherwise measured from two samples on; assumed from the settings for a
+//   single sample that saw a penumbra or came from a sampler whose every
+//   sample is noisy, NoiseModel::sampleNoise for a sample of its fullWork (a
+//   cheaper one's is larger by √(fullWork / w)); 0 otherwise (the exact
+//   sampler outside penumbrae).
+double meanNoise(const VertexStats& st, const NoiseModel& noise, double own);
+inline double meanNoise(const VertexStats& st, const NoiseModel& noise) {
+    return meanNoise(st, noise, st.ownUnitVariance());
+}
+// Per vertex of `lm`, the own variance its noise is judged by (meanNoise):
+// the larger of its samples' (VertexStats::ownUnitVariance) and that
+// averaged with its neighbours'. A vertex's own says how far its one
+// gather may be off, but also leans with it: a gather whose few rays found
+// a bright patch reads both bright and scattered, one whose rays missed it
+// dark and uniform, so resampling by its own variance alone takes the
+// bright ones back down and leaves the dark ones (the back rooms at 20 s
+// read 1.1% dark against 0.5%). Its ring's mean does not lean with its
+// value, but alone it misses the outliers (cache/README.md). < 0 where the
+// vertex's samples did not measure theirs.
+std::vector<double> ringOwnVariances(const LightMesh& lm);
 // The error each vertex of mesh `l` predicts for the irradiance shown
 // around it, in luminance (W·m⁻²), as an RMS over its faces: its noise and
 // the interpolation error of its edges (Refine.cpp), or a guess's

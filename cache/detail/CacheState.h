@@ -7,6 +7,7 @@
 #include "cache/IrradianceCache.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <memory>
 
@@ -29,6 +30,10 @@ struct VertexStats {
     uint32_t partial = 0;  // samples that saw the light partly occluded
     double sumInverseReach = 0;  // Σ 1/reach (0 for a sample that knows none)
     double work = 0;       // Σ w
+    // Σ w·v over the samples that measured their own variance v
+    // (VertexSample::ownVariance), and how many did.
+    double sumOwnVariance = 0;
+    uint32_t ownCount = 0;
 
     Rgb mean() const { return count ? sum / work : Rgb(0.0); }
     double meanLuminance() const { return count ? sumLum / work : 0.0; }
@@ -44,6 +49,9 @@ struct VertexStats {
     double reach() const {
         return sumInverseReach > 0 ? count / sumInverseReach : std::numeric_limits<double>::infinity();
     }
+    // A unit of work's variance as the samples' own parts scatter (w·v,
+    // averaged), where every sample measured it; < 0 otherwise.
+    double ownUnitVariance() const { return count && ownCount == count ? sumOwnVariance / count : -1.0; }
     void add(const VertexSample& s) {
         const double y = luminance(s.irradiance), w = s.work;
         sum += w * s.irradiance;
@@ -54,6 +62,7 @@ struct VertexStats {
         count += 1;
         partial += s.partial ? 1 : 0;
         if (s.reach > 0 && s.reach < std::numeric_limits<double>::infinity()) sumInverseReach += 1 / s.reach;
+        if (s.ownVariance >= 0 && std::isfinite(s.ownVariance)) sumOwnVariance += w * s.ownVariance, ownCount += 1;
     }
 };
 
@@ -116,11 +125,41 @@ struct CacheState {
     double fullWork = 0;
 };
 
-// The relative error of one sample (CacheSettings::sampleNoise) as the
-// cache's own resampled vertices measure it: their spreads pooled, once
-// they have kMeasuredNoiseFreedom degrees of freedom between them; 0 before.
+// What the cache's resampled vertices measure of its samples' noise,
+// once they have kMeasuredNoiseFreedom degrees of freedom between them
+// (0 before):
+// - relative: the relative error of one full sample
+//   (CacheSettings::sampleNoise), their spreads pooled;
+// - ownScale: their spreads over what their samples' own scatter said
+//   (VertexStats::ownUnitVariance), pooled the same way, where every
+//   sample measured its own: how much the samplers' stratification makes
+//   their true noise smaller than their rays' scatter says; < 0 before.
 constexpr double kMeasuredNoiseFreedom = 64;
-double measuredSampleNoise(const CacheState& s);
+struct MeasuredNoise {
+    double relative = 0;
+    double ownScale = -1;
+};
+MeasuredNoise measureNoise(const CacheState& s);
+
+// How noisy a vertex's (grid sample's) mean is taken to be
+// (detail::meanNoise): the settings at the cache's level, and what the
+// cache measured.
+struct NoiseModel {
+    double singleSampleNoise = 0;  // CacheSettings::singleSampleNoise
+    double sampleNoise = 0;        // effectiveSettings(s).sampleNoise
+    double fullWork = 0;           // CacheState::fullWork
+    // The factor that makes a unit of work's own variance its true one:
+    // MeasuredNoise::ownScale once measured; until then the one that makes
+    // the own variances' mean relative noise sampleNoise (the assumed
+    // level, spread over the vertices by what each sample saw). < 0 where
+    // no sample measured a variance above 0.
+    double ownScale = -1;
+};
+NoiseModel noiseModel(const CacheState& s);
+// A measured own variance counts as this many degrees of freedom beside a
+// vertex's own spread (its n − 1): two samples that agreed by chance do
+// not make a vertex whose rays scattered widely count as exact.
+constexpr double kOwnVarianceFreedom = 2;
 
 // The settings at the cache's level: CacheState::level halvings of the
 // split and noise tolerances, and as many doublings of the samples per

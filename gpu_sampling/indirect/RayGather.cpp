@@ -90,7 +90,8 @@ void RayGather::releaseSource(size_t slot) {
 
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
-                         int strata, const GatherDraw& draw, const EmittingFaces* emitting, double* reach) {
+                         int strata, const GatherDraw& draw, const EmittingFaces* emitting, double* reach,
+                         double* variance) {
     if (emitting && emitting->empty()) emitting = nullptr;
     const Vec3 n = glm::normalize(nIn);
     Vec3 t, b;
@@ -111,6 +112,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
     const int s = strata;
     const SpecularChainSettings chain;
     Rgb sum(0.0);
+    double lumSum = 0, lumSquares = 0;  // Σ and Σ² of the rays' luminance, for *variance
     double inverseDistances = 0;  // Σ 1/t over first hits (a miss: 0)
     uint32_t state = hash32(draw.seed ^ 0x2545f491u);
     const auto next = [&state] {
@@ -127,6 +129,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         // Cosine-weighted by Malley's method.
         const std::array<double, 2> u = sequence(first + uint32_t(k));
         const Vec3 w = cosineDirection(n, t, b, u[0], u[1]);
+        Rgb ray(0.0);
         // Through mirrors and glass to the diffuse surface behind, each
         // surface on the way read on the side the ray arrives on (a
         // closed object's inside is black); a smooth layer's own Kd too.
@@ -137,14 +140,21 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
             if (v.layers == 0) inverseDistances += 1 / std::max(v.hit.t, eps);
             Rgb e(0.0);
             for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
-            sum += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
+            ray += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
             // A gathered light's face seen from its emitting side: π Le
             // in this sum's units (π/N Σ L).
             if (emitting && (*emitting)[v.hit.mesh][v.hit.triangle] &&
                 glm::dot(v.side, v.surface.geometricNormal) > 0)
-                sum += v.weight * (kPi * v.surface.ke(scene));
+                ray += v.weight * (kPi * v.surface.ke(scene));
         });
+        sum += ray;
+        const double y = luminance(ray);
+        lumSum += y, lumSquares += y * y;
     }
+    // The rays as independent draws: their spread over N(N − 1).
+    const double count = double(s * s);
+    if (variance)
+        *variance = count > 1 ? std::max(0.0, lumSquares - lumSum * lumSum / count) / (count * (count - 1)) : 0.0;
     if (reach)
         *reach = inverseDistances > 0 ? double(s * s) / inverseDistances : std::numeric_limits<double>::infinity();
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
@@ -171,7 +181,7 @@ VertexSample RayGather::gather(size_t slot, const Vec3& x, const Vec3& n, const 
     // Bounce 1 (source 0, direct light) also reads the gathered lights.
     VertexSample result;
     result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, draw,
-                                             slot == 0 ? &emitting_ : nullptr, &result.reach);
+                                             slot == 0 ? &emitting_ : nullptr, &result.reach, &result.ownVariance);
     // Its rays: a first pass's cheaper gather (fewer rays) weighs less in a
     // vertex's mean and counts as noisier (VertexStats).
     result.work = double(source.strata) * source.strata;

@@ -68,12 +68,14 @@ struct GatherDraw {
 // where it lands on the emitting side of a face `emitting` marks (null or
 // empty: none); returns the irradiance, and in `reach` (when not null) the
 // harmonic mean of the rays' distances to their first hit (VertexSample::
-// reach). RayGather::estimate's work, and bench indirect's "exact gather of
-// the source".
+// reach), and in `variance` (when not null) the variance of the result's
+// luminance with the rays taken as independent (VertexSample::ownVariance).
+// RayGather::estimate's work, and bench indirect's "exact gather of the
+// source".
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& n,
                          int strata, const GatherDraw& draw, const EmittingFaces* emitting = nullptr,
-                         double* reach = nullptr);
+                         double* reach = nullptr, double* variance = nullptr);
 // closedMeshes for gatherCachedRadiance: isClosedMesh of every scene mesh.
 std::vector<char> closedMeshesOf(const Scene& scene);
 
