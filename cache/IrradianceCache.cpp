@@ -448,12 +448,15 @@ double effectiveSampleNoise(const CacheSettings& settings, const MeasuredNoise& 
 MeasuredNoise measureNoise(const CacheState& s) { return measured(noiseSums(s), s.fullWork); }
 
 NoiseModel noiseModel(const CacheState& s) {
-    const NoiseSums sums = noiseSums(s);
-    const MeasuredNoise m = measured(sums, s.fullWork);
     NoiseModel model;
     model.singleSampleNoise = s.settings.singleSampleNoise;
-    model.sampleNoise = effectiveSampleNoise(s.settings, m);
     model.fullWork = s.fullWork;
+    // Exact samplers (direct light's) measure nothing of their own: no pass
+    // over every mesh's vertices for each copy of a many-light cache.
+    if (!(s.settings.sampleNoise > 0)) return model;
+    const NoiseSums sums = noiseSums(s);
+    const MeasuredNoise m = measured(sums, s.fullWork);
+    model.sampleNoise = effectiveSampleNoise(s.settings, m);
     if (m.ownScale >= 0)
         model.ownScale = m.ownScale;
     else if (sums.ownVariance > 0)

@@ -152,7 +152,8 @@ struct NoiseModel {
     // MeasuredNoise::ownScale once measured; until then the one that makes
     // the own variances' mean relative noise sampleNoise (the assumed
     // level, spread over the vertices by what each sample saw). < 0 where
-    // no sample measured a variance above 0.
+    // no sample measured a variance above 0, and for exact samplers
+    // (CacheSettings::sampleNoise 0), whose own variances are not read.
     double ownScale = -1;
 };
 NoiseModel noiseModel(const CacheState& s);
