@@ -126,10 +126,9 @@ struct CacheState {
 };
 
 // What the cache's resampled vertices measure of its samples' noise,
-// once they have kMeasuredNoiseFreedom degrees of freedom between them
-// (0 before):
+// once they have kMeasuredNoiseFreedom degrees of freedom between them:
 // - relative: the relative error of one full sample
-//   (CacheSettings::sampleNoise), their spreads pooled;
+//   (CacheSettings::sampleNoise), their spreads pooled; 0 before;
 // - ownScale: their spreads over what their samples' own scatter said
 //   (VertexStats::ownUnitVariance), pooled the same way, where every
 //   sample measured its own: how much the samplers' stratification makes
