@@ -644,7 +644,7 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
     {
         std::vector<double> lum(n);
         for (size_t v = 0; v < n; ++v) lum[v] = luminance(out.irradiance[v]);
-        const std::vector<double> predicted = detail::predictedErrors(impl_->state, l, lum);
+        const std::vector<double> predicted = detail::predictedErrors(impl_->state, l, lum, noise, own);
         out.predictedError.reserve(n);
         for (size_t v = 0; v < n; ++v) out.predictedError.push_back(colourOf(out.irradiance[v], lum[v], predicted[v]));
     }

@@ -513,15 +513,15 @@ double meanNoise(const VertexStats& st, const NoiseModel& m, double own) {
     return 0;
 }
 
-std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum) {
-    const detail::NoiseModel noise = detail::noiseModel(s);
+std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum,
+                                    const NoiseModel& noise, const std::vector<double>& own) {
     const LightMesh& lm = s.meshes[l];
     const CacheTriMesh& mesh = lm.mesh;
     const size_t nv = mesh.n_vertices();
-    ML_ASSERT(lum.size() == nv, lum.size(), " values for ", nv, " vertices");
+    ML_ASSERT(lum.size() == nv && own.size() == nv, lum.size(), " values and ", own.size(), " own variances for ",
+              nv, " vertices");
     std::vector<double> res, sumSq(nv, 0.0), edges(nv, 0.0);
     residuals(mesh, lum, res);
-    const std::vector<double> own = ringOwnVariances(lm);
     // Linear interpolation of a smooth signal errs most at an edge's
     // midpoint, by a quarter of the larger residual of its ends (see the
     // top of this file), and by e·4t(1−t) along it: an RMS of e·√(8/15) =

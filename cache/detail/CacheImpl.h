@@ -72,8 +72,11 @@ std::vector<double> ringOwnVariances(const LightMesh& lm);
 // around it, in luminance (W·m⁻²), as an RMS over its faces: its noise and
 // the interpolation error of its edges (Refine.cpp), or a guess's
 // (kGuessedLightError) where not sampled yet; `lum` the luminance
-// the copy shows at each vertex (sampled, or filled from neighbours).
-std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum);
+// the copy shows at each vertex (sampled, or filled from neighbours);
+// `noise` the cache's noiseModel and `own` the mesh's ringOwnVariances, as
+// the caller has them for its standard errors.
+std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum,
+                                    const NoiseModel& noise, const std::vector<double>& own);
 
 }  // namespace detail
 }  // namespace ml
