@@ -402,7 +402,7 @@ struct NoiseSums {
     double ownLevel = 0, ownVariance = 0;  // every sampled one whose samples measured their own
 };
 
-NoiseSums noiseSums(const CacheState& s) {
+NoiseSums noiseSums(const CacheState& s, size_t firstMesh = 0) {
     // Pooled as a ratio of sums, Σ (n−1)·s² / Σ (n−1)·mean²: each vertex's
     // spread counts by its degrees of freedom and by its light, so the dark
     // vertices, whose relative spread is large and shown faint, do not
@@ -424,9 +424,9 @@ NoiseSums noiseSums(const CacheState& s) {
         sums.ownExpected += (n - 1) * own;
         sums.ownFreedom += n - 1;
     };
-    for (const LightMesh& lm : s.meshes) {
-        for (const VertexStats& st : lm.stats) add(st);
-        for (const VertexStats& st : lm.gridStats) add(st);
+    for (size_t l = firstMesh; l < s.meshes.size(); ++l) {
+        for (const VertexStats& st : s.meshes[l].stats) add(st);
+        for (const VertexStats& st : s.meshes[l].gridStats) add(st);
     }
     return sums;
 }
@@ -451,9 +451,19 @@ NoiseModel noiseModel(const CacheState& s) {
     NoiseModel model;
     model.singleSampleNoise = s.settings.singleSampleNoise;
     model.fullWork = s.fullWork;
-    // Exact samplers (direct light's) measure nothing of their own: no pass
-    // over every mesh's vertices for each copy of a many-light cache.
-    if (!(s.settings.sampleNoise > 0)) return model;
+    if (!(s.settings.sampleNoise > 0)) {
+        // Exact samplers (direct light's) measure nothing of their own but
+        // for the mesh many lights share, whose draws among the lights
+        // scatter (SharedLightSampler): only its vertices are passed over.
+        // Until its resampled vertices measure the scale, the draws count
+        // as independent (scale 1): stratified, they scatter less, so the
+        // noise is overestimated, never hidden.
+        if (!s.sharedMesh || s.meshes.empty()) return model;
+        const NoiseSums sums = noiseSums(s, s.meshes.size() - 1);
+        const MeasuredNoise m = measured(sums, s.fullWork);
+        model.ownScale = m.ownScale >= 0 ? m.ownScale : sums.ownVariance > 0 ? 1.0 : -1.0;
+        return model;
+    }
     const NoiseSums sums = noiseSums(s);
     const MeasuredNoise m = measured(sums, s.fullWork);
     model.sampleNoise = effectiveSampleNoise(s.settings, m);

@@ -21,10 +21,13 @@
 // view when one is given. A vertex is resampled while the standard error of
 // its mean (from its samples' spread) exceeds the noise tolerance; one
 // sample is trusted unless it saw a penumbra (outside penumbrae the control-
-// variate sampler is exact). With a sampler whose every sample is noisy
-// (CacheSettings::sampleNoise > 0: indirect gathers), twice a vertex's
-// relative standard error is taken off its residual before it asks for a
-// split, so noise is resampled away rather than refined into the mesh.
+// variate sampler is exact) or its sampler measured its own scatter (a
+// gather's rays, the shared mesh's draws among lights). With a sampler
+// whose every sample is noisy (CacheSettings::sampleNoise > 0: indirect
+// gathers), and wherever samples measured their own scatter, twice a
+// vertex's relative standard error is taken off its residual before it
+// asks for a split, so noise is resampled away rather than refined into
+// the mesh.
 #include "IrradianceCache.h"
 
 #include "core/Error.h"
@@ -256,7 +259,8 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
             // With a sampler whose every sample is noisy, a residual within
             // twice the mean's standard error may be noise, not curvature:
             // resampling, not splitting, is what helps there.
-            if (cs.sampleNoise > 0) lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], noise, white, own[vi]));
+            if (cs.sampleNoise > 0 || own[vi] >= 0)
+                lap[vi] = std::max(0.0, lap[vi] - 2 * relativeNoise(lm.stats[vi], noise, white, own[vi]));
         }
 
         for (auto e : mesh.edges()) {
@@ -271,7 +275,7 @@ Scoring score(const CacheState& s, const std::optional<RefinementCamera>& view, 
                 double step = 0.5 * std::abs(t[a] - t[b]) / (std::max(t[a], t[b]) + kDarkFloor);
                 // As for the residual: a difference within twice the ends'
                 // standard errors may be noise.
-                if (cs.sampleNoise > 0)
+                if (cs.sampleNoise > 0 || (own[a] >= 0 && own[b] >= 0))
                     step = std::max(0.0, step - 2 * std::max(relativeNoise(lm.stats[a], noise, white, own[a]),
                                                              relativeNoise(lm.stats[b], noise, white, own[b])));
                 predicted = std::max(predicted, step);

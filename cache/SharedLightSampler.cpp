@@ -16,15 +16,18 @@ Rgb unoccludedIrradiance(const Light& light, const Vec3& x, const Vec3& n) {
 }
 
 SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const LightCoverage> coverage,
-                                       std::unique_ptr<DirectSampler> perLight, int lights)
-    : scene_(scene), coverage_(std::move(coverage)), perLight_(std::move(perLight)), draws_(lights) {
-    ML_ASSERT(coverage_ && perLight_ && draws_ >= 1, "a shared-light sampler needs its coverage and sampler");
+                                       std::unique_ptr<DirectSampler> perLight, int lights, int firstLights)
+    : scene_(scene), coverage_(std::move(coverage)), perLight_(std::move(perLight)), draws_(lights),
+      firstDraws_(firstLights) {
+    ML_ASSERT(coverage_ && perLight_ && draws_ >= 1 && firstDraws_ >= 1,
+              "a shared-light sampler needs its coverage and sampler, and a light to draw");
     for (const Light& l : scene_.lights) textured_.push_back(EmitterTexture(scene_, l).textured());
 }
 
 std::string SharedLightSampler::name() const {
     return concat(perLight_->name(), "; lights share a mesh where they give under ", 100 * coverage_->share(),
-                  "% of the light, ", draws_, " lights drawn per shared estimate from those of the ", kAskedLights,
+                  "% of the light, ", draws_, " lights drawn per shared estimate (", firstDraws_,
+                  " in the first pass) from those of the ", kAskedLights,
                   " brightest the sampler cannot answer without the GPU, and the rest");
 }
 
@@ -125,8 +128,11 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     reaching(x, n, total, all);
     static const Known kNone;
     const Known& k = firstSamples_ ? kNone : known(x, n, seed);
+    const size_t draws = size_t(firstSamples_ ? firstDraws_ : draws_);
     if (!(all > 0)) {  // nothing shared reaches this point
         out = {};
+        out.ownVariance = 0;  // exactly
+        out.work = double(draws);
         return true;
     }
     cdf_.clear();
@@ -141,33 +147,57 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         drawable_.push_back(i);
     }
     Rgb occluded = k.occluded;
-    double drawnVisible = 0;
+    double drawnShare = 0;  // Σ (1 − w_l) Y(U_l) · visibility over the drawn, weighted as they are
     bool partial = false;
-    for (int d = 0; d < draws_ && sum > 0; ++d) {
-        // Stratified over [0, 1): draw d in [d/K, (d+1)/K).
-        const double u = (double(d) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(d))) >> 8) / 16777216.0) /
-                         double(draws_) * sum;
-        const size_t c = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin());
-        const size_t j = std::min(c, cdf_.size() - 1);
+    double drawSum = 0, drawSquares = 0;  // Σ and Σ² of the draws' luminance, for ownVariance
+    // K draws, or each light once (weight 1, exact) where no more than K
+    // are left to draw.
+    const bool every = drawable_.size() <= draws;
+    const size_t count = every ? drawable_.size() : draws;
+    for (size_t d = 0; d < count && sum > 0; ++d) {
+        size_t j = d;
+        if (!every) {
+            // Stratified over [0, 1): draw d in [d/K, (d+1)/K).
+            const double u =
+                (double(d) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(d))) >> 8) / 16777216.0) /
+                double(draws) * sum;
+            j = std::min(size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()), cdf_.size() - 1);
+        }
         const Reaching& r = reaching_[drawable_[j]];
         const uint32_t l = r.light;
-        const double p = (cdf_[j] - (j ? cdf_[j - 1] : 0.0)) / sum;
+        // 1/(K p_l) for a draw, p_l its share of the CDF.
+        const double weight = every ? 1.0 : sum / ((cdf_[j] - (j ? cdf_[j - 1] : 0.0)) * double(draws));
         VertexSample e;
         if (!take(l, seedFor(seed, uint32_t(d), l), e)) return false;
-        // (1 − w_l) O_l / p_l, O_l = U_l − E_l, never negative for a
+        // (1 − w_l) O_l / (K p_l), O_l = U_l − E_l, never negative for a
         // uniform light; a textured one's may be (see the header).
         const Rgb difference = r.unoccluded - e.irradiance;
-        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * r.shared;
-        occluded += o / (p * double(draws_));
-        drawnVisible += e.visibility;
+        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * r.shared * weight;
+        occluded += o;
+        const double y = luminance(o) * double(count);  // this draw's estimate of the drawn lights' Σ
+        drawSum += y, drawSquares += y * y;
+        drawnShare += weight * r.y * e.visibility;
         partial = partial || e.partial;
     }
     out.irradiance = glm::max(total - occluded, Rgb(0.0));
-    // The visible share of the shared light, weighted as the draws are:
-    // exact for the lights answered without the GPU, the draws' mean for the rest.
-    const double drawnShare = sum > 0 ? sum * drawnVisible / double(draws_) : 0.0;
+    // The visible share of the shared light: exact for the lights answered
+    // without the GPU and for lights taken each once, the draws' estimate
+    // for the rest.
     out.visibility = std::clamp((k.visible + drawnShare) / all, 0.0, 1.0);
     out.partial = partial;
+    // The draws as independent: their scatter over K(K − 1) is the variance
+    // of their mean, the estimate's only noise but the wrapped sampler's own
+    // (small: its jittered tests). Stratified draws scatter less than that;
+    // the cache measures by how much where it resamples (detail::NoiseModel).
+    // With nothing to draw, or each light taken once, the estimate is exact.
+    // Its work, the draws it had: a first pass's few weigh less in a
+    // vertex's mean than a later estimate's many (VertexStats), and an
+    // exact one (each light taken once, or none left to draw) as a full one.
+    out.work = double(draws);
+    if (every || !(sum > 0)) out.ownVariance = 0;
+    else if (count >= 2)
+        out.ownVariance =
+            std::max(0.0, drawSquares - drawSum * drawSum / double(count)) / (double(count) * double(count - 1));
     return true;
 }
 

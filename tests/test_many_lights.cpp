@@ -90,7 +90,8 @@ TEST(SharedLights, OwnAndSharedMeshesAddUpToEveryLightsWholeLight) {
     // control variate leaves no noise there), within the draws' noise in
     // the made-up half shadow (mean of 256 seeds: the occluded half of the
     // drawn lights scaled by 1/p; its standard error is well under 1% of
-    // the total for 4 draws a sample, and 2% is four standard errors).
+    // the total for 4 draws a sample, less for the 16 drawn now, and 2% is
+    // four standard errors of the former).
     const Scene scene = emptyOffice(8, 6, 0.4);
     auto coverage = std::make_shared<const LightCoverage>(scene, 0.05);
     SharedLightSampler sampler(scene, coverage,
@@ -210,6 +211,129 @@ TEST(SharedLights, LightsAnsweredWithoutTheGpuAreSubtractedExactlyAndNeverDrawn)
         EXPECT_NEAR(s.irradiance.r / truth.r, 1.0, 1e-12) << "seed " << seed;
         EXPECT_EQ(exact.sample(lit.lights.size(), p, n, seed).irradiance, s.irradiance);
     }
+}
+
+TEST(SharedLights, EachEstimateReportsItsDrawsScatter) {
+    const Scene scene = emptyOffice(8, 6, 0.4);
+    auto coverage = std::make_shared<const LightCoverage>(scene, 0.05);
+    const size_t lights = scene.lights.size();
+    const Vec3 up(0, 1, 0);
+    {
+        // Every draw says the same where each light's occluded part is in
+        // proportion to its draw weight: half of every light hidden (x < 0)
+        // or none (x > 0). Their scatter, and so the variance, is 0.
+        SharedLightSampler sampler(scene, coverage,
+                                   std::make_unique<test::FunctionDirectSampler<HalfShadowed>>(HalfShadowed{&scene}));
+        for (const Vec3& p : {Vec3(2.1, 0.0, 1.3), Vec3(-2.4, 0.0, -0.7)}) {
+            const VertexSample s = sampler.sample(lights, p, up, 3);
+            EXPECT_GE(s.ownVariance, 0.0);
+            EXPECT_LE(s.ownVariance, 1e-20 * luminance(s.irradiance) * luminance(s.irradiance)) << "at x " << p.x;
+        }
+    }
+    // Draws whose visibility is uniform in [0, 1] (PartlyOnCpu's GPU pairs),
+    // 4 of them as in a first pass, which asks no light: over 4096 seeds,
+    // the mean variance reported against the estimates' own scatter. The
+    // draws are stratified over the lights' CDF, but each stratum holds the
+    // same mix of CPU and GPU lights and the visibilities are independent,
+    // so the stratification gains nothing and the two agree in expectation.
+    // The scatter's relative standard error over 4096 seeds is about
+    // √(2/4095) = 2.2% (somewhat more for these skewed estimates), and the
+    // mean variance's about as much: over 8 other bases of the seeds the
+    // ratio read 0.955-1.049 (standard deviation 3.4%), so 10% is about 3
+    // of them.
+    SharedLightSampler sampler(scene, coverage, std::make_unique<PartlyOnCpu>(scene));
+    const Vec3 p(2.1, 0.0, 1.3);
+    {
+        FirstSamples first(sampler);
+        double sum = 0, squares = 0, own = 0;
+        constexpr int kSeeds = 4096;
+        for (int k = 0; k < kSeeds; ++k) {
+            const VertexSample s = sampler.sample(lights, p, up, seedFor(13, uint32_t(k)));
+            const double y = luminance(s.irradiance);
+            sum += y, squares += y * y, own += s.ownVariance;
+        }
+        const double scatter = (squares - sum * sum / kSeeds) / (kSeeds - 1);
+        ASSERT_GT(scatter, 0.0);
+        EXPECT_NEAR(own / kSeeds / scatter, 1.0, 0.1);
+    }
+    // Where no more lights are left to draw than an estimate draws, each is
+    // taken once: the estimate is then the exact sum over them of what the
+    // wrapped sampler says (its own noise aside), and its variance 0. The
+    // 12-panel office's lights are all asked (16 are), every third answered
+    // on the CPU; the other 8 are drawn, in light order.
+    const Scene twelve = emptyOffice(4, 3, 0.6);
+    auto twelveCoverage = std::make_shared<const LightCoverage>(twelve, 0.3);
+    SharedLightSampler each(twelve, twelveCoverage, std::make_unique<PartlyOnCpu>(twelve));
+    PartlyOnCpu wrapped(twelve);
+    for (const Vec3& q : {Vec3(1.7, 0.0, 0.9), Vec3(-2.2, 0.0, -1.1)}) {
+        for (uint32_t seed : {1u, 77u}) {
+            Rgb expected(0.0);
+            uint32_t drawn = 0;
+            for (size_t l = 0; l < twelve.lights.size(); ++l) {
+                const double w = twelveCoverage->weight(l, q);
+                const Rgb u = unoccludedIrradiance(twelve.lights[l], q, up);
+                if (w >= 1 || !(luminance(u) > 0)) continue;
+                const Rgb e = PartlyOnCpu::cpu(l) ? PartlyOnCpu::exact(twelve.lights[l], l, q, up)
+                                                  : wrapped.sample(l, q, up, seedFor(seed, drawn++, uint32_t(l))).irradiance;
+                expected += (1 - w) * e;
+            }
+            ASSERT_GT(drawn, 0u);
+            ASSERT_LE(drawn, 16u);
+            const VertexSample s = each.sample(twelve.lights.size(), q, up, seed);
+            ASSERT_GT(expected.r, 0.0);
+            EXPECT_NEAR(s.irradiance.r / expected.r, 1.0, 1e-12) << "at x " << q.x << ", seed " << seed;
+            EXPECT_EQ(s.ownVariance, 0.0);
+        }
+    }
+}
+
+// A direct cache's shared mesh: its estimates' own variance makes a vertex
+// sampled once count as noisy, where the lights' own meshes (an exact
+// sampler's one sample outside penumbrae) count as exact. The shared
+// mesh's estimates are 1 W/m² (the lights' own 0, so that the scoring's
+// dark floor, a fiftieth of twice the mean light, stays small: 0.04) and
+// say 1e-4 of their own variance, so before any
+// resampled vertex measures the scale (1 until then) each shared vertex's
+// standard error is exactly √1e-4 = 1%, over the 0.5% tolerance; a budget
+// of resamples goes to shared vertices alone.
+TEST(SharedLights, TheSharedMeshsScatteredEstimatesAreResampled) {
+    const Scene scene = emptyOffice(8, 6, 0.4);
+    const size_t lights = scene.lights.size();
+    CacheSettings cs;
+    cs.lightShare = 0.05;
+    cs.uniformEdgeFraction = 0;  // uniform light: nothing to split
+    CacheLayout layout;
+    layout.coverage = std::make_shared<const LightCoverage>(scene, cs.lightShare);
+    IrradianceCache cache(scene, cs, layout);
+    ASSERT_TRUE(cache.hasSharedMesh());
+    auto sampler = samplerOf([&](size_t mesh, const Vec3&, const Vec3&, uint32_t) {
+        VertexSample v;
+        v.irradiance = Rgb(mesh == lights ? 1.0 : 0.0);
+        if (mesh == lights) v.ownVariance = 1e-4;
+        return v;
+    });
+    cache.refine(sampler, 1 << 22, 1);
+    std::vector<IrradianceMeshCopy> meshes = cache.copyMeshes();
+    ASSERT_EQ(meshes.size(), lights + 1);
+    size_t shared = meshes[lights].positions.size();
+    ASSERT_GT(shared, 100u);
+    for (size_t m = 0; m <= lights; ++m)
+        for (size_t v = 0; v < meshes[m].positions.size(); ++v) {
+            ASSERT_EQ(meshes[m].samples[v], 1u) << "mesh " << m;
+            EXPECT_NEAR(meshes[m].standardError[v].g, m == lights ? 0.01 : 0.0, 1e-12) << "mesh " << m;
+        }
+    const RefineReport r = cache.refine(sampler, shared / 2, 2);
+    EXPECT_EQ(r.splits, 0u);
+    EXPECT_EQ(r.resamples, shared / 2);
+    meshes = cache.copyMeshes();
+    size_t resampled = 0;
+    for (size_t m = 0; m <= lights; ++m)
+        for (size_t v = 0; v < meshes[m].positions.size(); ++v)
+            if (meshes[m].samples[v] > 1) {
+                EXPECT_EQ(m, lights) << "a light's own mesh resampled";
+                ++resampled;
+            }
+    EXPECT_EQ(resampled, shared / 2);
 }
 
 TEST(SharedLights, ARoomOfAHundredSmallLightsKeepsTheirPower) {

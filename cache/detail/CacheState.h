@@ -150,9 +150,11 @@ struct NoiseModel {
     // The factor that makes a unit of work's own variance its true one:
     // MeasuredNoise::ownScale once measured; until then the one that makes
     // the own variances' mean relative noise sampleNoise (the assumed
-    // level, spread over the vertices by what each sample saw). < 0 where
-    // no sample measured a variance above 0, and for exact samplers
-    // (CacheSettings::sampleNoise 0), whose own variances are not read.
+    // level, spread over the vertices by what each sample saw). For exact
+    // samplers (CacheSettings::sampleNoise 0) only the mesh many lights
+    // share measures its own (its draws among the lights), and until
+    // measured the scale is 1. < 0 where no sample measured a variance
+    // above 0.
     double ownScale = -1;
 };
 NoiseModel noiseModel(const CacheState& s);
