@@ -537,8 +537,9 @@ void IrradianceCache::resetSamples() {
 }
 
 std::vector<IrradianceMeshCopy> IrradianceCache::copyMeshes() const {
+    const detail::NoiseModel noise = detail::noiseModel(impl_->state);
     std::vector<IrradianceMeshCopy> meshes;
-    for (size_t l = 0; l < meshCount(); ++l) meshes.push_back(copyMesh(l));
+    for (size_t l = 0; l < meshCount(); ++l) meshes.push_back(copyMesh(l, noise));
     return meshes;
 }
 
@@ -605,9 +606,10 @@ Rgb colourOf(const Rgb& mean, double lum, double value) { return lum > 0 ? mean 
 
 }  // namespace
 
-IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const {
+IrradianceMeshCopy IrradianceCache::copyMesh(size_t l) const { return copyMesh(l, detail::noiseModel(impl_->state)); }
+
+IrradianceMeshCopy IrradianceCache::copyMesh(size_t l, const detail::NoiseModel& noise) const {
     const detail::LightMesh& lm = impl_->state.meshes.at(l);
-    const detail::NoiseModel noise = detail::noiseModel(impl_->state);
     const std::vector<double> own = detail::ringOwnVariances(lm);
     IrradianceMeshCopy out;
     const size_t n = lm.mesh.n_vertices();

@@ -30,6 +30,9 @@
 namespace ml {
 
 class LightCoverage;
+namespace detail {
+struct NoiseModel;
+}
 
 struct CacheSettings {
     // Base mesh: triangles are bisected until no edge is longer than this
@@ -318,6 +321,10 @@ public:
     void load(const std::string& path);
 
 private:
+    // copyMesh with the cache's noise model, made once for all the copies
+    // of copyMeshes (with many lights it passes over the shared mesh).
+    IrradianceMeshCopy copyMesh(size_t mesh, const detail::NoiseModel& noise) const;
+
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -185,15 +185,15 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     // for the rest.
     out.visibility = std::clamp((k.visible + drawnShare) / all, 0.0, 1.0);
     out.partial = partial;
+    // Its work, the draws it had: a first pass's few weigh less in a
+    // vertex's mean than a later estimate's many (VertexStats), and an
+    // exact one (each light taken once, or none left to draw) as a full one.
+    out.work = double(draws);
     // The draws as independent: their scatter over K(K − 1) is the variance
     // of their mean, the estimate's only noise but the wrapped sampler's own
     // (small: its jittered tests). Stratified draws scatter less than that;
     // the cache measures by how much where it resamples (detail::NoiseModel).
     // With nothing to draw, or each light taken once, the estimate is exact.
-    // Its work, the draws it had: a first pass's few weigh less in a
-    // vertex's mean than a later estimate's many (VertexStats), and an
-    // exact one (each light taken once, or none left to draw) as a full one.
-    out.work = double(draws);
     if (every || !(sum > 0)) out.ownVariance = 0;
     else if (count >= 2)
         out.ownVariance =
