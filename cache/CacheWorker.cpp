@@ -111,8 +111,10 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
                           uint64_t cameraSerial, SamplerPool& samplers) {
     auto snap = std::make_unique<CacheSnapshot>();
     snap->seconds = seconds;
-    snap->direct = cache_.copyMeshes();
-    for (size_t l = 0; l < cache_.meshCount(); ++l) snap->verticesPerMesh.push_back(cache_.vertexCount(l));
+    for (size_t l = 0; l < cache_.meshCount(); ++l) {
+        snap->direct.push_back(cache_.copyMesh(l));
+        snap->verticesPerMesh.push_back(cache_.vertexCount(l));
+    }
     snap->vertices = cache_.totalVertices();
     snap->samples = cache_.totalSamples();
     snap->rounds = cache_.rounds();
@@ -183,10 +185,7 @@ void CacheWorker::run() {
         };
         double lastPublish = -1e30, publishCost = 0;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
-        // Direct samples per second in the last round, and whether that
-        // round was in a first pass.
-        double directRate = 0;
-        bool directRateFirstPass = true;
+        double directRate = 0;  // direct samples per second in the last round
         // Gathers per second in the last indirect round, and whether that
         // round was in a first pass (whose gathers may be far cheaper).
         double gatherRate = 0;
@@ -281,21 +280,9 @@ void CacheWorker::run() {
                 // milliseconds (the back rooms: 3,768 samples took 5 s) a
                 // round in vertices would hold indirect light off for
                 // seconds at a time. Not under a sample budget, whose
-                // rounds no clock may decide. A first pass's rate does not
-                // hold for the resamples after it, nor theirs for a first
-                // pass: the first round of the other kind is kept to 256
-                // samples and measures its own. With many lights, a first
-                // pass's shared estimates draw 4 lights and ask none, later
-                // ones ask 16 and draw 16 (SharedLightSampler): the 48-panel
-                // office's first round of resamples, sized at the first
-                // pass's rate, held indirect light and the snapshots off for
-                // 2 s (bench lights: 89,236 to 91,538 samples from 3.2 to
-                // 4.2 s).
-                const bool firstPassRound = cache_.unsampledCount() > 0;
+                // rounds no clock may decide.
                 if (indirectStarted && !byRounds && directRate > 0)
-                    budget = std::min(budget, directRateFirstPass == firstPassRound
-                                                  ? std::max<size_t>(64, size_t(directRate * kRoundSeconds))
-                                                  : size_t(256));
+                    budget = std::min(budget, std::max<size_t>(64, size_t(directRate * kRoundSeconds)));
                 const double before = seconds();
                 const RefineReport report = cache_.refine(sample, capped(budget), settings_.seed, view);
                 const double took = seconds() - before;
@@ -304,8 +291,7 @@ void CacheWorker::run() {
                 // start indirect light. Not smoothed over rounds: the first
                 // pass's first round takes every pair that needs no GPU, a
                 // hundred times faster than the rest will go.
-                if (report.estimates > 0 && took > 0)
-                    directRate = double(report.estimates) / took, directRateFirstPass = firstPassRound;
+                if (report.estimates > 0 && took > 0) directRate = double(report.estimates) / took;
                 directConverged = report.converged();
                 lastDirectError = report.estimatedError;
             }
