@@ -451,28 +451,25 @@ NoiseModel noiseModel(const CacheState& s) {
     NoiseModel model;
     model.singleSampleNoise = s.settings.singleSampleNoise;
     model.fullWork = s.fullWork;
-    if (!(s.settings.sampleNoise > 0)) {
-        // Exact samplers (direct light's) measure nothing of their own but
-        // for the mesh many lights share, whose draws among the lights
-        // scatter (SharedLightSampler): only its vertices are passed over.
-        // Until its resampled vertices measure the scale, the draws count
-        // as independent (scale 1): stratified, they scatter less, so the
-        // noise is overestimated, never hidden.
-        if (!s.sharedMesh || s.meshes.empty()) return model;
-        const NoiseSums sums = noiseSums(s, s.meshes.size() - 1);
-        const MeasuredNoise m = measured(sums, s.fullWork);
-        model.ownScale = m.ownScale >= 0 ? m.ownScale : sums.ownVariance > 0 ? 1.0 : -1.0;
-        return model;
-    }
-    const NoiseSums sums = noiseSums(s);
+    // Exact samplers (direct light's) measure nothing of their own but for
+    // the mesh many lights share, whose draws among the lights scatter
+    // (SharedLightSampler): only its vertices are passed over, and none
+    // without it.
+    const bool exact = !(s.settings.sampleNoise > 0);
+    if (exact && (!s.sharedMesh || s.meshes.empty())) return model;
+    const NoiseSums sums = noiseSums(s, exact ? s.meshes.size() - 1 : 0);
     const MeasuredNoise m = measured(sums, s.fullWork);
-    model.sampleNoise = effectiveSampleNoise(s.settings, m);
+    model.sampleNoise = effectiveSampleNoise(s.settings, m);  // 0 for exact samplers
     if (m.ownScale >= 0)
         model.ownScale = m.ownScale;
     else if (sums.ownVariance > 0)
-        // Unit variance sampleNoise²·mean²·fullWork on the mean, as the
-        // settings assume of every vertex.
-        model.ownScale = model.sampleNoise * model.sampleNoise * s.fullWork * sums.ownLevel / sums.ownVariance;
+        // Until measured: for an exact sampler's draws, taken as
+        // independent (scale 1: stratified, they scatter less, so the noise
+        // is overestimated, never hidden); otherwise unit variance
+        // sampleNoise²·mean²·fullWork on the mean, as the settings assume of
+        // every vertex.
+        model.ownScale = exact ? 1.0
+                               : model.sampleNoise * model.sampleNoise * s.fullWork * sums.ownLevel / sums.ownVariance;
     return model;
 }
 
