@@ -11,6 +11,8 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
+#include <set>
 #include <tuple>
 
 namespace ml {
@@ -35,6 +37,12 @@ constexpr double kLeastGap = 1e-3;
 // dropped (a hole too thin for any pixel): the GPU gets positions in floats,
 // 6e-8 of their size, and a face that thin is degenerate there.
 constexpr double kThinnest = 1e-6;
+
+// A hanging surface's face is parallel to the receiver when their normals'
+// cosine is at least this (within 2.6°), and a line lies in a face's plane
+// within this fraction of the scene's size.
+constexpr double kParallel = 0.999;
+constexpr double kCoplanar = 1e-7;
 
 // An edge of some surface, welded by position, with the triangles beside it.
 struct SceneEdge {
@@ -248,11 +256,21 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
         list.emplace_back(t, v);
     };
 
+    // The hanging surfaces' own lines (the header's last paragraph but
+    // one): for each (edge, face of the hanging surface beside it), a line
+    // in that face 2h inside the edge, kept as an edge of a surface `mesh`
+    // (its one face entry) so that EdgeGrid finds it near each of that
+    // mesh's triangles it may cross (a quad's line crosses both halves).
+    std::vector<SceneEdge> inner;
+    std::set<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> innerDone;
+    std::unique_ptr<EdgeGrid> innerGrid;
+    for (int pass = 0; pass < 2; ++pass)
     for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
-        if (mi < skip.size() && skip[mi]) continue;
+        if (pass == 1 && mi == 0 && !inner.empty()) innerGrid = std::make_unique<EdgeGrid>(scene.bounds, inner, 0.0);
+        if (pass == 1 && mi < skip.size() && skip[mi]) continue;
         const Mesh& m = scene.meshes[mi];
         CutMesh& cm = cuts[mi];
-        cm.segments.resize(m.triangles.size());
+        if (pass == 1) cm.segments.resize(m.triangles.size());
         for (size_t t = 0; t < m.triangles.size(); ++t) {
             if (!(m.area(t) > 0)) continue;
             const Triangle3 p = m.triangle(t);
@@ -281,6 +299,18 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 cm.segments[t].emplace_back(ca, cb);
                 ++rep.segments;
             };
+            if (pass == 1 && innerGrid) {
+                // This mesh's own lines that lie in this triangle's plane.
+                std::vector<uint32_t> lines;
+                innerGrid->query(b, lines);
+                for (uint32_t l : lines) {
+                    const SceneEdge& line = inner[l];
+                    if (line.faces.front().first != mi) continue;
+                    const double da = glm::dot(line.a - r.p0, r.n), db = glm::dot(line.b - r.p0, r.n);
+                    if (std::abs(da) <= kCoplanar * diagonal && std::abs(db) <= kCoplanar * diagonal)
+                        addSegment(line.a, line.b);
+                }
+            }
             for (uint32_t e : near) {
                 const SceneEdge& edge = edges[e];
                 if (flat[e]) continue;
@@ -296,6 +326,29 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 // ones are not.
                 const double h = 0.5 * (da + db);
                 if (!(h > kLeastGap * diagonal)) continue;
+                if (pass == 0) {
+                    // The hanging surface's faces beside the edge that are
+                    // parallel to R: a line 2h inside each, drawn 3h past
+                    // the edge's ends (as the receiver's below).
+                    if (!(2 * h < 0.5 * settings.spacing)) continue;
+                    const Vec3 dir = glm::normalize(edge.b - edge.a);
+                    for (const auto& f : edge.faces) {
+                        if (f.first < skip.size() && skip[f.first]) continue;
+                        const Mesh& hanging = scene.meshes[f.first];
+                        if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
+                        if (!innerDone.insert({e, f}).second) continue;
+                        // Towards the face's corner off the edge, within its plane.
+                        const Triangle3 q = hanging.triangle(f.second);
+                        Vec3 off = q[0];
+                        for (const Vec3& c : q)
+                            if (glm::length(glm::cross(c - edge.a, dir)) > glm::length(glm::cross(off - edge.a, dir))) off = c;
+                        Vec3 in = (off - edge.a) - glm::dot(off - edge.a, dir) * dir;
+                        if (!(glm::length(in) > touch)) continue;
+                        in = glm::normalize(in);
+                        inner.push_back({edge.a + 2 * h * in - 3 * h * dir, edge.b + 2 * h * in + 3 * h * dir, {f}});
+                    }
+                    continue;
+                }
                 addSegment(edge.a, edge.b);
                 // Penumbra lines where the mesh is coarser than the penumbra:
                 // parallel to the edge at 2h either side, drawn 3h past its

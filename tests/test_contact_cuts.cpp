@@ -1,5 +1,6 @@
 // Discontinuity meshing where a surface hangs close (cache/ContactCuts.h): a
-// panel under a ceiling cuts it along its outline and penumbra lines, no
+// panel under a ceiling cuts it along its outline and penumbra lines (and
+// itself along a line inside its outline, for its back), no
 // face straddles a cut, the area is kept and the cut mesh stays conforming;
 // touching contacts and hair-thin gaps are left uncut.
 #include "TestScenes.h"
@@ -125,8 +126,21 @@ TEST(ContactCuts, APanelUnderACeilingCutsItsOutlineAndPenumbraLines) {
         }
     expectConforming(ceiling, [](const Vec3& p) { return std::abs(std::abs(p.x) - 1) < 1e-12 ||
                                                           std::abs(std::abs(p.z) - 1) < 1e-12; });
-    // The panel is not cut by the ceiling (behind it), nor the floor (far).
-    EXPECT_EQ(cut[1].triangles.size(), 2u);
+    // The panel's back sees the same gap from below: lines 2h inside its
+    // own outline, crossing at its corners (light reaches its back only
+    // through the gap). The floor (far) is not cut.
+    const Mesh& panel = cut[1];
+    EXPECT_NEAR(totalArea(panel), 0.36, 1e-12);
+    const double in = 0.3 - 2 * h;
+    for (int k = 0; k < 4; ++k) {
+        const double sx = (k & 1) ? 1 : -1;
+        const Vec3 a = (k & 2) ? Vec3(sx * in, 1 - h, -0.3) : Vec3(-0.3, 1 - h, sx * in);
+        const Vec3 b = (k & 2) ? Vec3(sx * in, 1 - h, 0.3) : Vec3(0.3, 1 - h, sx * in);
+        EXPECT_TRUE(hasVertex(panel, (k & 2) ? Vec3(sx * in, 1 - h, -in) : Vec3(-in, 1 - h, sx * in))) << k;
+        EXPECT_FALSE(segmentCrossesAFace(panel, a, b)) << "panel line, side " << k;
+    }
+    expectConforming(panel, [](const Vec3& p) { return std::abs(std::abs(p.x) - 0.3) < 1e-12 ||
+                                                        std::abs(std::abs(p.z) - 0.3) < 1e-12; });
     EXPECT_EQ(cut[2].triangles.size(), 2u);
     // With a spacing that already resolves 2h, the outline alone.
     s.spacing = 0.06;
