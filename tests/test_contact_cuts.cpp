@@ -126,18 +126,19 @@ TEST(ContactCuts, APanelUnderACeilingCutsItsOutlineAndPenumbraLines) {
         }
     expectConforming(ceiling, [](const Vec3& p) { return std::abs(std::abs(p.x) - 1) < 1e-12 ||
                                                           std::abs(std::abs(p.z) - 1) < 1e-12; });
-    // The panel's back sees the same gap from below: lines 2h inside its
-    // own outline, crossing at its corners (light reaches its back only
+    // The panel's back sees the same gap from below: lines 2h and 6h inside
+    // its own outline, crossing at its corners (light reaches its back only
     // through the gap). The floor (far) is not cut.
     const Mesh& panel = cut[1];
     EXPECT_NEAR(totalArea(panel), 0.36, 1e-12);
-    const double in = 0.3 - 2 * h;
-    for (int k = 0; k < 4; ++k) {
-        const double sx = (k & 1) ? 1 : -1;
-        const Vec3 a = (k & 2) ? Vec3(sx * in, 1 - h, -0.3) : Vec3(-0.3, 1 - h, sx * in);
-        const Vec3 b = (k & 2) ? Vec3(sx * in, 1 - h, 0.3) : Vec3(0.3, 1 - h, sx * in);
-        EXPECT_TRUE(hasVertex(panel, (k & 2) ? Vec3(sx * in, 1 - h, -in) : Vec3(-in, 1 - h, sx * in))) << k;
-        EXPECT_FALSE(segmentCrossesAFace(panel, a, b)) << "panel line, side " << k;
+    for (const double in : {0.3 - 2 * h, 0.3 - 6 * h}) {
+        for (int k = 0; k < 4; ++k) {
+            const double sx = (k & 1) ? 1 : -1;
+            const Vec3 a = (k & 2) ? Vec3(sx * in, 1 - h, -0.3) : Vec3(-0.3, 1 - h, sx * in);
+            const Vec3 b = (k & 2) ? Vec3(sx * in, 1 - h, 0.3) : Vec3(0.3, 1 - h, sx * in);
+            EXPECT_TRUE(hasVertex(panel, (k & 2) ? Vec3(sx * in, 1 - h, -in) : Vec3(-in, 1 - h, sx * in))) << k;
+            EXPECT_FALSE(segmentCrossesAFace(panel, a, b)) << "panel line " << in << ", side " << k;
+        }
     }
     expectConforming(panel, [](const Vec3& p) { return std::abs(std::abs(p.x) - 0.3) < 1e-12 ||
                                                         std::abs(std::abs(p.z) - 0.3) < 1e-12; });
