@@ -263,118 +263,121 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
         list.emplace_back(t, v);
     };
 
-    // The hanging surfaces' own lines (the header's last paragraph but
-    // one): for each (edge, face of the hanging surface beside it), a line
-    // in that face 2h inside the edge, kept as an edge of a surface `mesh`
-    // (its one face entry) so that EdgeGrid finds it near each of that
-    // mesh's triangles it may cross (a quad's line crosses both halves).
+    // Two passes over the receivers. The first finds the hanging surfaces'
+    // own lines (the header's paragraph on the hanging face's side): for
+    // each (edge, face of the hanging surface beside it), lines in that face
+    // kInside·h inside the edge, each kept as an edge with that face as its
+    // one entry, so that EdgeGrid finds it near every triangle of that mesh
+    // it may cross (a quad's line crosses both halves). The second cuts.
     std::vector<SceneEdge> inner;
     std::set<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> innerDone;
     std::unique_ptr<EdgeGrid> innerGrid;
-    for (int pass = 0; pass < 2; ++pass)
-    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
-        if (pass == 1 && mi == 0 && !inner.empty()) innerGrid = std::make_unique<EdgeGrid>(scene.bounds, inner, 0.0);
-        if (pass == 1 && mi < skip.size() && skip[mi]) continue;
-        const Mesh& m = scene.meshes[mi];
-        CutMesh& cm = cuts[mi];
-        if (pass == 1) cm.segments.resize(m.triangles.size());
-        for (size_t t = 0; t < m.triangles.size(); ++t) {
-            if (!(m.area(t) > 0)) continue;
-            const Triangle3 p = m.triangle(t);
-            Receiver r;
-            r.p0 = p[0], r.e1 = p[1] - p[0], r.e2 = p[2] - p[0];
-            r.n = unitNormal(m, t);
-            r.g11 = glm::dot(r.e1, r.e1), r.g12 = glm::dot(r.e1, r.e2), r.g22 = glm::dot(r.e2, r.e2);
-            r.det = r.g11 * r.g22 - r.g12 * r.g12;
-            if (!(r.det > 0)) continue;
-            const double scale = std::sqrt(std::max({r.g11, r.g22, glm::dot(p[2] - p[1], p[2] - p[1])}));
-            const double tol = touch / scale;  // barycentric snapping
-            Bounds3 b;
-            for (const Vec3& q : p) b.extend(q);
-            grid.query(b, near);
-            // Adds the part of segment (a3, b3) that crosses R, projected,
-            // unless it misses R or runs along R's boundary.
-            const auto addSegment = [&](const Vec3& a3, const Vec3& b3) {
-                auto a = r.local(a3), bb = r.local(b3);
-                if (!clip(a, bb)) return;
-                CutPoint ca = classify(a.first, a.second, tol), cb = classify(bb.first, bb.second, tol);
-                if (alongBoundary(ca, cb)) return;
-                const Vec3 d = (bb.first - a.first) * r.e1 + (bb.second - a.second) * r.e2;
-                if (glm::length(d) <= touch) return;
-                for (CutPoint* c : {&ca, &cb})
-                    if (c->kind == CutPoint::OnEdge) registerOnEdge(cm, m, m.triangles[t], *c);
-                cm.segments[t].emplace_back(ca, cb);
-                ++rep.segments;
-            };
-            if (pass == 1 && innerGrid) {
-                // This mesh's own lines that lie in this triangle's plane.
-                std::vector<uint32_t> lines;
-                innerGrid->query(b, lines);
-                for (uint32_t l : lines) {
-                    const SceneEdge& line = inner[l];
-                    if (line.faces.front().first != mi) continue;
-                    const double da = glm::dot(line.a - r.p0, r.n), db = glm::dot(line.b - r.p0, r.n);
-                    if (std::abs(da) <= kCoplanar * diagonal && std::abs(db) <= kCoplanar * diagonal)
-                        addSegment(line.a, line.b);
-                }
-            }
-            for (uint32_t e : near) {
-                const SceneEdge& edge = edges[e];
-                if (flat[e]) continue;
-                bool own = false;
-                for (const auto& f : edge.faces) own = own || (f.first == mi && f.second == t);
-                if (own) continue;
-                const double length = glm::length(edge.b - edge.a);
-                const double da = glm::dot(edge.a - r.p0, r.n), db = glm::dot(edge.b - r.p0, r.n);
-                const double limit = settings.closeness * length + touch;
-                if (da < -touch || db < -touch || da > limit || db > limit) continue;
-                // Only an edge hanging over a gap wider than a thousandth of
-                // the scene is cut along: see the header for why touching
-                // ones are not.
-                const double h = 0.5 * (da + db);
-                if (!(h > kLeastGap * diagonal)) continue;
-                if (pass == 1) addSegment(edge.a, edge.b);
-                if (!(2 * h < 0.5 * settings.spacing)) continue;
-                // The hanging surface's faces beside the edge that are
-                // parallel to R, each with the unit vector from the edge
-                // into it, within its plane.
-                const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
-                std::vector<std::pair<std::pair<uint32_t, uint32_t>, Vec3>> parallel;
-                for (const auto& f : edge.faces) {
-                    const Mesh& hanging = scene.meshes[f.first];
-                    if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
-                    const Triangle3 q = hanging.triangle(f.second);
-                    const auto away = [&](const Vec3& c) { return glm::length(glm::cross(c - edge.a, edgeDir)); };
-                    Vec3 off = q[0];
-                    for (const Vec3& c : q)
-                        if (away(c) > away(off)) off = c;
-                    const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
-                    if (glm::length(in) > touch) parallel.emplace_back(f, glm::normalize(in));
-                }
-                if (pass == 0) {
-                    // Lines kInside·h inside each such face, drawn 3h past
-                    // the edge's ends (as the receiver's below).
-                    for (const auto& [f, in] : parallel) {
-                        if (f.first < skip.size() && skip[f.first]) continue;
-                        if (!innerDone.insert({e, f}).second) continue;
-                        for (const double depth : kInside)
-                            inner.push_back({edge.a + depth * h * in - 3 * h * edgeDir,
-                                             edge.b + depth * h * in + 3 * h * edgeDir, {f}});
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1 && !inner.empty()) innerGrid = std::make_unique<EdgeGrid>(scene.bounds, inner, 0.0);
+        for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+            // A skipped receiver is not cut, but what hangs over it still
+            // gets its own lines.
+            if (pass == 1 && mi < skip.size() && skip[mi]) continue;
+            const Mesh& m = scene.meshes[mi];
+            CutMesh& cm = cuts[mi];
+            if (pass == 1) cm.segments.resize(m.triangles.size());
+            for (size_t t = 0; t < m.triangles.size(); ++t) {
+                if (!(m.area(t) > 0)) continue;
+                const Triangle3 p = m.triangle(t);
+                Receiver r;
+                r.p0 = p[0], r.e1 = p[1] - p[0], r.e2 = p[2] - p[0];
+                r.n = unitNormal(m, t);
+                r.g11 = glm::dot(r.e1, r.e1), r.g12 = glm::dot(r.e1, r.e2), r.g22 = glm::dot(r.e2, r.e2);
+                r.det = r.g11 * r.g22 - r.g12 * r.g12;
+                if (!(r.det > 0)) continue;
+                const double scale = std::sqrt(std::max({r.g11, r.g22, glm::dot(p[2] - p[1], p[2] - p[1])}));
+                const double tol = touch / scale;  // barycentric snapping
+                Bounds3 b;
+                for (const Vec3& q : p) b.extend(q);
+                grid.query(b, near);
+                // Adds the part of segment (a3, b3) that crosses R, projected,
+                // unless it misses R or runs along R's boundary.
+                const auto addSegment = [&](const Vec3& a3, const Vec3& b3) {
+                    auto a = r.local(a3), bb = r.local(b3);
+                    if (!clip(a, bb)) return;
+                    CutPoint ca = classify(a.first, a.second, tol), cb = classify(bb.first, bb.second, tol);
+                    if (alongBoundary(ca, cb)) return;
+                    const Vec3 d = (bb.first - a.first) * r.e1 + (bb.second - a.second) * r.e2;
+                    if (glm::length(d) <= touch) return;
+                    for (CutPoint* c : {&ca, &cb})
+                        if (c->kind == CutPoint::OnEdge) registerOnEdge(cm, m, m.triangles[t], *c);
+                    cm.segments[t].emplace_back(ca, cb);
+                    ++rep.segments;
+                };
+                if (pass == 1 && innerGrid) {
+                    // This mesh's own lines that lie in this triangle's plane.
+                    std::vector<uint32_t> lines;
+                    innerGrid->query(b, lines);
+                    for (uint32_t l : lines) {
+                        const SceneEdge& line = inner[l];
+                        if (line.faces.front().first != mi) continue;
+                        const double da = glm::dot(line.a - r.p0, r.n), db = glm::dot(line.b - r.p0, r.n);
+                        if (std::abs(da) <= kCoplanar * diagonal && std::abs(db) <= kCoplanar * diagonal)
+                            addSegment(line.a, line.b);
                     }
-                    continue;
                 }
-                // Penumbra lines where the mesh is coarser than the penumbra:
-                // parallel to the edge at 2h either side, drawn 3h past its
-                // ends so that two edges' lines cross rather than meet end to
-                // end (an end that misses a line by a rounding makes slivers).
-                const Vec3 a = edge.a - da * r.n, bp = edge.b - db * r.n;
-                const Vec3 along = bp - a;
-                if (!(glm::length(along) > touch)) continue;
-                const Vec3 dir = glm::normalize(along);
-                const Vec3 side = glm::cross(r.n, dir);
-                for (double sign : {1.0, -1.0})
-                    addSegment(a + 2 * sign * h * side - 3 * h * dir, bp + 2 * sign * h * side + 3 * h * dir);
-
+                for (uint32_t e : near) {
+                    const SceneEdge& edge = edges[e];
+                    if (flat[e]) continue;
+                    bool own = false;
+                    for (const auto& f : edge.faces) own = own || (f.first == mi && f.second == t);
+                    if (own) continue;
+                    const double length = glm::length(edge.b - edge.a);
+                    const double da = glm::dot(edge.a - r.p0, r.n), db = glm::dot(edge.b - r.p0, r.n);
+                    const double limit = settings.closeness * length + touch;
+                    if (da < -touch || db < -touch || da > limit || db > limit) continue;
+                    // Only an edge hanging over a gap wider than a thousandth of
+                    // the scene is cut along: see the header for why touching
+                    // ones are not.
+                    const double h = 0.5 * (da + db);
+                    if (!(h > kLeastGap * diagonal)) continue;
+                    if (pass == 1) addSegment(edge.a, edge.b);
+                    if (!(2 * h < 0.5 * settings.spacing)) continue;
+                    if (pass == 0) {
+                        // The hanging surface's faces beside the edge that
+                        // are parallel to R (and not skipped), each with the
+                        // unit vector from the edge into it, within its
+                        // plane; lines kInside·h inside each, drawn 3h past
+                        // the edge's ends (as the receiver's below).
+                        const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
+                        for (const auto& f : edge.faces) {
+                            if (f.first < skip.size() && skip[f.first]) continue;
+                            const Mesh& hanging = scene.meshes[f.first];
+                            if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
+                            if (!innerDone.insert({e, f}).second) continue;
+                            const auto away = [&](const Vec3& c) {
+                                return glm::length(glm::cross(c - edge.a, edgeDir));
+                            };
+                            const Triangle3 q = hanging.triangle(f.second);
+                            Vec3 off = q[0];
+                            for (const Vec3& c : q)
+                                if (away(c) > away(off)) off = c;
+                            const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
+                            if (!(glm::length(in) > touch)) continue;
+                            const Vec3 inward = glm::normalize(in);
+                            for (const double depth : kInside)
+                                inner.push_back({edge.a + depth * h * inward - 3 * h * edgeDir,
+                                                 edge.b + depth * h * inward + 3 * h * edgeDir, {f}});
+                        }
+                        continue;
+                    }
+                    // Penumbra lines where the mesh is coarser than the penumbra:
+                    // parallel to the edge at 2h either side, drawn 3h past its
+                    // ends so that two edges' lines cross rather than meet end to
+                    // end (an end that misses a line by a rounding makes slivers).
+                    const Vec3 a = edge.a - da * r.n, bp = edge.b - db * r.n;
+                    const Vec3 along = bp - a;
+                    if (!(glm::length(along) > touch)) continue;
+                    const Vec3 dir = glm::normalize(along);
+                    const Vec3 side = glm::cross(r.n, dir);
+                    for (double sign : {1.0, -1.0})
+                        addSegment(a + 2 * sign * h * side - 3 * h * dir, bp + 2 * sign * h * side + 3 * h * dir);
+                }
             }
         }
     }
