@@ -1,6 +1,6 @@
 // Discontinuity meshing where a surface hangs close (cache/ContactCuts.h): a
 // panel under a ceiling cuts it along its outline and penumbra lines (and
-// itself along a line inside its outline, for its back), no
+// itself along lines inside its outline, for its back), no
 // face straddles a cut, the area is kept and the cut mesh stays conforming;
 // touching contacts and hair-thin gaps are left uncut.
 #include "TestScenes.h"
