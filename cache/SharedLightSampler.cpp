@@ -196,8 +196,7 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     // With nothing to draw, or each light taken once, the estimate is exact.
     if (every || !(sum > 0)) out.ownVariance = 0;
     else if (count >= 2)
-        out.ownVariance =
-            std::max(0.0, drawSquares - drawSum * drawSum / double(count)) / (double(count) * double(count - 1));
+        out.ownVariance = varianceOfMean(drawSum, drawSquares, double(count));
     return true;
 }
 

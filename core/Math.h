@@ -61,4 +61,11 @@ inline Vec3 cosineDirection(const Vec3& n, const Vec3& t, const Vec3& b, double 
 // weights instead (core/image/Photometry.h).
 inline double luminance(const Rgb& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
 
+// The variance of the mean of `count` independent draws, from their sum and
+// their sum of squares: their scatter Σx² − (Σx)²/N over N(N − 1) (never
+// below 0: rounding). 0 for fewer than two draws.
+inline double varianceOfMean(double sum, double squares, double count) {
+    return count > 1 ? std::max(0.0, squares - sum * sum / count) / (count * (count - 1)) : 0.0;
+}
+
 }  // namespace ml

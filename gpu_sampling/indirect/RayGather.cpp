@@ -153,8 +153,7 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
     }
     // The rays as independent draws: their spread over N(N − 1).
     const double count = double(s * s);
-    if (variance)
-        *variance = count > 1 ? std::max(0.0, lumSquares - lumSum * lumSum / count) / (count * (count - 1)) : 0.0;
+    if (variance) *variance = varianceOfMean(lumSum, lumSquares, count);
     if (reach)
         *reach = inverseDistances > 0 ? double(s * s) / inverseDistances : std::numeric_limits<double>::infinity();
     // Cosine-weighted: E = π/N Σ Lo = π/N Σ Kd/π E = 1/N Σ Kd E.
