@@ -242,7 +242,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     const EdgeGrid grid(scene.bounds, edges, settings.closeness);
 
     std::vector<CutMesh> cuts(scene.meshes.size());
-    std::vector<uint32_t> near;
+    std::vector<uint32_t> near, lines;  // scratch: the edges and the hanging faces' lines near a receiver
     // Registers an end on the receiver's edge, once: a new vertex there.
     const auto registerOnEdge = [&](CutMesh& cm, const Mesh& m, const glm::uvec3& tri, CutPoint& p) {
         const uint32_t va = tri[kEdgeCorners[p.index][0]], vb = tri[kEdgeCorners[p.index][1]];
@@ -311,7 +311,6 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 };
                 if (pass == 1 && innerGrid) {
                     // This mesh's own lines that lie in this triangle's plane.
-                    std::vector<uint32_t> lines;
                     innerGrid->query(b, lines);
                     for (uint32_t l : lines) {
                         const SceneEdge& line = inner[l];
