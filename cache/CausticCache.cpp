@@ -190,6 +190,7 @@ IrradianceMeshCopy CausticCache::copyMesh() const {
     // each vertex's photon noise (its kernel's blur, shrinking as PPM goes
     // on, is not counted).
     m.predictedError = m.standardError;
+    m.predictedNoise = m.standardError;
     return m;
 }
 

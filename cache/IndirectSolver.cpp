@@ -470,6 +470,7 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
     // first passes done 2.6% against 2.0%. kGuessedLightError (0.25) of the
     // tail, as before, read 3.5%, 13.3% and 4.1% there.
     rest.predictedError.resize(rest.irradiance.size());
+    rest.predictedNoise.clear();  // a model's error: none of it is noise
     for (size_t i = 0; i < rest.irradiance.size(); ++i) {
         const Rgb shape = glm::abs(rest.irradiance[i] - tail * v.back().irradiance[i]);
         const Rgb scale = kTailRatioError * rest.irradiance[i];

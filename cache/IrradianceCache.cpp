@@ -653,9 +653,14 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l, const detail::NoiseModel&
     {
         std::vector<double> lum(n);
         for (size_t v = 0; v < n; ++v) lum[v] = luminance(out.irradiance[v]);
-        const std::vector<double> predicted = detail::predictedErrors(impl_->state, l, lum, noise, own);
+        std::vector<double> vertexNoise;
+        const std::vector<double> predicted = detail::predictedErrors(impl_->state, l, lum, noise, own, &vertexNoise);
         out.predictedError.reserve(n);
-        for (size_t v = 0; v < n; ++v) out.predictedError.push_back(colourOf(out.irradiance[v], lum[v], predicted[v]));
+        out.predictedNoise.reserve(n);
+        for (size_t v = 0; v < n; ++v) {
+            out.predictedError.push_back(colourOf(out.irradiance[v], lum[v], predicted[v]));
+            out.predictedNoise.push_back(colourOf(out.irradiance[v], lum[v], vertexNoise[v]));
+        }
     }
     out.triangles.reserve(lm.mesh.n_faces());
     for (auto f : lm.mesh.faces()) {
@@ -690,6 +695,7 @@ IrradianceMeshCopy IrradianceCache::copyMesh(size_t l, const detail::NoiseModel&
                 colourOf(vertexValues[v], lum, st.count ? detail::meanNoise(st, noise) : kGuessedLightError * lum);
             out.standardError.push_back(measuredNoise(st) ? se : Rgb(0.0));
             out.predictedError.push_back(se);
+            out.predictedNoise.push_back(st.count ? se : Rgb(0.0));
         }
         for (const glm::uvec3& t : g.triangles) out.triangles.push_back(t + glm::uvec3(first));
     }

@@ -121,6 +121,13 @@ struct IrradianceMeshCopy {
     // (viewer/compositor/ImageErrorEstimate.h). Empty where not made: read
     // as 0.
     std::vector<Rgb> predictedError;
+    // The part of predictedError that is the vertex's own sampling noise
+    // (≤ it, W·m⁻²): independent of every other mesh's and of the next
+    // vertex's, unlike the interpolation error (a corner is read dark by
+    // every bounce) or a guess. The image's estimate adds the noise of
+    // different meshes in quadrature and the rest linearly
+    // (viewer/compositor/ImageErrorEstimate.h). Empty: none of it is noise.
+    std::vector<Rgb> predictedNoise;
 };
 
 // A camera the refinement should serve: what it sees is refined first and

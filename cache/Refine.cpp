@@ -518,7 +518,8 @@ double meanNoise(const VertexStats& st, const NoiseModel& m, double own) {
 }
 
 std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum,
-                                    const NoiseModel& noise, const std::vector<double>& own) {
+                                    const NoiseModel& noise, const std::vector<double>& own,
+                                    std::vector<double>* vertexNoise) {
     const LightMesh& lm = s.meshes[l];
     const CacheTriMesh& mesh = lm.mesh;
     const size_t nv = mesh.n_vertices();
@@ -545,13 +546,16 @@ std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::ve
         for (size_t v : {a, b}) sumSq[v] += err * err, edges[v] += 1;
     }
     std::vector<double> out(nv, 0.0);
+    if (vertexNoise) vertexNoise->assign(nv, 0.0);
     for (size_t v = 0; v < nv; ++v) {
         const double interpolation = edges[v] > 0 ? sumSq[v] / edges[v] : 0.0;
         // A vertex not sampled yet shows its neighbours' light (copyMesh):
         // a guess, assumed off by kGuessedLightError of itself.
-        const double vertexNoise =
-            lm.stats[v].count == 0 ? kGuessedLightError * std::max(lum[v], 0.0) : meanNoise(lm.stats[v], noise, own[v]);
-        out[v] = std::sqrt(interpolation + vertexNoise * vertexNoise);
+        const bool sampled = lm.stats[v].count > 0;
+        const double vertexError =
+            sampled ? meanNoise(lm.stats[v], noise, own[v]) : kGuessedLightError * std::max(lum[v], 0.0);
+        out[v] = std::sqrt(interpolation + vertexError * vertexError);
+        if (vertexNoise && sampled) (*vertexNoise)[v] = vertexError;
     }
     return out;
 }

@@ -74,9 +74,12 @@ std::vector<double> ringOwnVariances(const LightMesh& lm);
 // (kGuessedLightError) where not sampled yet; `lum` the luminance
 // the copy shows at each vertex (sampled, or filled from neighbours);
 // `noise` the cache's noiseModel and `own` the mesh's ringOwnVariances, as
-// the caller has them for its standard errors.
+// the caller has them for its standard errors. `vertexNoise`, when given,
+// receives the noise part of each (its mean's standard error; 0 for a
+// guess).
 std::vector<double> predictedErrors(const CacheState& s, size_t l, const std::vector<double>& lum,
-                                    const NoiseModel& noise, const std::vector<double>& own);
+                                    const NoiseModel& noise, const std::vector<double>& own,
+                                    std::vector<double>* vertexNoise = nullptr);
 
 }  // namespace detail
 }  // namespace ml
