@@ -185,6 +185,59 @@ TEST(ImageErrorEstimate, ADimSceneEstimatesAndMeasuresAsItsBrightTwin) {
     EXPECT_NEAR(mb, ma, 0.01 * ma);
 }
 
+// Two bounce meshes on the Cornell box's direct mesh's geometry, each with
+// the error `error` at every vertex, of which `noise` is noise; direct
+// light without error. The estimate of the composite.
+double estimateOfTwoMeshes(Compositor& compositor, const Scene& scene, const Camera& camera,
+                           const IrradianceMeshCopy& base, const CompositorSettings& cs, const Rgb errors[2],
+                           const Rgb noises[2]) {
+    IrradianceMeshCopy direct = base;
+    direct.predictedError.assign(base.irradiance.size(), Rgb(0.0));
+    direct.predictedNoise.assign(base.irradiance.size(), Rgb(0.0));
+    std::vector<IrradianceMeshCopy> bounces;
+    for (int k = 0; k < 2; ++k) {
+        IrradianceMeshCopy m = base;
+        m.predictedError.assign(base.irradiance.size(), errors[k]);
+        m.predictedNoise.assign(base.irradiance.size(), noises[k]);
+        bounces.push_back(std::move(m));
+    }
+    return estimateImageError(compositor, scene, camera, {direct}, bounces, cs).cache;
+}
+
+TEST(ImageErrorEstimate, NoiseOfTwoMeshesAddsInQuadratureTheRestLinearly) {
+    // Every bounce draws its own rays, so two meshes' noise σ reads as one
+    // mesh's √2 σ; an interpolation error leans the same way in both, so two
+    // meshes' b reads as one mesh's 2b. Each pixel's error is Kd/π times
+    // √2 σ or 2b, so the estimates are those exactly, and in the ratio √2.
+    // Tolerance 1e-4 of the value: float composites of σ, σ² and Kd.
+    const Scene scene = makeCornellBox();
+    const CacheSnapshot snap = refined(scene, 3000);
+    ASSERT_EQ(snap.direct.size(), 1u);
+    const Camera camera = scene.cameraOrDefault(1.0);
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings cs;
+    cs.width = cs.height = 48;
+    cs.passes = 1;
+    const IrradianceMeshCopy& base = snap.direct.front();
+    double mean = 0;
+    for (const Rgb& e : base.irradiance) mean += luminance(e);
+    const Rgb sigma(0.05 * mean / double(base.irradiance.size())), zero(0.0);
+    const auto estimate = [&](Rgb e0, Rgb n0, Rgb e1, Rgb n1) {
+        const Rgb errors[2] = {e0, e1}, noises[2] = {n0, n1};
+        return estimateOfTwoMeshes(compositor, scene, camera, base, cs, errors, noises);
+    };
+    const double noiseInBoth = estimate(sigma, sigma, sigma, sigma);
+    const double noiseInOne = estimate(std::sqrt(2.0) * sigma, std::sqrt(2.0) * sigma, zero, zero);
+    const double biasInBoth = estimate(sigma, zero, sigma, zero);
+    const double biasInOne = estimate(2.0 * sigma, zero, zero, zero);
+    std::printf("noise in both %.5f%%, in one %.5f%%; bias in both %.5f%%, in one %.5f%%\n", 100 * noiseInBoth,
+                100 * noiseInOne, 100 * biasInBoth, 100 * biasInOne);
+    ASSERT_GT(noiseInBoth, 1e-4);
+    EXPECT_NEAR(noiseInBoth, noiseInOne, 1e-4 * noiseInOne);
+    EXPECT_NEAR(biasInBoth, biasInOne, 1e-4 * biasInOne);
+    EXPECT_NEAR(biasInBoth / noiseInBoth, std::sqrt(2.0), 1e-4);
+}
+
 TEST(ImageErrorEstimate, ALongRunsErrorDoesNotRise) {
     // One session of the Cornell box (full GI, one thread), its snapshots
     // taken as the samples pass 16,000, 32,000 and 64,000: the composite's
