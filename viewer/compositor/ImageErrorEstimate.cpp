@@ -28,35 +28,47 @@ VertexErrors errorsOf(const IrradianceMeshCopy& m) {
     return e;
 }
 
+// What the compositor uploads of `m` (its geometry), with `values` in place
+// of its irradiance.
+IrradianceMeshCopy withValues(const IrradianceMeshCopy& m, std::vector<Rgb> values) {
+    IrradianceMeshCopy out;
+    out.positions = m.positions;
+    out.normals = m.normals;
+    out.triangles = m.triangles;
+    out.irradiance = std::move(values);
+    return out;
+}
+
 // The meshes with, in place of irradiance, the part of their error that is
 // not noise (interpolation, guesses, a model's): √(error² − noise²).
-std::vector<IrradianceMeshCopy> biasMeshes(std::vector<IrradianceMeshCopy> meshes) {
-    for (IrradianceMeshCopy& m : meshes) {
+std::vector<IrradianceMeshCopy> biasMeshes(const std::vector<IrradianceMeshCopy>& meshes) {
+    std::vector<IrradianceMeshCopy> out;
+    for (const IrradianceMeshCopy& m : meshes) {
         const VertexErrors e = errorsOf(m);
         std::vector<Rgb> bias(m.irradiance.size(), Rgb(0.0));
         for (size_t i = 0; e.error && i < bias.size(); ++i) {
             const Rgb total = (*e.error)[i], noise = e.noise ? (*e.noise)[i] : Rgb(0.0);
             bias[i] = glm::sqrt(glm::max(total * total - noise * noise, Rgb(0.0)));
         }
-        m.irradiance = std::move(bias);
+        out.push_back(withValues(m, std::move(bias)));
     }
-    return meshes;
+    return out;
 }
 
 // The meshes with their noise's square in place of irradiance (W²·m⁻⁴);
-// whether any is above 0.
-bool noiseSquareMeshes(std::vector<IrradianceMeshCopy>& meshes) {
-    bool any = false;
-    for (IrradianceMeshCopy& m : meshes) {
+// `any`: whether any is above 0.
+std::vector<IrradianceMeshCopy> noiseSquareMeshes(const std::vector<IrradianceMeshCopy>& meshes, bool& any) {
+    std::vector<IrradianceMeshCopy> out;
+    for (const IrradianceMeshCopy& m : meshes) {
         const VertexErrors e = errorsOf(m);
         std::vector<Rgb> square(m.irradiance.size(), Rgb(0.0));
         for (size_t i = 0; e.noise && i < square.size(); ++i) {
             square[i] = (*e.noise)[i] * (*e.noise)[i];
             any |= luminance(square[i]) > 0;
         }
-        m.irradiance = std::move(square);
+        out.push_back(withValues(m, std::move(square)));
     }
-    return any;
+    return out;
 }
 
 }  // namespace
@@ -98,8 +110,9 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
     // Σ σ², then times Kd/π and its root taken per pixel). Added linearly,
     // the office's seven bounces read 3.5% where their noise is 2.0%.
     ImageRgb noise(out.image.width, out.image.height);
-    std::vector<IrradianceMeshCopy> directSquares = direct, indirectSquares = indirect;
-    const bool anyNoise = noiseSquareMeshes(directSquares) | noiseSquareMeshes(indirectSquares);
+    bool anyNoise = false;
+    const std::vector<IrradianceMeshCopy> directSquares = noiseSquareMeshes(direct, anyNoise),
+                                          indirectSquares = noiseSquareMeshes(indirect, anyNoise);
     if (anyNoise) {
         const GpuCacheMeshes squares = compositor.upload(directSquares, indirectSquares);
         const ImageRgb sum = compositor.composite(camera, squares, all, errorSettings);
