@@ -39,34 +39,28 @@ IrradianceMeshCopy withValues(const IrradianceMeshCopy& m, std::vector<Rgb> valu
     return out;
 }
 
-// The meshes with, in place of irradiance, the part of their error that is
-// not noise (interpolation, guesses, a model's): √(error² − noise²).
-std::vector<IrradianceMeshCopy> biasMeshes(const std::vector<IrradianceMeshCopy>& meshes) {
-    std::vector<IrradianceMeshCopy> out;
+// The meshes' errors split for compositing (each mesh's geometry with one
+// value per vertex in place of irradiance): the part that is not noise
+// (interpolation, guesses, a model's), √(error² − noise²), and the noise's
+// square (W²·m⁻⁴); `anyNoise`: whether any noise is above 0.
+struct ErrorMeshes {
+    std::vector<IrradianceMeshCopy> bias, noiseSquares;
+    bool anyNoise = false;
+};
+
+ErrorMeshes splitErrors(const std::vector<IrradianceMeshCopy>& meshes) {
+    ErrorMeshes out;
     for (const IrradianceMeshCopy& m : meshes) {
         const VertexErrors e = errorsOf(m);
-        std::vector<Rgb> bias(m.irradiance.size(), Rgb(0.0));
+        std::vector<Rgb> bias(m.irradiance.size(), Rgb(0.0)), square(m.irradiance.size(), Rgb(0.0));
         for (size_t i = 0; e.error && i < bias.size(); ++i) {
             const Rgb total = (*e.error)[i], noise = e.noise ? (*e.noise)[i] : Rgb(0.0);
             bias[i] = glm::sqrt(glm::max(total * total - noise * noise, Rgb(0.0)));
+            square[i] = noise * noise;
+            out.anyNoise |= luminance(square[i]) > 0;
         }
-        out.push_back(withValues(m, std::move(bias)));
-    }
-    return out;
-}
-
-// The meshes with their noise's square in place of irradiance (W²·m⁻⁴);
-// `any`: whether any is above 0.
-std::vector<IrradianceMeshCopy> noiseSquareMeshes(const std::vector<IrradianceMeshCopy>& meshes, bool& any) {
-    std::vector<IrradianceMeshCopy> out;
-    for (const IrradianceMeshCopy& m : meshes) {
-        const VertexErrors e = errorsOf(m);
-        std::vector<Rgb> square(m.irradiance.size(), Rgb(0.0));
-        for (size_t i = 0; e.noise && i < square.size(); ++i) {
-            square[i] = (*e.noise)[i] * (*e.noise)[i];
-            any |= luminance(square[i]) > 0;
-        }
-        out.push_back(withValues(m, std::move(square)));
+        out.bias.push_back(withValues(m, std::move(bias)));
+        out.noiseSquares.push_back(withValues(m, std::move(square)));
     }
     return out;
 }
@@ -101,7 +95,8 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
     // from different samplers), each mesh's added linearly within each (an
     // interpolation error or a guess leans the same way in every mesh over
     // a place: a corner reads dark in every bounce).
-    const GpuCacheMeshes bias = compositor.upload(biasMeshes(direct), biasMeshes(indirect));
+    const ErrorMeshes directErrors = splitErrors(direct), indirectErrors = splitErrors(indirect);
+    const GpuCacheMeshes bias = compositor.upload(directErrors.bias, indirectErrors.bias);
     const ImageRgb directBias = compositor.composite(camera, bias, directOnly, errorSettings);
     const ImageRgb indirectBias = indirect.empty() ? ImageRgb(out.image.width, out.image.height)
                                                    : compositor.composite(camera, bias, indirectOnly, errorSettings);
@@ -110,11 +105,8 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
     // Σ σ², then times Kd/π and its root taken per pixel). Added linearly,
     // the office's seven bounces read 3.5% where their noise is 2.0%.
     ImageRgb noise(out.image.width, out.image.height);
-    bool anyNoise = false;
-    const std::vector<IrradianceMeshCopy> directSquares = noiseSquareMeshes(direct, anyNoise),
-                                          indirectSquares = noiseSquareMeshes(indirect, anyNoise);
-    if (anyNoise) {
-        const GpuCacheMeshes squares = compositor.upload(directSquares, indirectSquares);
+    if (directErrors.anyNoise || indirectErrors.anyNoise) {
+        const GpuCacheMeshes squares = compositor.upload(directErrors.noiseSquares, indirectErrors.noiseSquares);
         const ImageRgb sum = compositor.composite(camera, squares, all, errorSettings);
         CompositorSettings reflectance = errorSettings;
         reflectance.quantity = CompositeQuantity::Reflectance;
