@@ -95,6 +95,28 @@ Scene lightOnFloor() {
                          {upQuad("floor", -4, 4, -4, 4, 0, 0), upQuad("light", kX0, kX1, kZ0, kZ1, 0.001, 1)});
 }
 
+// `scene`'s cache at base edges of `edgeFraction` of its diagonal, every
+// vertex sampled once from a smooth field that differs per channel.
+std::vector<IrradianceMeshCopy> smoothCache(const Scene& scene, double edgeFraction) {
+    CacheSettings cs;
+    cs.maxEdgeFraction = edgeFraction;
+    IrradianceCache cache(scene, cs);
+    test::sampleEveryVertex(
+        cache, [](size_t, const Vec3& x, const Vec3&, uint32_t) { return Rgb(2.0 + x.x, 1.0, 0.5 + x.z * x.z); }, 1,
+        1);
+    return cache.copyMeshes();
+}
+
+// The light and the floor around it seen from above and to the side.
+Camera obliqueView() {
+    Camera camera;
+    camera.position = Vec3(0.3, 1.5, 0.2);
+    camera.target = Vec3(0, 0.001, 0);
+    camera.up = Vec3(0, 0, -1);
+    camera.fovYDegrees = 70;
+    return camera;
+}
+
 // Of [a0, a1] the share inside [b0, b1].
 double overlap(double a0, double a1, double b0, double b1) {
     return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)) / (a1 - a0);
@@ -164,24 +186,15 @@ TEST(EmitterOutlines, PartsCompositedTogetherEqualEachCompositedAlone) {
     // without emission, everything, and nothing: two emissions, each met
     // twice, so both the drawn and the taken passes are checked.
     const Scene scene = lightOnFloor();
-    CacheSettings cs;
-    cs.maxEdgeFraction = 1.0 / 8.0;
-    IrradianceCache cache(scene, cs);
-    test::sampleEveryVertex(
-        cache, [](size_t, const Vec3& x, const Vec3&, uint32_t) { return Rgb(2.0 + x.x, 1.0, 0.5 + x.z * x.z); }, 1,
-        1);
-    Camera camera;
-    camera.position = Vec3(0.3, 1.5, 0.2);
-    camera.target = Vec3(0, 0.001, 0);
-    camera.up = Vec3(0, 0, -1);
-    camera.fovYDegrees = 70;
+    const std::vector<IrradianceMeshCopy> smooth = smoothCache(scene, 1.0 / 8.0);
+    const Camera camera = obliqueView();
     Compositor compositor(test::glContext(), scene);
     CompositorSettings s;
     s.width = 48, s.height = 40;
     s.supersample = 4;
     s.passes = 2;
     s.outlinePasses = 8;
-    const GpuCacheMeshes meshes = compositor.upload(cache.copyMeshes(), {});
+    const GpuCacheMeshes meshes = compositor.upload(smooth, {});
     const size_t lights = scene.lights.size();
     ASSERT_EQ(1u, lights);
     LightWeights emission = LightWeights::unit(lights), direct = LightWeights::unit(lights),
@@ -202,4 +215,63 @@ TEST(EmitterOutlines, PartsCompositedTogetherEqualEachCompositedAlone) {
     // The parts differ, so the comparison could fail: the light is seen.
     EXPECT_FALSE(together[0].data == together[1].data);
     EXPECT_FALSE(together[0].data == together[3].data);
+}
+
+TEST(EmitterOutlines, ALightsPartIsCompositedOnlyOverItsMeshBitForBitTheSame) {
+    // Where lights share a mesh, a light's own mesh keeps only some faces,
+    // and Compositor::composite of several parts composites that light's
+    // part only over its mesh's screen bounds (two pixels wider), read back
+    // as zeros outside. Its own mesh here: the floor's triangles within
+    // 0.15 of a point on the light's right edge, so that the clip holds part
+    // of the light's outline; the shared mesh: the whole floor. Each part
+    // must be bit for bit what compositing it alone (the whole image) gives,
+    // its share of the image well under 1 (so that the clip is what is
+    // checked), and the image must be black outside that share, as alone.
+    const Scene scene = lightOnFloor();
+    const std::vector<IrradianceMeshCopy> smooth = smoothCache(scene, 1.0 / 128.0);
+    const IrradianceMeshCopy shared = smooth.at(0);
+    IrradianceMeshCopy own = shared;
+    own.triangles.clear();
+    const Vec3 centre(kX1, 0, 0.1);
+    for (const glm::uvec3& t : shared.triangles) {
+        const Vec3 c = (shared.positions[t.x] + shared.positions[t.y] + shared.positions[t.z]) / 3.0;
+        if (length(c - centre) < 0.15) own.triangles.push_back(t);
+    }
+    for (Rgb& e : own.irradiance) e = e * 3.0;
+    ASSERT_GT(own.triangles.size(), 8u);
+    ASSERT_LT(own.triangles.size(), shared.triangles.size() / 4);
+    const Camera camera = obliqueView();
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings s;
+    s.width = 56, s.height = 40;
+    s.supersample = 4;
+    s.passes = 2;
+    s.outlinePasses = 8;
+    const GpuCacheMeshes meshes = compositor.upload({own, shared}, {});
+    const size_t lights = scene.lights.size();
+    ASSERT_EQ(1u, lights);
+    LightWeights alone = LightWeights::unit(lights), rest = LightWeights::unit(lights);
+    alone.emission.assign(lights, Rgb(0.0));
+    alone.shared = Rgb(0.0);
+    alone.indirect = Rgb(0.0);
+    rest.light.assign(lights, Rgb(0.0));
+    rest.emission.assign(lights, Rgb(0.0));
+    // The light alone first, so that its outlines are drawn over its clip
+    // and must not be taken by the part of the same emission after it.
+    const std::vector<LightWeights> parts = {alone, rest, LightWeights::unit(lights)};
+    const std::vector<double> shares = compositor.partShares(camera, meshes, parts, s);
+    ASSERT_EQ(shares.size(), parts.size());
+    EXPECT_LT(shares[0], 0.2);  // 0.054
+    EXPECT_EQ(shares[1], 1.0);
+    EXPECT_EQ(shares[2], 1.0);
+    const std::vector<ImageRgb> together = compositor.composite(camera, meshes, parts, s);
+    ASSERT_EQ(parts.size(), together.size());
+    for (size_t p = 0; p < parts.size(); ++p) {
+        const ImageRgb image = compositor.composite(camera, meshes, parts[p], s);
+        EXPECT_TRUE(image.data == together[p].data) << "part " << p;
+    }
+    size_t lit = 0, black = 0;
+    for (float v : together[0].data) (v > 0 ? lit : black) += 1;
+    EXPECT_GT(lit, 0u);
+    EXPECT_GT(black, together[0].data.size() / 2) << "the light's part covers part of the image";
 }

@@ -162,22 +162,31 @@ TEST_F(Layers, TheLastImagesPassesAreBudgetedOverEveryLayer) {
     // tenth of the refinement pays for, over every composite the image takes
     // at those passes: the estimate's beauty, and each RGB layer of a
     // layered EXR (a composite apiece; illuminance.Y is one pass). The count
-    // printed must be what the file holds, for an EXR and for a PNG.
+    // printed must be what the file holds, for an EXR and for a PNG. Each
+    // light's layer costs the share of the image its mesh covers, so the
+    // whole images they make are at most as many, and as many for a PNG.
     for (const std::string& out : {std::string("o.exr"), std::string("o.png")}) {
         const std::string layers = out == "o.exr" ? " --max-light-layers 2" : "";
         const CommandResult r = runMeshlight("render office:panels=3x2,desks=1,cabinets=0,partitions=0 --time 1" +
                                              layers + " --width 32 --height 24 --out " + path(out));
         ASSERT_EQ(r.status, 0) << r.output;
-        const size_t at = r.output.find(" composites; a tenth of");
+        const size_t at = r.output.find(" composites, ");
         ASSERT_NE(at, std::string::npos) << r.output;
         const size_t from = r.output.rfind(", ", at);
         ASSERT_NE(from, std::string::npos) << r.output;
         const int printed = std::stoi(r.output.substr(from + 2, at - from - 2));
+        const size_t wholeAt = at + std::string(" composites, ").size();
+        const size_t wholeEnd = r.output.find(" whole images", wholeAt);
+        ASSERT_NE(wholeEnd, std::string::npos) << r.output;
+        const double whole = std::stod(r.output.substr(wholeAt, wholeEnd - wholeAt));
         int expected = 1;
         if (out == "o.exr")
             for (const std::string& n : readImageChannelNames(path(out)))
                 expected += n.size() >= 1 && n.back() == 'R' && (n == "R" || n.compare(n.size() - 2, 2, ".R") == 0);
         EXPECT_EQ(printed, expected) << out << "\n" << r.output;
+        EXPECT_GT(whole, 0.0) << r.output;
+        EXPECT_LE(whole, printed + 0.05) << r.output;  // printed to 0.1
+        if (out == "o.png") EXPECT_EQ(whole, 1.0) << r.output;
         if (out == "o.exr") EXPECT_GT(expected, 8) << "a layered EXR: beauty, noise, reflectance and the parts";
     }
 }

@@ -106,12 +106,15 @@ public:
     }
     bool expectIndirect = false;  // the session computes indirect light
     // The composites at the settings' sub-pixel passes that the last image
-    // of `s` written to `path` takes: the estimate's beauty, and every
-    // layer of a layered EXR (layerComposites).
-    size_t compositesPerPass(const std::string& path, const CacheSnapshot& s) const {
-        if (quantity_ == OutputQuantity::Lux) return 1;
-        if (outputFormat(path) != ImageFormat::Exr || !layers_) return 1;
-        return 1 + layerComposites(scene_, s.direct.size(), compositor_.hasSpecularPass(), *layers_);
+    // of `meshes` from `camera` written to `path` takes: the estimate's
+    // beauty, and every layer of a layered EXR (layerComposites).
+    LayerCost compositesPerPass(const std::string& path, const Camera& camera, const GpuCacheMeshes& meshes) const {
+        LayerCost cost;
+        if (quantity_ != OutputQuantity::Lux && outputFormat(path) == ImageFormat::Exr && layers_)
+            cost = layerComposites(compositor_, scene_, camera, meshes, settings_, *layers_);
+        cost.composites += 1;
+        cost.wholeComposites += 1;
+        return cost;
     }
     int passes() const { return settings_.passes; }
     void setPasses(int passes) { settings_.passes = passes; }
@@ -547,7 +550,9 @@ int runRender(const std::vector<std::string>& args) {
         // composite the image takes: a layered EXR composites each light's
         // layer at those passes too. Counting the beauty alone, the back
         // rooms' `--time 240` (240×135) took 32 passes, and its last image,
-        // with 16 lights' layers, 127 s after 241 s of refinement.
+        // with 16 lights' layers, 127 s after 241 s of refinement. A light's
+        // layer counts by the share of the image it composites (its mesh's
+        // screen bounds: Compositor::partShares).
         CompositorSettings one = comp;
         one.passes = 1;
         one.outlinePasses = 0;
@@ -556,12 +561,12 @@ int runRender(const std::vector<std::string>& args) {
         const auto t0 = Clock::now();
         compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
         const double pass = secondsSince(t0);
-        const size_t composites = output.compositesPerPass(lastPath, *final);
-        const int k = subpixelPassesWithin(pass * double(composites), refineSeconds);
+        const LayerCost composites = output.compositesPerPass(lastPath, cameras[lastFrame], meshes);
+        const int k = subpixelPassesWithin(pass * composites.wholeComposites, refineSeconds);
         output.setPasses(k);
-        std::printf("sub-pixel passes: %d for the last image (one pass %.3f s, %zu composites; a tenth of %.1f s "
-                    "refined)\n",
-                    k, pass, composites, refineSeconds);
+        std::printf("sub-pixel passes: %d for the last image (one pass %.3f s, %zu composites, %.1f whole images; "
+                    "a tenth of %.1f s refined)\n",
+                    k, pass, composites.composites, composites.wholeComposites, refineSeconds);
     }
     ImageErrorEstimate finalEstimate;
     if (radianceOut || !logPath.empty()) {

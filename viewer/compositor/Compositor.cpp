@@ -15,7 +15,9 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <future>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -154,6 +156,73 @@ struct RookPattern {
     bool byParity = false;
 };
 
+// The sub-pixels (GL rows from the bottom) of a width × height image at
+// `supersample` seen through `mvp` where a Radiance composite of `weights`
+// without a specular image can be non-zero, in whole pixels: the screen
+// bounds of the footprints (GpuCacheMeshes::Mesh::footprint) of the meshes
+// it adds, two pixels wider each way, so that the emitters' outlines
+// (EmitterOutlines::apply, which pools a pixel's 3×3 neighbours) read zeros
+// outside as they would have composited them. Empty (the whole target) when
+// it shows emission or a mesh's footprint is not known. Clipped to it, such
+// a composite is bit for bit the same image: every sub-pixel outside adds
+// nothing (no mesh covers it, no emission).
+EmitterOutlines::Rect partRect(const Scene& scene, const glm::mat4& mvp, int width, int height, int supersample,
+                               const GpuCacheMeshes& meshes, const LightWeights& weights) {
+    for (const Rgb& e : emittedRadiance(scene, weights))
+        if (e != Rgb(0.0)) return {};
+    const int w = width * supersample, h = height * supersample;
+    float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
+    auto add = [&](const GpuCacheMeshes::Mesh& m, const Rgb& weight) {
+        if (m.triangleCount == 0 || weight == Rgb(0.0)) return true;
+        if (m.footprint.empty()) return false;
+        for (const GpuCacheMeshes::Cell& box : m.footprint) {
+            // The box's part in front of the camera (clip w ≥ ε) is a
+            // convex solid whose corners are the box's corners there and
+            // the points where its edges cross w = ε: its image is
+            // theirs. Points near w = ε land far off screen (clamped).
+            std::array<glm::vec4, 8> c;
+            for (int k = 0; k < 8; ++k)
+                c[k] = mvp * glm::vec4(k & 1 ? box.hi.x : box.lo.x, k & 2 ? box.hi.y : box.lo.y,
+                                       k & 4 ? box.hi.z : box.lo.z, 1.0f);
+            const float epsilon = 1e-6f * std::max({std::abs(c[0].w), std::abs(c[7].w), 1e-30f});
+            auto project = [&](const glm::vec4& p) {
+                const float x = std::clamp(p.x / p.w, -2.0f, 2.0f), y = std::clamp(p.y / p.w, -2.0f, 2.0f);
+                x0 = std::min(x0, (x * 0.5f + 0.5f) * float(w)), x1 = std::max(x1, (x * 0.5f + 0.5f) * float(w));
+                y0 = std::min(y0, (y * 0.5f + 0.5f) * float(h)), y1 = std::max(y1, (y * 0.5f + 0.5f) * float(h));
+            };
+            for (int k = 0; k < 8; ++k) {
+                if (!std::isfinite(c[k].x) || !std::isfinite(c[k].y) || !std::isfinite(c[k].w)) return false;
+                if (c[k].w >= epsilon) project(c[k]);
+                for (int axis = 1; axis < 8; axis <<= 1) {  // the edges from k to its neighbour along each axis
+                    const int j = k | axis;
+                    if (j == k || (c[k].w >= epsilon) == (c[j].w >= epsilon)) continue;
+                    const float f = (epsilon - c[k].w) / (c[j].w - c[k].w);
+                    glm::vec4 q = c[k] + f * (c[j] - c[k]);
+                    q.w = epsilon;
+                    project(q);
+                }
+            }
+        }
+        return true;
+    };
+    const size_t lights = scene.lights.size();
+    for (size_t l = 0; l < meshes.directCount(); ++l)
+        if (!add(meshes.direct(l), l < lights ? weights.light[l] : weights.shared)) return {};
+    for (size_t b = 0; b < meshes.indirectCount(); ++b)
+        if (!add(meshes.indirect(b), weights.indirect)) return {};
+    const int s = supersample, margin = 2;
+    if (x0 > x1) return {0, 0, s, s};  // nothing to add: one pixel, read back as zeros
+    auto pixel = [&](float v, int pixels, bool up) {
+        const float p = (up ? std::ceil(v / float(s)) + margin : std::floor(v / float(s)) - margin);
+        return std::clamp(int(std::clamp(p, -1.0f, float(pixels) + 1.0f)), 0, pixels);
+    };
+    const int px0 = pixel(x0, width, false), px1 = pixel(x1, width, true);
+    const int py0 = pixel(y0, height, false), py1 = pixel(y1, height, true);
+    if (px1 <= px0 || py1 <= py0) return {0, 0, s, s};  // wholly out of view
+    if (px0 == 0 && py0 == 0 && px1 == width && py1 == height) return {};
+    return {px0 * s, py0 * s, (px1 - px0) * s, (py1 - py0) * s};
+}
+
 bool sameCamera(const Camera& a, const Camera& b) {
     return a.position == b.position && a.target == b.target && a.up == b.up && a.fovYDegrees == b.fovYDegrees;
 }
@@ -216,6 +285,10 @@ struct Compositor::Impl {
     bool composed = false, surfaced = false, composited = false, resolved = false, forwarded = false;
     float textureLodShift = 0;  // common_textures.glsl's uTextureLodShift for this composite
     size_t drawnTriangles = 0;  // by the last compose's irradiance pass
+    // The sub-pixels the last compose's part can make non-zero (partRect),
+    // to which every pass of it is clipped and from which it is read back,
+    // the rest read as zero; empty: the whole target.
+    EmitterOutlines::Rect clip;
 
     // The specular pass, in scenes with a glossy or specular material: the
     // last traced image (RGBA32F, a texel per reduction² sub-pixels, row 0
@@ -570,6 +643,10 @@ struct Compositor::Impl {
         gl.Viewport(0, 0, width, height);
         gl.DepthMask(GL_TRUE);
         gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        if (!clip.empty() && width == t.width * t.supersample && height == t.height * t.supersample) {
+            gl.Enable(GL_SCISSOR_TEST);  // clears too: outside, the targets keep what they held
+            gl.Scissor(clip.x, clip.y, clip.width, clip.height);
+        }
     }
 
     // Adds one mesh's weighted irradiance where it is the nearest cache
@@ -704,8 +781,10 @@ struct Compositor::Impl {
     }
 
     // Pass 2, the irradiance, for the passes that follow.
+    // `clipped`: only where the part can be non-zero (partRect), for
+    // composite()'s parts; the viewer's frames are whole.
     void compose(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
-                 const CompositorSettings& s) {
+                 const CompositorSettings& s, bool clipped = false) {
         s.validate();
         camera.validate();
         ML_ASSERT(meshes.directCount() == scene.lights.size() || meshes.directCount() == scene.lights.size() + 1,
@@ -728,6 +807,9 @@ struct Compositor::Impl {
                            s.specular != SpecularPart::Off
                        ? specularCode(s.specular)
                        : 0;
+        clip = clipped && quantity == CompositeQuantity::Radiance && !specular
+                   ? partRect(scene, mvp, t.width, t.height, t.supersample, meshes, weights)
+                   : EmitterOutlines::Rect{};
         if (!scene.lights.empty()) {
             std::vector<glm::vec4> emission;
             for (const Rgb& e : emittedRadiance(scene, weights)) emission.emplace_back(toVec3(e), 1.0f);
@@ -769,6 +851,7 @@ struct Compositor::Impl {
     // nothing composited (the irradiance is not this view's).
     // Only the sub-pixels of `rect` are drawn.
     void drawSurfacesOnly(const Camera& camera, const CompositorSettings& s, const EmitterOutlines::Rect& rect) {
+        clip = {};  // its own rectangle
         ensureTargets(s.width, s.height, s.supersample);
         mvp = clipFromLocal(camera, double(s.width) / s.height, Vec2(2 * s.shiftX / s.width, 2 * s.shiftY / s.height));
         setFrustum();
@@ -784,19 +867,24 @@ struct Compositor::Impl {
         p.rect = rect;
         const EmitterOutlines::Rect r =
             rect.empty() ? EmitterOutlines::Rect{0, 0, t.width * t.supersample, t.height * t.supersample} : rect;
+        if (rect.empty()) {  // the whole target, or the part's clip
+            p.rect = clip;
+            p.surface = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT0);
+            if (textured) p.emissionScale = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1);
+            return p;
+        }
         p.surface = readRgba(t.surfaceFb.id(), r.x, r.y, r.width, r.height);
         if (textured)
             p.emissionScale =
                 readFloats(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1, GL_RGBA, 4, r.x, r.y, r.width, r.height);
         return p;
     }
-    // The last composite's sub-pixels (GL rows, from the bottom), and the
-    // image readImage() makes of them.
+    // The last composite's sub-pixels (GL rows, from the bottom; those of
+    // the part's clip, if any), and the image readImage() makes of them.
     ImageRgb readImage(std::vector<float>& subPixels) {
         ensureComposite();
-        const int w = t.width * t.supersample, h = t.height * t.supersample;
-        subPixels = readRgba(t.compositeFb.id(), 0, 0, w, h);
-        return boxDownsample(toImage(subPixels, w, h), t.supersample);
+        subPixels = readTarget(t.compositeFb.id(), GL_COLOR_ATTACHMENT0);
+        return imageOf(subPixels);
     }
 
     // Pass 1: reflectance, and which light's front is seen, per sub-pixel.
@@ -1080,6 +1168,28 @@ struct Compositor::Impl {
     std::vector<float> readRgba(GLuint fb, int x, int y, int w, int h) {
         return readFloats(fb, GL_COLOR_ATTACHMENT0, GL_RGBA, 4, x, y, w, h);
     }
+    // The sub-pixels of the part's clip, or of the whole target.
+    EmitterOutlines::Rect clipOrWhole() const {
+        return clip.empty() ? EmitterOutlines::Rect{0, 0, t.width * t.supersample, t.height * t.supersample} : clip;
+    }
+    // An RGBA sub-pixel target's clipOrWhole().
+    std::vector<float> readTarget(GLuint fb, GLenum attachment) {
+        const EmitterOutlines::Rect r = clipOrWhole();
+        return readFloats(fb, attachment, GL_RGBA, 4, r.x, r.y, r.width, r.height);
+    }
+    // The image of readTarget()'s sub-pixels, box-filtered: black outside
+    // the clip (which holds whole pixels), the same pixels inside.
+    ImageRgb imageOf(const std::vector<float>& rgba) const {
+        const EmitterOutlines::Rect r = clipOrWhole();
+        const int s = t.supersample;
+        ImageRgb pixels = boxDownsample(toImage(rgba, r.width, r.height), s);
+        if (clip.empty()) return pixels;
+        ImageRgb image(t.width, t.height);
+        const int left = r.x / s, top = t.height - (r.y + r.height) / s;  // rows from the top
+        for (int y = 0; y < pixels.height; ++y)
+            for (int x = 0; x < pixels.width; ++x) image.set(left + x, top + y, pixels.at(x, y));
+        return image;
+    }
 
     static ImageRgb toImage(const std::vector<float>& rgba, int w, int h) {
         ImageRgb image(w, h);
@@ -1095,8 +1205,7 @@ struct Compositor::Impl {
 
     ImageRgb readImage() {
         ensureComposite();
-        const int w = t.width * t.supersample, h = t.height * t.supersample;
-        return boxDownsample(toImage(readRgba(t.compositeFb.id(), 0, 0, w, h), w, h), t.supersample);
+        return imageOf(readTarget(t.compositeFb.id(), GL_COLOR_ATTACHMENT0));
     }
 
     // The illuminance composite box-filtered on the CPU: per pixel the sums
@@ -1220,6 +1329,24 @@ std::vector<ImageRgb> Compositor::composite(const Camera& camera, const GpuCache
     return images;
 }
 
+std::vector<double> Compositor::partShares(const Camera& camera, const GpuCacheMeshes& meshes,
+                                           const std::vector<LightWeights>& parts,
+                                           const CompositorSettings& settings) const {
+    settings.validate();
+    const bool clips = settings.quantity == CompositeQuantity::Radiance &&
+                       (!hasSpecularPass() || settings.specular == SpecularPart::Off);
+    const glm::mat4 mvp = impl_->clipFromLocal(camera, double(settings.width) / settings.height);
+    const double all = double(settings.width) * settings.height * settings.supersample * settings.supersample;
+    std::vector<double> shares;
+    for (const LightWeights& w : parts) {
+        const EmitterOutlines::Rect r =
+            clips ? partRect(impl_->scene, mvp, settings.width, settings.height, settings.supersample, meshes, w)
+                  : EmitterOutlines::Rect{};
+        shares.push_back(r.empty() ? 1.0 : double(r.width) * r.height / all);
+    }
+    return shares;
+}
+
 ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshes, const LightWeights& weights,
                                const CompositorSettings& settings, ImageRgb* spread,
                                std::vector<EmitterOutlines>* drawn) {
@@ -1228,7 +1355,7 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
                           settings.specular != SpecularPart::Only && !impl_->scene.lights.empty();
     if (passes == 1 && !outlines) {
         impl_->traceSpecularFor(camera, weights, settings);
-        impl_->compose(camera, meshes, weights, settings);
+        impl_->compose(camera, meshes, weights, settings, drawn != nullptr);
         ImageRgb image = impl_->readImage();
         if (spread) *spread = ImageRgb(image.width, image.height);
         return image;
@@ -1241,10 +1368,12 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
     ImageRgb sum;
     std::vector<double> odd;  // Σ over the odd half
     std::vector<float> subPixels;
+    bool clipped = false;  // some pass only composited where the part can be non-zero
     for (int k = 0; k < passes; ++k) {
         const CompositorSettings s = passes > 1 ? rook.shifted(settings, k) : settings;
         impl_->traceSpecularFor(camera, weights, s);
-        impl_->compose(camera, meshes, weights, s);
+        impl_->compose(camera, meshes, weights, s, drawn != nullptr);
+        clipped = clipped || !impl_->clip.empty();
         const ImageRgb image = edges ? impl_->readImage(subPixels) : impl_->readImage();
         if (edges) edges->addFullPass(subPixels, impl_->readSurfaceSubPixels());
         if (k == 0) sum = image;
@@ -1283,8 +1412,9 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
         }
         edges->apply(sum, spread);
         // Kept for the parts after this one (moved: this part is done with
-        // it), one per distinct emission: render's layers keep two.
-        if (drawn && !same) drawn->push_back(std::move(*edges));
+        // it), one per distinct emission: render's layers keep two. Not
+        // those of a clipped part: its surface passes cover its clip only.
+        if (drawn && !same && !clipped) drawn->push_back(std::move(*edges));
     }
     return sum;
 }

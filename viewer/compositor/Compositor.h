@@ -250,8 +250,21 @@ public:
     // 16 passes saved per layer). Each distinct emission keeps its
     // EmitterOutlines (120 bytes per pixel) until the call returns: render's
     // layers have two.
+    // Each part is composited only where it can be non-zero: a part without
+    // emission (a light's layer) only over the screen bounds of the meshes
+    // it adds (GpuCacheMeshes::Mesh::footprint, two pixels wider), read
+    // back as zeros outside. Where lights share a mesh, their own meshes
+    // cover only the surfaces where they matter: the 48-panel office's
+    // layers (320×180, 4 passes) took 11.5 s, 6.0 s clipped, bit for bit
+    // the same file.
     std::vector<ImageRgb> composite(const Camera& camera, const GpuCacheMeshes& meshes,
                                     const std::vector<LightWeights>& parts, const CompositorSettings& settings);
+    // The share of the image's sub-pixels that composite() of these parts
+    // composites for each (1: the whole image), from the unshifted grid:
+    // what each costs against a whole composite, roughly (render budgets
+    // its last image's passes by it).
+    std::vector<double> partShares(const Camera& camera, const GpuCacheMeshes& meshes,
+                                   const std::vector<LightWeights>& parts, const CompositorSettings& settings) const;
     // Cache triangles the last compose drew: large meshes' cells out of
     // view are skipped (GpuCacheMeshes::Cell).
     size_t drawnTriangles() const;

@@ -47,12 +47,13 @@ bool EmitterOutlines::emittedAt(const SubPixels& seen, size_t i, Rgb& e) const {
 }
 
 void EmitterOutlines::addFullPass(const std::vector<float>& radiance, const SubPixels& seen) {
-    const size_t n = pixels_.size() * size_t(supersample_) * size_t(supersample_);
-    ML_ASSERT(radiance.size() == 4 * n && seen.surface.size() == 4 * n && seen.rect.empty(), "a full pass of ",
-              radiance.size() / 4, " and ", seen.surface.size() / 4, " sub-pixels for ", n);
-    const Rect all = whole();
+    const Rect r = seen.rect.empty() ? whole() : seen.rect;
+    const size_t n = size_t(r.width) * size_t(r.height);
+    ML_ASSERT(r.x >= 0 && r.y >= 0 && r.x + r.width <= width_ * supersample_ &&
+                  r.y + r.height <= height_ * supersample_ && radiance.size() == 4 * n && seen.surface.size() == 4 * n,
+              "a full pass of ", radiance.size() / 4, " and ", seen.surface.size() / 4, " sub-pixels for ", n);
     for (size_t i = 0; i < n; ++i) {
-        Pixel& p = pixels_[pixelOf(all, i)];
+        Pixel& p = pixels_[pixelOf(r, i)];
         Rgb e;
         if (emittedAt(seen, i, e)) {
             for (int c = 0; c < 3; ++c) p.rest[c] += double(radiance[i * 4 + c]) - e[c];

@@ -52,8 +52,11 @@ public:
     // `emission`: what light l's front shows, its radiance times its weight.
     EmitterOutlines(int width, int height, int supersample, std::vector<Rgb> emission);
 
-    // A full pass: its composite's radiance sub-pixels (RGBA, as SubPixels)
-    // and what each saw.
+    // A full pass: its composite's radiance sub-pixels (RGBA, as SubPixels,
+    // those of seen.rect) and what each saw. Outside a rect, nothing is
+    // counted: right where the pass is black there and within two pixels
+    // of its edge inside (Compositor's clipped parts), as the 3×3 pooling
+    // of apply() then reads zeros either way.
     void addFullPass(const std::vector<float>& radiance, const SubPixels& seen);
     // A pass of the surfaces alone; `odd`: which half of the passes it is in
     // (the halves' difference is the spread, as Compositor::composite's).

@@ -46,6 +46,38 @@ void copyTriangles(const GlApi& gl, const IrradianceMeshCopy& view, GLuint buffe
                           &view.triangles[begin]);
 }
 
+// Mesh::footprint of `view`'s triangles.
+std::vector<GpuCacheMeshes::Cell> footprintOf(const IrradianceMeshCopy& view, const Vec3& origin) {
+    if (view.triangles.empty()) return {};
+    constexpr int n = GpuCacheMeshes::kFootprintCells;
+    auto local = [&](uint32_t v) { return glm::vec3(view.positions[v] - origin); };
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (const glm::uvec3& t : view.triangles)
+        for (int k = 0; k < 3; ++k) {
+            lo = glm::min(lo, local(t[k]));
+            hi = glm::max(hi, local(t[k]));
+        }
+    const glm::vec3 extent = glm::max(hi - lo, glm::vec3(1e-30f));
+    std::vector<GpuCacheMeshes::Cell> bins(size_t(n * n * n));
+    std::vector<bool> used(bins.size(), false);
+    for (const glm::uvec3& t : view.triangles) {
+        const glm::vec3 a = local(t.x), b = local(t.y), c = local(t.z);
+        const glm::ivec3 cell = glm::clamp(glm::ivec3(((a + b + c) / 3.0f - lo) / extent * float(n)), 0, n - 1);
+        const size_t i = size_t((cell.z * n + cell.y) * n + cell.x);
+        GpuCacheMeshes::Cell& box = bins[i];
+        if (!used[i]) {
+            box.lo = box.hi = a;
+            used[i] = true;
+        }
+        box.lo = glm::min(glm::min(box.lo, a), glm::min(b, c));
+        box.hi = glm::max(glm::max(box.hi, a), glm::max(b, c));
+    }
+    std::vector<GpuCacheMeshes::Cell> footprint;
+    for (size_t i = 0; i < bins.size(); ++i)
+        if (used[i]) footprint.push_back(bins[i]);
+    return footprint;
+}
+
 }  // namespace
 
 struct GpuCacheMeshes::Mesh::Gpu {
@@ -101,6 +133,7 @@ void GpuCacheMeshes::reserve(const std::vector<const IrradianceMeshCopy*>& views
         }
         m.vertexCount = v.positions.size();
         m.triangleCount = v.triangles.size();
+        m.footprint.clear();  // not known until upload() sets it
     }
 }
 
@@ -115,6 +148,7 @@ void GpuCacheMeshes::upload(const std::vector<IrradianceMeshCopy>& direct,
         if (!views[i]->triangles.empty())
             copyTriangles(*gl_, *views[i], meshes_[i].gpu->indices.id(), 0, views[i]->triangles.size());
         meshes_[i].cells.clear();
+        meshes_[i].footprint = footprintOf(*views[i], origin_);
     }
 }
 

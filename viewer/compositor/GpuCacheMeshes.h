@@ -48,6 +48,14 @@ public:
         // Otherwise the triangles sorted into cells of space (Morton order,
         // so neighbouring cells are mostly neighbours in the buffer).
         std::vector<Cell> cells;
+        // Boxes (relative to the origin) that together hold every triangle:
+        // upload() bins the triangles on a grid of kFootprintCells a side
+        // over the mesh's bounds, a box per bin over its triangles' corners
+        // (first and count unused). What the compositor clips a part of an
+        // image to (render's per-light layers: a light's own mesh covers
+        // only the surfaces where it matters). Empty when not known
+        // (CacheMeshUploader's copies): the whole image.
+        std::vector<Cell> footprint;
     };
 
     // Meshes with at least this many triangles are sorted into cells by
@@ -55,6 +63,9 @@ public:
     // (vertex work runs on one thread), and cells out of view cost nothing.
     // Smaller meshes keep the snapshot's order, as upload() does.
     static constexpr size_t kCellMinTriangles = 65536;
+    // The footprint's grid: 64 boxes at most, whose corners a part projects
+    // per sub-pixel pass (512 points per mesh, nothing against a composite).
+    static constexpr int kFootprintCells = 4;
 
     // `origin` is subtracted from every position (the scene's centre): what
     // goes to the GPU as float stays precise far from the world's origin.

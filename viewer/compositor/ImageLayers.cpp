@@ -78,7 +78,28 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
         out.noise = compositor.composite(camera, noiseMeshes, w, radiance);
     }
     // The parts, composited together: the emitters' outline passes are
-    // drawn once for all the parts without emission (Compositor::composite).
+    // drawn once for all the parts without emission, and each light's
+    // layer only where its mesh is (Compositor::composite).
+    const std::vector<LightWeights> parts = layerParts(scene, direct.size(), layerSettings);
+    std::vector<ImageRgb> images = compositor.composite(camera, meshes, parts, radiance);
+    const std::vector<std::string> names = lightLayerNames(scene);
+    const size_t own = std::min(lights, layerSettings.maxLightLayers);
+    out.emission = std::move(images[0]);
+    out.direct = std::move(images[1]);
+    out.indirect = std::move(images[2]);
+    for (size_t l = 0; l < own; ++l) out.lights.push_back({names[l], std::move(images[3 + l])});
+    if (own < lights) out.directRest = std::move(images[3 + own]);
+    if (direct.size() > lights) out.directShared = std::move(images.back());
+
+    CompositorSettings reflectance = settings;
+    reflectance.quantity = CompositeQuantity::Reflectance;
+    out.reflectance = composite(LightWeights::unit(lights), reflectance);
+    out.illuminance = compositor.renderIlluminance(camera, direct, indirect, settings);
+    return out;
+}
+
+std::vector<LightWeights> layerParts(const Scene& scene, size_t directMeshes, const LayerSettings& layerSettings) {
+    const size_t lights = scene.lights.size();
     std::vector<LightWeights> parts;
     LightWeights w = none(lights);
     w.emission.assign(lights, Rgb(1.0));
@@ -90,7 +111,6 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
     w = none(lights);
     w.indirect = Rgb(1.0);
     parts.push_back(w);  // 2: indirect
-    const std::vector<std::string> names = lightLayerNames(scene);
     const size_t own = std::min(lights, layerSettings.maxLightLayers);
     for (size_t l = 0; l < own; ++l) {
         w = none(lights);
@@ -102,32 +122,28 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
         for (size_t l = own; l < lights; ++l) w.light[l] = Rgb(1.0);
         parts.push_back(w);  // the lights past the cap
     }
-    const bool shared = direct.size() > lights;
-    if (shared) {
+    if (directMeshes > lights) {
         w = none(lights);
         w.shared = Rgb(1.0);
         parts.push_back(w);  // last: the shared mesh
     }
-    std::vector<ImageRgb> images = compositor.composite(camera, meshes, parts, radiance);
-    out.emission = std::move(images[0]);
-    out.direct = std::move(images[1]);
-    out.indirect = std::move(images[2]);
-    for (size_t l = 0; l < own; ++l) out.lights.push_back({names[l], std::move(images[3 + l])});
-    if (own < lights) out.directRest = std::move(images[3 + own]);
-    if (shared) out.directShared = std::move(images.back());
-
-    CompositorSettings reflectance = settings;
-    reflectance.quantity = CompositeQuantity::Reflectance;
-    out.reflectance = composite(LightWeights::unit(lights), reflectance);
-    out.illuminance = compositor.renderIlluminance(camera, direct, indirect, settings);
-    return out;
+    return parts;
 }
 
-size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers) {
-    const size_t lights = scene.lights.size();
-    const size_t own = std::min(lights, layers.maxLightLayers);
-    const size_t parts = 3 + own + (own < lights ? 1 : 0) + (directMeshes > lights ? 1 : 0);
-    return 3 + (specularPass ? 1 : 0) + parts;
+LayerCost layerComposites(const Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const GpuCacheMeshes& meshes, const CompositorSettings& settings,
+                          const LayerSettings& layers) {
+    CompositorSettings radiance = settings;
+    radiance.quantity = CompositeQuantity::Radiance;
+    radiance.specular = SpecularPart::Off;
+    const std::vector<LightWeights> parts = layerParts(scene, meshes.directCount(), layers);
+    const std::vector<double> shares = compositor.partShares(camera, meshes, parts, radiance);
+    const size_t whole = 3 + (compositor.hasSpecularPass() ? 1 : 0);  // beauty, noise, reflectance, specular
+    LayerCost cost;
+    cost.composites = whole + parts.size();
+    cost.wholeComposites = double(whole);
+    for (double share : shares) cost.wholeComposites += share;
+    return cost;
 }
 
 std::vector<ImageLayer> RenderLayers::exrLayers() const {

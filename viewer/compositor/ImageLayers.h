@@ -72,14 +72,26 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
                           const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
                           const LayerSettings& layers);
 
-// How many composites renderLayers makes at the settings' sub-pixel passes
+// The parts renderLayers composites together (Compositor::composite of
+// several parts), for a cache of `directMeshes` direct meshes: emission,
+// direct, indirect, each light with a layer of its own, the lights past the
+// cap, the shared mesh.
+std::vector<LightWeights> layerParts(const Scene& scene, size_t directMeshes, const LayerSettings& layers);
+
+// What one sub-pixel pass of renderLayers composites at the settings' grid
 // (the illuminance is one pass): the beauty, the specular pass where there
-// is one, the noise, the reflectance, and one per part (emission, direct,
-// indirect, each light with a layer of its own, the lights past the cap,
-// the shared mesh). What a sub-pixel pass of a layered EXR costs, in
-// composites: `render` budgets its last image's passes by it (the back
-// rooms' 16 lights and their shared mesh make 23).
-size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers);
+// is one, the noise, the reflectance, and the parts (layerParts). `render`
+// budgets its last image's passes by it.
+struct LayerCost {
+    size_t composites = 0;  // the back rooms' 16 lights and their shared mesh make 23
+    // The same in whole images: each part by the share of the image it
+    // composites (Compositor::partShares). The 48-panel office's 56
+    // composites cost about 20 whole ones.
+    double wholeComposites = 0;
+};
+LayerCost layerComposites(const Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const GpuCacheMeshes& meshes, const CompositorSettings& settings,
+                          const LayerSettings& layers);
 
 // "light.<name>" per light: the name with every character other than a
 // letter, a digit or '_' made '_' (EXR tools split layers at '.'), "light<i>"
