@@ -106,23 +106,30 @@ public:
     }
     bool expectIndirect = false;  // the session computes indirect light
     // The composites at the settings' sub-pixel passes that the last image
-    // of `meshes` from `camera` written to `path` takes: the estimate's
-    // beauty, and every layer of a layered EXR (layerComposites).
-    LayerCost compositesPerPass(const std::string& path, const Camera& camera, const GpuCacheMeshes& meshes) const {
-        LayerCost cost;
-        if (quantity_ != OutputQuantity::Lux && outputFormat(path) == ImageFormat::Exr && layers_)
-            cost = layerComposites(compositor_, scene_, camera, meshes, settings_, *layers_);
-        cost.composites += 1;
-        cost.wholeComposites += 1;
-        return cost;
+    // of `s` written to `path` takes: the estimate's beauty, and every
+    // layer of a layered EXR (layerComposites).
+    size_t compositesPerPass(const std::string& path, const CacheSnapshot& s) const {
+        if (!layered(path)) return 1;
+        return 1 + layerComposites(scene_, s.direct.size(), compositor_.hasSpecularPass(), *layers_);
+    }
+    // `path` is a frame written as a layered EXR (write()).
+    bool layered(const std::string& path) const {
+        return quantity_ == OutputQuantity::Radiance && outputFormat(path) == ImageFormat::Exr && layers_.has_value();
+    }
+    // Every layer of `s` from `camera` at the settings' passes, as write()
+    // makes them for a layered EXR.
+    RenderLayers layers(const CacheSnapshot& s, const Camera& camera) {
+        return renderLayers(compositor_, scene_, camera, s.direct, s.indirect, settings_, *layers_);
     }
     int passes() const { return settings_.passes; }
     void setPasses(int passes) { settings_.passes = passes; }
     // Composites `s` from `camera` and writes it to `path`; returns the
     // radiance image written (empty for lux).
-    // `made`: the radiance image of `s` from `camera`, when already made.
+    // `made`: the radiance image of `s` from `camera`, when already made;
+    // `ready`: the layers of a layered EXR, when already made (layers()).
     ImageRgb write(const std::string& path, const CacheSnapshot& s, const Camera& camera,
-                   ImageRole role = ImageRole::Frame, const ImageRgb* made = nullptr) {
+                   ImageRole role = ImageRole::Frame, const ImageRgb* made = nullptr,
+                   std::optional<RenderLayers> ready = std::nullopt) {
         const bool frame = role == ImageRole::Frame;
         if (quantity_ == OutputQuantity::Lux) {
             writeLux(path, compositor_.renderIlluminance(camera, s.direct, s.indirect, settings_), frame);
@@ -130,7 +137,7 @@ public:
         }
         const ImageFormat format = outputFormat(path);
         if (format == ImageFormat::Exr && layers_ && frame) {
-            RenderLayers layers = renderLayers(compositor_, scene_, camera, s.direct, s.indirect, settings_, *layers_);
+            RenderLayers layers = ready ? std::move(*ready) : this->layers(s, camera);
             ImageAttributes attributes = metadata_(s);
             attributes.push_back({"meshlight:layers", std::string(kLayerSums)});
             writeImageLayers(path, settings_.width, settings_.height, layers.exrLayers(), attributes);
@@ -544,15 +551,19 @@ int runRender(const std::vector<std::string>& args) {
     // count timed on this machine would make the image, unlike the cache,
     // depend on its speed and load (a run under load took 4.75 s instead of
     // 2.1 s and composited more passes than its resumed copies, 2.5% apart).
+    std::optional<RenderLayers> lastLayers;  // made while timing the last image's passes, if kept
     if (autoPasses && !walkthrough && radianceOut && !stop.samples) {
         // As many passes as a tenth of the refinement's time pays for, timed
         // on one pass (subpixelPassesWithin) and counted over every
         // composite the image takes: a layered EXR composites each light's
         // layer at those passes too. Counting the beauty alone, the back
         // rooms' `--time 240` (240×135) took 32 passes, and its last image,
-        // with 16 lights' layers, 127 s after 241 s of refinement. A light's
-        // layer counts by the share of the image it composites (its mesh's
-        // screen bounds: Compositor::partShares).
+        // with 16 lights' layers, 127 s after 241 s of refinement. A layered
+        // EXR's pass is timed, not counted: its layers are made at one pass
+        // (kept when that is all the time pays for), as a light's layer
+        // costs what its mesh covers (Compositor::composite of parts). The
+        // 48-panel office's counted 56 composites of a beauty pass took 16 s
+        // a pass at 240 s, for one pass; its layers take about 4 s.
         CompositorSettings one = comp;
         one.passes = 1;
         one.outlinePasses = 0;
@@ -561,12 +572,20 @@ int runRender(const std::vector<std::string>& args) {
         const auto t0 = Clock::now();
         compositor.composite(cameras[lastFrame], meshes, LightWeights::unit(scene.lights.size()), one);
         const double pass = secondsSince(t0);
-        const LayerCost composites = output.compositesPerPass(lastPath, cameras[lastFrame], meshes);
-        const int k = subpixelPassesWithin(pass * composites.wholeComposites, refineSeconds);
+        const size_t composites = output.compositesPerPass(lastPath, *final);
+        double perPass = pass * double(composites);
+        if (output.layered(lastPath)) {
+            output.setPasses(1);
+            const auto t1 = Clock::now();
+            lastLayers = output.layers(*final, cameras[lastFrame]);
+            perPass = pass + secondsSince(t1);  // the estimate's beauty, and the layers
+        }
+        const int k = subpixelPassesWithin(perPass, refineSeconds);
         output.setPasses(k);
+        if (k != 1) lastLayers.reset();
         std::printf("sub-pixel passes: %d for the last image (one pass %.3f s, %zu composites, %.1f whole images; "
                     "a tenth of %.1f s refined)\n",
-                    k, pass, composites.composites, composites.wholeComposites, refineSeconds);
+                    k, pass, composites, perPass / pass, refineSeconds);
     }
     ImageErrorEstimate finalEstimate;
     if (radianceOut || !logPath.empty()) {
@@ -574,7 +593,7 @@ int runRender(const std::vector<std::string>& args) {
         imageEstimate = finalEstimate.cache;
     }
     output.write(lastPath, *final, cameras[lastFrame], ImageRole::Frame,
-                 finalEstimate.image.data.empty() ? nullptr : &finalEstimate.image);
+                 finalEstimate.image.data.empty() ? nullptr : &finalEstimate.image, std::move(lastLayers));
     if (!logPath.empty())
         log.add(refineSeconds, lastFrame, *final, finalEstimate, o.has("reference") ? &reference : nullptr);
     printStatus(*final, refineSeconds, walkthrough ? concat("frame ", lastFrame) : std::string("refined"), true);

@@ -261,8 +261,7 @@ public:
                                     const std::vector<LightWeights>& parts, const CompositorSettings& settings);
     // The share of the image's sub-pixels that composite() of these parts
     // composites for each (1: the whole image), from the unshifted grid:
-    // what each costs against a whole composite, roughly (render budgets
-    // its last image's passes by it).
+    // about what each costs against a whole composite.
     std::vector<double> partShares(const Camera& camera, const GpuCacheMeshes& meshes,
                                    const std::vector<LightWeights>& parts, const CompositorSettings& settings) const;
     // Cache triangles the last compose drew: large meshes' cells out of

@@ -130,20 +130,8 @@ std::vector<LightWeights> layerParts(const Scene& scene, size_t directMeshes, co
     return parts;
 }
 
-LayerCost layerComposites(const Compositor& compositor, const Scene& scene, const Camera& camera,
-                          const GpuCacheMeshes& meshes, const CompositorSettings& settings,
-                          const LayerSettings& layers) {
-    CompositorSettings radiance = settings;
-    radiance.quantity = CompositeQuantity::Radiance;
-    radiance.specular = SpecularPart::Off;
-    const std::vector<LightWeights> parts = layerParts(scene, meshes.directCount(), layers);
-    const std::vector<double> shares = compositor.partShares(camera, meshes, parts, radiance);
-    const size_t whole = 3 + (compositor.hasSpecularPass() ? 1 : 0);  // beauty, noise, reflectance, specular
-    LayerCost cost;
-    cost.composites = whole + parts.size();
-    cost.wholeComposites = double(whole);
-    for (double share : shares) cost.wholeComposites += share;
-    return cost;
+size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers) {
+    return 3 + (specularPass ? 1 : 0) + layerParts(scene, directMeshes, layers).size();
 }
 
 std::vector<ImageLayer> RenderLayers::exrLayers() const {

@@ -78,20 +78,14 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
 // cap, the shared mesh.
 std::vector<LightWeights> layerParts(const Scene& scene, size_t directMeshes, const LayerSettings& layers);
 
-// What one sub-pixel pass of renderLayers composites at the settings' grid
+// How many composites renderLayers makes at the settings' sub-pixel passes
 // (the illuminance is one pass): the beauty, the specular pass where there
-// is one, the noise, the reflectance, and the parts (layerParts). `render`
-// budgets its last image's passes by it.
-struct LayerCost {
-    size_t composites = 0;  // the back rooms' 16 lights and their shared mesh make 23
-    // The same in whole images: each part by the share of the image it
-    // composites (Compositor::partShares). The 48-panel office's 56
-    // composites cost about 20 whole ones.
-    double wholeComposites = 0;
-};
-LayerCost layerComposites(const Compositor& compositor, const Scene& scene, const Camera& camera,
-                          const GpuCacheMeshes& meshes, const CompositorSettings& settings,
-                          const LayerSettings& layers);
+// is one, the noise, the reflectance, and one per part (layerParts). A
+// part without emission is composited only over its meshes' screen bounds
+// (Compositor::composite of parts), so a light's layer costs a share of a
+// whole composite: `render` times its last image's layers rather than
+// count them. The back rooms' 16 lights and their shared mesh make 23.
+size_t layerComposites(const Scene& scene, size_t directMeshes, bool specularPass, const LayerSettings& layers);
 
 // "light.<name>" per light: the name with every character other than a
 // letter, a digit or '_' made '_' (EXR tools split layers at '.'), "light<i>"
