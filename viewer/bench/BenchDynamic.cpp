@@ -108,6 +108,7 @@ std::unique_ptr<ProgressiveSession> newSession(Scene& scene, const Choices& c, u
     ss.worker.seed = seed;
     ss.worker.refinementLevels = IrradianceCache::kMaxRefinementLevel;  // as `view` refines
     ss.worker.indirectStandIn = c.realtime.realtime != "off";
+    ss.worker.publishSeconds = ViewRefinement::kPublishSeconds;
     if (c.indirect.active()) ss.indirect = c.indirect.solver;
     auto session = std::make_unique<ProgressiveSession>(scene, ss, samplerFactory(scene, c.direct, c.indirect));
     ViewRefinement::lowerWorkerPriority(*session);

@@ -1,6 +1,7 @@
 // meshlight view: the progressive walkthrough viewer (ViewSession.h), and
 // its scripted twin (--script, ViewScript.h). Everything the user can get
 // wrong, the script included, is checked before the window opens.
+#include "viewer/window/ViewRefinement.h"
 #include "viewer/window/ViewScript.h"
 #include "viewer/window/ViewSession.h"
 #include "CameraOptions.h"
@@ -40,7 +41,8 @@ int runView(const std::vector<std::string>& args) {
                                 "timing for recordings)");
     o.value("samples", "N", "the worker stops after N irradiance samples in all: with the same seed and view, "
                             "the same cache as 'render --samples N'");
-    o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds", std::string("0.25"));
+    o.value("publish", "S", "the worker publishes a cache snapshot at most every S seconds",
+            concat(ViewRefinement::kPublishSeconds));
     o.value("sampling-threads", "T", "sampling threads, each with its own GL context; 0 = one per core (the cache a "
                                      "--samples budget makes is the same for any T)",
             std::string("0"));
