@@ -563,7 +563,7 @@ int runRender(const std::vector<std::string>& args) {
         // (kept when that is all the time pays for), as a light's layer
         // costs what its mesh covers (Compositor::composite of parts). The
         // 48-panel office's counted 56 composites of a beauty pass took 16 s
-        // a pass at 240 s, for one pass; its layers take about 4 s.
+        // a pass at 240 s, for one pass; its layers take about 4.5 s.
         CompositorSettings one = comp;
         one.passes = 1;
         one.outlinePasses = 0;
