@@ -117,6 +117,17 @@ Camera obliqueView() {
     return camera;
 }
 
+// A width × height composite of 4×4 sub-pixels, 2 sub-pixel passes and 8
+// outline passes: both halves of the passes, and the outlines' own.
+CompositorSettings twoPassesWithOutlines(int width, int height) {
+    CompositorSettings s;
+    s.width = width, s.height = height;
+    s.supersample = 4;
+    s.passes = 2;
+    s.outlinePasses = 8;
+    return s;
+}
+
 // Of [a0, a1] the share inside [b0, b1].
 double overlap(double a0, double a1, double b0, double b1) {
     return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)) / (a1 - a0);
@@ -189,11 +200,7 @@ TEST(EmitterOutlines, PartsCompositedTogetherEqualEachCompositedAlone) {
     const std::vector<IrradianceMeshCopy> smooth = smoothCache(scene, 1.0 / 8.0);
     const Camera camera = obliqueView();
     Compositor compositor(test::glContext(), scene);
-    CompositorSettings s;
-    s.width = 48, s.height = 40;
-    s.supersample = 4;
-    s.passes = 2;
-    s.outlinePasses = 8;
+    const CompositorSettings s = twoPassesWithOutlines(48, 40);
     const GpuCacheMeshes meshes = compositor.upload(smooth, {});
     const size_t lights = scene.lights.size();
     ASSERT_EQ(1u, lights);
@@ -242,11 +249,7 @@ TEST(EmitterOutlines, ALightsPartIsCompositedOnlyOverItsMeshBitForBitTheSame) {
     ASSERT_LT(own.triangles.size(), shared.triangles.size() / 4);
     const Camera camera = obliqueView();
     Compositor compositor(test::glContext(), scene);
-    CompositorSettings s;
-    s.width = 56, s.height = 40;
-    s.supersample = 4;
-    s.passes = 2;
-    s.outlinePasses = 8;
+    const CompositorSettings s = twoPassesWithOutlines(56, 40);
     const GpuCacheMeshes meshes = compositor.upload({own, shared}, {});
     const size_t lights = scene.lights.size();
     ASSERT_EQ(1u, lights);

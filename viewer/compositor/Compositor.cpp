@@ -864,19 +864,9 @@ struct Compositor::Impl {
     // Those of `rect` (empty: all).
     EmitterOutlines::SubPixels readSurfaceSubPixels(const EmitterOutlines::Rect& rect = {}) {
         EmitterOutlines::SubPixels p;
-        p.rect = rect;
-        const EmitterOutlines::Rect r =
-            rect.empty() ? EmitterOutlines::Rect{0, 0, t.width * t.supersample, t.height * t.supersample} : rect;
-        if (rect.empty()) {  // the whole target, or the part's clip
-            p.rect = clip;
-            p.surface = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT0);
-            if (textured) p.emissionScale = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1);
-            return p;
-        }
-        p.surface = readRgba(t.surfaceFb.id(), r.x, r.y, r.width, r.height);
-        if (textured)
-            p.emissionScale =
-                readFloats(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1, GL_RGBA, 4, r.x, r.y, r.width, r.height);
+        p.rect = rect.empty() ? clip : rect;  // none given: the whole target, or the part's clip
+        p.surface = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT0, p.rect);
+        if (textured) p.emissionScale = readTarget(t.surfaceFb.id(), GL_COLOR_ATTACHMENT1, p.rect);
         return p;
     }
     // The last composite's sub-pixels (GL rows, from the bottom; those of
@@ -1172,9 +1162,9 @@ struct Compositor::Impl {
     EmitterOutlines::Rect clipOrWhole() const {
         return clip.empty() ? EmitterOutlines::Rect{0, 0, t.width * t.supersample, t.height * t.supersample} : clip;
     }
-    // An RGBA sub-pixel target's clipOrWhole().
-    std::vector<float> readTarget(GLuint fb, GLenum attachment) {
-        const EmitterOutlines::Rect r = clipOrWhole();
+    // An RGBA sub-pixel target's `rect` (empty: its clipOrWhole()).
+    std::vector<float> readTarget(GLuint fb, GLenum attachment, const EmitterOutlines::Rect& rect = {}) {
+        const EmitterOutlines::Rect r = rect.empty() ? clipOrWhole() : rect;
         return readFloats(fb, attachment, GL_RGBA, 4, r.x, r.y, r.width, r.height);
     }
     // The image of readTarget()'s sub-pixels, box-filtered: black outside
