@@ -146,7 +146,10 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->vertices += snap->indirectVertices;
         snap->samples += snap->indirectSamples;
         snap->indirectError = indirect_->estimatedError(view);
-        if (samplers.indirect()) snap->indirectStats = samplers.indirect()->stats();
+        if (samplers.indirect()) {
+            snap->indirectStats = samplers.indirect()->stats();
+            snap->bounceLayout = bounceCacheLayout(*samplers.indirect());
+        }
     }
     if (caustics_) {
         snap->indirect.push_back(caustics_->copyMesh());

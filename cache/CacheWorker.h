@@ -52,6 +52,10 @@ struct CacheSnapshot {
     // direct light only.
     bool indirectComplete = true;
     std::vector<IrradianceMeshCopy> bounceMeshes;
+    // How the bounces' base meshes are laid for the worker's gather
+    // (bounceCacheLayout(estimator)): the stand-in lays its estimate the
+    // same way, vertex for vertex.
+    CacheLayout bounceLayout = bounceCacheLayout();
     size_t causticMeshes = 0;         // the last of `indirect` that are caustics (0 or 1)
     uint64_t causticPhotons = 0;      // photons emitted so far
     double causticError = 0;          // CausticCache::estimatedError

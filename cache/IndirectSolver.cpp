@@ -115,6 +115,15 @@ CacheLayout bounceCacheLayout() {
     return layout;
 }
 
+CacheLayout bounceCacheLayout(const IndirectEstimator& estimator) {
+    CacheLayout layout = bounceCacheLayout();
+    layout.borderInset = estimator.borderInset();
+    // The back of a luminaire hung under a ceiling too, not the inside of
+    // an open box (BackFaceReach.h).
+    if (estimator.separatesSides()) layout.backFaces = CacheLayout::BackFaces::ReachedByScene;
+    return layout;
+}
+
 void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
                                    const std::function<std::vector<IrradianceMeshCopy>()>& direct, bool firstPass) {
     const size_t slot = size_t(bounce - 1);
@@ -151,11 +160,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         if (bounce > 2) releaseSource(estimator, size_t(bounce - 2));
         // Every bounce lays the same surfaces (bounceCacheSettings changes
         // only tolerances and the smallest edges): cut along contacts once.
-        CacheLayout layout = bounceCacheLayout();
-        layout.borderInset = estimator.borderInset();
-        // The back of a luminaire hung under a ceiling too, not the inside
-        // of an open box (BackFaceReach.h).
-        if (estimator.separatesSides()) layout.backFaces = CacheLayout::BackFaces::ReachedByScene;
+        CacheLayout layout = bounceCacheLayout(estimator);
         if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
         layout.surfaces = surfaces_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));

@@ -94,9 +94,13 @@ struct IndirectSettings {
 
 // Bounce `bounce`'s cache settings (bounce 1's tolerances relaxed by
 // ā^(n−1), see above) and the layout of every bounce's one mesh: how the
-// solver lays its bounces, and RealtimeIndirect the same base mesh.
+// solver lays its bounces, and RealtimeIndirect the same base mesh. The
+// layout depends on the gather: its border inset and whether it keeps a
+// thin surface's sides apart (IndirectEstimator::borderInset,
+// separatesSides), which the second form takes from `estimator`.
 CacheSettings bounceCacheSettings(const IndirectSettings& settings, int bounce);
 CacheLayout bounceCacheLayout();
+CacheLayout bounceCacheLayout(const IndirectEstimator& estimator);
 
 // A vertex that sees almost no indirect light where its neighbours see
 // plenty is hidden: boxed in (the ceiling behind a light hung a hair below

@@ -22,6 +22,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -95,9 +96,10 @@ TEST(IndirectBlend, RightAfterAChangeTheEstimateIsShownWithTheCachesCaustics) {
 TEST(IndirectBlend, EachVertexGatheredSinceTheChangeShowsTheCache) {
     CacheSnapshot s;
     s.indirectComplete = false;
-    // Bounce 1 in its first pass on the base mesh: vertices 1 and 4 gathered.
+    // Bounce 1 in its first pass on the base mesh: vertex 4 gathered, under
+    // a quarter of them.
     IrradianceMeshCopy first = meshOf(kBase, 10, 0);
-    first.samples[1] = 1, first.samples[4] = 2;
+    first.samples[4] = 2;
     // Bounce 2 refined (a vertex more): its first pass is complete.
     std::vector<Vec3> refined = kBase;
     refined.push_back(Vec3(3, 0, 3));
@@ -115,6 +117,12 @@ TEST(IndirectBlend, EachVertexGatheredSinceTheChangeShowsTheCache) {
     EXPECT_GT(shown.realtimeShare, 0.0);
     EXPECT_LT(shown.realtimeShare, 1.0);
     EXPECT_NE(shown.source.find("catching up"), std::string::npos);
+    // From a quarter gathered on (2 of 6 vertices), the cache's copy whole:
+    // it fills the rest from gathered neighbours.
+    s.bounceMeshes[0].samples[1] = 1;
+    const IndirectShown quarter = blendIndirect(s, 2, &e);
+    EXPECT_EQ(quarter.meshes[0].irradiance, first.irradiance);
+    EXPECT_EQ(quarter.meshes[2].irradiance, e.bounces[2].irradiance);
 }
 
 TEST(IndirectBlend, AnEstimateOfTheSceneBeforeStandsInWholeAndLiveShowsItAlways) {
@@ -231,8 +239,9 @@ TEST(RealtimeIndirect, TheSessionShowsTheCacheWhenCompleteAndTheEstimateRightAft
 
     // The estimate is laid on the solver's own base mesh; while a bounce is
     // in its first pass each vertex shows the cache once gathered, the
-    // estimate before; gathers start only once direct light is complete.
-    const RealtimeMesh mesh(scene, session->indirect()->settings());
+    // estimate before, and from a quarter gathered on the cache's copy;
+    // gathers start only once direct light is complete.
+    const RealtimeMesh mesh(scene, session->indirect()->settings(), after->bounceLayout);
     size_t partial = 0;
     refineToConvergence(*session, [&](const CacheSnapshot& s) {
         realtime->offer(s, version, copy);
@@ -244,15 +253,90 @@ TEST(RealtimeIndirect, TheSessionShowsTheCacheWhenCompleteAndTheEstimateRightAft
         EXPECT_EQ(first.positions, mesh.geometry.positions);
         const std::shared_ptr<const RealtimeEstimate> e = realtime->latest();
         const IndirectShown blended = blendIndirect(s, version, e.get());
-        size_t gathered = 0;
-        for (size_t v = 0; v < first.positions.size(); ++v) {
-            gathered += first.samples[v] > 0;
+        const size_t n = first.positions.size();
+        const size_t gathered = size_t(std::count_if(first.samples.begin(), first.samples.end(),
+                                                     [](uint32_t k) { return k > 0; }));
+        const bool quarter = 4 * gathered >= n;
+        for (size_t v = 0; v < n; ++v)
             ASSERT_EQ(blended.meshes[0].irradiance[v],
-                      first.samples[v] ? first.irradiance[v] : e->bounces[0].irradiance[v]);
-        }
-        partial += gathered > 0 && gathered < first.positions.size();
+                      quarter || first.samples[v] ? first.irradiance[v] : e->bounces[0].irradiance[v]);
+        partial += gathered > 0 && !quarter;
     });
-    EXPECT_GT(partial, 0u);  // a snapshot caught bounce 1 half gathered
+    EXPECT_GT(partial, 0u);  // a snapshot caught bounce 1 under a quarter gathered
+}
+
+// The share of a bounce mesh's vertices gathered.
+double gatheredShare(const IrradianceMeshCopy& m) {
+    size_t n = 0;
+    for (uint32_t k : m.samples) n += k > 0;
+    return m.samples.empty() ? 0.0 : double(n) / double(m.samples.size());
+}
+
+TEST(RealtimeIndirect, AsTheCacheGathersABounceTheLaterOnesAreChainedOntoIt) {
+    Scene scene = makeCornellBox();
+    // The light a hair lower and off centre: the ray gather's bounces then
+    // also copy the back of the light (CacheLayout::BackFaces::
+    // ReachedByScene), which the stand-in's mesh must lay too.
+    scene = applySceneChange(scene, SceneChange::moveLight(0, scene.lights.at(0).centroid + Vec3(150.0, -2.0, 60.0)))
+                .scene;
+    const IndirectChoice indirect = indirectChoice(scene);
+    const std::unique_ptr<ProgressiveSession> session = cornellSession(scene, indirect);
+    const IndirectSettings& settings = session->indirect()->settings();
+    // Snapshots with bounce 1 a quarter to half gathered, and with bounce 1
+    // gathered and a quarter of bounce 2 not.
+    std::unique_ptr<CacheSnapshot> partly, whole;
+    refineToConvergence(*session, [&](const CacheSnapshot& s) {
+        if (s.indirectComplete || s.bounceMeshes.empty()) return;
+        const double first = gatheredShare(s.bounceMeshes[0]);
+        if (!partly && s.bounceMeshes.size() == 1 && first >= 0.25 && first < 0.5)
+            partly = std::make_unique<CacheSnapshot>(s);
+        if (!whole && gatheredBounces(s) == 1 && (s.bounceMeshes.size() == 1 || gatheredShare(s.bounceMeshes[1]) < 0.25))
+            whole = std::make_unique<CacheSnapshot>(s);
+    });
+    ASSERT_TRUE(partly != nullptr);
+    ASSERT_TRUE(whole != nullptr);
+    const RealtimeMesh mesh(scene, settings, whole->bounceLayout);
+    EXPECT_EQ(mesh.geometry.positions, whole->bounceMeshes[0].positions);
+    EXPECT_NE(mesh.geometry.positions.size(), RealtimeMesh(scene, settings, bounceCacheLayout()).geometry.positions.size())
+        << "the default layout would do as well: this scene does not test the gather's own";
+    std::unique_ptr<IndirectEstimator> volume = realtimeEstimatorFactory(indirect)(scene, "volume");
+    const uint32_t seed = RealtimeSettings().seed;
+    // The method's own bounces, from direct light.
+    const std::vector<IrradianceMeshCopy> own = *estimateBounces(mesh, *volume, settings, 2, whole->direct, seed);
+
+    for (const CacheSnapshot* s : {partly.get(), whole.get()}) {
+        SCOPED_TRACE(s == partly.get() ? "bounce 1 partly gathered" : "bounce 1 gathered");
+        const IrradianceMeshCopy& first = s->bounceMeshes.front();
+        // The stand-in asked with it: bounce 1 the cache's (its copy
+        // filled), bounce 2 the method's from the cache's bounce 1, not from
+        // its own.
+        const std::unique_ptr<RealtimeIndirect> realtime = standIn(*session, indirect);
+        realtime->offer(*s, 1, std::make_shared<const Scene>(scene));
+        ASSERT_TRUE(realtime->waitIdle(1, 30));
+        const std::shared_ptr<const RealtimeEstimate> e = realtime->latest();
+        EXPECT_EQ(e->chained, 1);
+        ASSERT_EQ(e->bounces.size(), 2u);
+        EXPECT_EQ(e->bounces[0].irradiance, first.irradiance);
+        const std::vector<IrradianceMeshCopy> chained = *chainBounces(mesh, *volume, settings, 2, {first}, {first}, seed);
+        EXPECT_EQ(e->bounces[1].irradiance, chained[1].irradiance);
+        EXPECT_NE(own[1].irradiance, chained[1].irradiance);
+        // The image: bounce 1 the cache's where gathered and its fill
+        // elsewhere, bounce 2 the chained estimate's where not gathered.
+        const IndirectShown shown = realtime->display(*s, 1);
+        EXPECT_EQ(shown.meshes[0].irradiance, first.irradiance);
+        for (size_t v = 0; v < chained[1].irradiance.size(); ++v) {
+            if (s->bounceMeshes.size() < 2 || s->bounceMeshes[1].samples[v] == 0) {
+                ASSERT_EQ(shown.meshes[1].irradiance[v], chained[1].irradiance[v]) << "vertex " << v;
+            }
+        }
+    }
+
+    // Chained onto the method's own bounce 1, the method (the irradiance
+    // volume draws no jitter) gives its own bounce 2 bit for bit: the slot
+    // and the share of light are those of the whole estimate.
+    const std::vector<IrradianceMeshCopy> again = *chainBounces(mesh, *volume, settings, 2, {own[0]}, {own[0]}, seed);
+    EXPECT_EQ(again[0].irradiance, own[0].irradiance);
+    EXPECT_EQ(again[1].irradiance, own[1].irradiance);
 }
 
 // The image a session's snapshot shows with the stand-in, 64×64.
