@@ -196,7 +196,7 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
                 out.meshes.push_back(c);
                 continue;
             }
-            // Before: per vertex, gathered since the change or not.
+            // Under a quarter: per vertex, gathered since the change or not.
             IrradianceMeshCopy m = c;
             for (size_t v = 0; v < m.irradiance.size(); ++v) {
                 if (c.samples[v] == 0) {
@@ -352,9 +352,9 @@ void RealtimeIndirect::run(int nice) {
             r.known.resize(chained);
             const std::vector<IrradianceMeshCopy> source =
                 chained > 0 ? std::vector<IrradianceMeshCopy>{r.known.back()} : std::move(r.source);
-            // A request chained onto more gathered bounces of the same scene
+            // A request chained further (chainLevel) for the same scene
             // makes this one obsolete.
-            const auto cancelled = [this, &r, chained] {
+            const auto cancelled = [this, &r] {
                 std::lock_guard<std::mutex> lock(mutex_);
                 return stopping_ || (pending_ && pending_->sceneVersion == r.sceneVersion &&
                                      pending_->settings.method == r.settings.method &&

@@ -27,8 +27,8 @@
 // weight is 1 or 0 per vertex, so the mix is exact at both ends), and from a
 // quarter gathered on the cache's copy, which fills the rest from gathered
 // neighbours; a bounce whose first pass is complete (refined, or every
-// vertex gathered) shows the cache's. Once every bounce is complete the cache's own display meshes are
-// shown unchanged. Caustics are the cache's throughout (no method estimates
+// vertex gathered) shows the cache's. Once every bounce is complete the
+// cache's own display meshes are shown unchanged. Caustics are the cache's throughout (no method estimates
 // them).
 //
 // Threads. offer() and display() run on the caller's (frame) thread and do
@@ -217,8 +217,8 @@ private:
         uint64_t sceneVersion = 0, snapshotVersion = 0;
         double directSampled = 0;
         RealtimeSettings settings;
-        // Direct light and caustics; or, chained (`known` not empty), the
-        // cache's bounce known.size() as it is.
+        // What bounce 1 reflects: direct light and caustics (the source
+        // when nothing is chained).
         std::vector<IrradianceMeshCopy> source;
         std::vector<IrradianceMeshCopy> known;  // the cache's gathered bounces, 1..k
         CacheLayout layout;                     // the cache's bounces' (CacheSnapshot::bounceLayout)

@@ -290,14 +290,15 @@ TEST(RealtimeIndirect, AsTheCacheGathersABounceTheLaterOnesAreChainedOntoIt) {
         const double first = gatheredShare(s.bounceMeshes[0]);
         if (!partly && s.bounceMeshes.size() == 1 && first >= 0.25 && first < 0.5)
             partly = std::make_unique<CacheSnapshot>(s);
-        if (!whole && gatheredBounces(s) == 1 && (s.bounceMeshes.size() == 1 || gatheredShare(s.bounceMeshes[1]) < 0.25))
-            whole = std::make_unique<CacheSnapshot>(s);
+        const bool secondUnderAQuarter = s.bounceMeshes.size() == 1 || gatheredShare(s.bounceMeshes[1]) < 0.25;
+        if (!whole && gatheredBounces(s) == 1 && secondUnderAQuarter) whole = std::make_unique<CacheSnapshot>(s);
     });
     ASSERT_TRUE(partly != nullptr);
     ASSERT_TRUE(whole != nullptr);
     const RealtimeMesh mesh(scene, settings, whole->bounceLayout);
     EXPECT_EQ(mesh.geometry.positions, whole->bounceMeshes[0].positions);
-    EXPECT_NE(mesh.geometry.positions.size(), RealtimeMesh(scene, settings, bounceCacheLayout()).geometry.positions.size())
+    const RealtimeMesh defaultLaid(scene, settings, bounceCacheLayout());
+    EXPECT_NE(mesh.geometry.positions.size(), defaultLaid.geometry.positions.size())
         << "the default layout would do as well: this scene does not test the gather's own";
     std::unique_ptr<IndirectEstimator> volume = realtimeEstimatorFactory(indirect)(scene, "volume");
     const uint32_t seed = RealtimeSettings().seed;
@@ -317,7 +318,8 @@ TEST(RealtimeIndirect, AsTheCacheGathersABounceTheLaterOnesAreChainedOntoIt) {
         EXPECT_EQ(e->chained, 1);
         ASSERT_EQ(e->bounces.size(), 2u);
         EXPECT_EQ(e->bounces[0].irradiance, first.irradiance);
-        const std::vector<IrradianceMeshCopy> chained = *chainBounces(mesh, *volume, settings, 2, {first}, {first}, seed);
+        const std::vector<IrradianceMeshCopy> chained =
+            *chainBounces(mesh, *volume, settings, 2, {first}, {first}, seed);
         EXPECT_EQ(e->bounces[1].irradiance, chained[1].irradiance);
         EXPECT_NE(own[1].irradiance, chained[1].irradiance);
         // The image: bounce 1 the cache's where gathered and its fill
