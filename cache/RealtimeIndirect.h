@@ -163,9 +163,9 @@ public:
     using EstimatorFactory =
         std::function<std::unique_ptr<IndirectEstimator>(const Scene& scene, const std::string& method)>;
     // `nice`: the estimate thread's niceness (0: the caller's). The viewer
-    // puts it between its frames (0) and the cache's workers (10): the
-    // estimate is what the next frames show, but it reflects the direct
-    // light the workers sample.
+    // runs it at its frames' priority (0), above the cache's workers (10):
+    // the estimate is what the next frames show (bench dynamic at 5: the
+    // estimates came later and the cache no sooner, viewer/README.md).
     RealtimeIndirect(const IndirectSettings& indirect, EstimatorFactory factory, const RealtimeSettings& settings,
                      int nice = 0);
     ~RealtimeIndirect();  // lets the bounce under way finish, then joins

@@ -47,9 +47,10 @@ public:
     };
 
     // Niceness of the cache's sampling threads and of the real-time
-    // stand-in's thread (RealtimeIndirect): the frames (0) come first, then
-    // the estimate the next frames show, then refinement; a frame never
-    // waits for a round. A failure to set it (not permitted) leaves it as it was.
+    // stand-in's thread (RealtimeIndirect): the frames and the estimate the
+    // next frames show (0) come first, then refinement; a frame never waits
+    // for a round. The estimate at 5 was no better (viewer/README.md,
+    // "Measured: bench dynamic"). A failure to set it (not permitted) leaves it as it was.
     static constexpr int kWorkerNice = 10;
     static constexpr int kRealtimeNice = 0;
     // The least time between two snapshots of the viewer's worker (view
