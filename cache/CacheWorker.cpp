@@ -165,6 +165,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         std::lock_guard<std::mutex> lock(mutex_);
         snap->version = ++published_;
     }
+    if (settings_.onPublish) settings_.onPublish(*snap);
     snapshots_.publish(std::move(snap));
     wake_.notify_all();
 }

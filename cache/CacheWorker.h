@@ -124,6 +124,12 @@ struct WorkerSettings {
     // are made again (IndirectSolver::restart) and its worker time is then
     // direct light's.
     bool indirectStandIn = false;
+    // Called on the worker's thread with each snapshot as it is published,
+    // before the next round: for a caller that must see every round (a
+    // test of what each did), which a reader polling the exchange cannot
+    // promise (under load it missed a snapshot published 9 ms after the one
+    // before). It must be quick and must not call back into the worker.
+    std::function<void(const CacheSnapshot&)> onPublish;
 
     void validate() const;
 };
