@@ -16,6 +16,7 @@
 #include "core/raytrace/EmbreeScene.h"
 #include "core/raytrace/PathTracer.h"
 #include "core/scenes/CornellBox.h"
+#include "core/scenes/OfficeScene.h"
 #include "gpu_sampling/SamplerFactory.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
@@ -79,19 +80,56 @@ constexpr double kStepInterval = 0.25;
 
 struct Motion {
     std::string name;
+    bool office = false;  // the scene: the built-in office (12 panels) or the Cornell box
     std::vector<SceneChange> steps;
 };
 
-// The light 180 mm along x in `steps` steps, 2 mm below the ceiling (548.8);
-// the short block 150 mm along +z and 40 mm along −x.
-std::vector<Motion> motionsFor(const Scene& cornell, int steps) {
-    Motion light{"light", {}}, block{"block", {}};
+Scene sceneOf(const Motion& m) { return m.office ? makeOfficeScene() : makeCornellBox(); }
+
+// The light the office's panel motion moves: the panel nearest the middle
+// of the room's (+x) half, in the middle of the camera's view.
+size_t officePanel(const Scene& office) {
+    const Vec3 aim(1.0, office.bounds.hi.y, 0.0);
+    size_t best = 0;
+    for (size_t i = 1; i < office.lights.size(); ++i)
+        if (glm::length(office.lights[i].centroid - aim) < glm::length(office.lights[best].centroid - aim)) best = i;
+    return best;
+}
+
+// The Cornell box's light 180 mm along x in `steps` steps, 2 mm below the
+// ceiling (548.8); its short block 150 mm along +z and 40 mm along −x. Not
+// quick: one of the office's 12 panels 0.6 m along x (a luminaire moved by
+// its own width, in its grid cell), the other 11 and the furniture staying:
+// the common case for a lighting designer, where the cache keeps the other
+// lights' direct light, which the Cornell box's one light cannot.
+std::vector<Motion> allMotions(int steps) {
+    Motion light{"light", false, {}}, block{"block", false, {}}, panel{"panel", true, {}};
+    const Scene cornell = makeCornellBox(), office = makeOfficeScene();
     const Vec3 c = cornell.lights.at(0).centroid;
+    const size_t moved = officePanel(office);
+    const Vec3 p = office.lights.at(moved).centroid;
     for (int k = 1; k <= steps; ++k) {
         light.steps.push_back(SceneChange::moveLight(0, Vec3(c.x + 180.0 * k / steps, 546.8, c.z)));
         block.steps.push_back(SceneChange::moveObject("shortBlock", Vec3(-40.0, 0.0, 150.0) / double(steps)));
+        panel.steps.push_back(SceneChange::moveLight(moved, p + Vec3(0.6 * k / steps, 0.0, 0.0)));
     }
-    return {light, block};
+    return {light, block, panel};
+}
+
+// The motions asked for (BenchDynamicOptions::motions; none: every one the
+// mode runs), in their order.
+std::vector<Motion> motionsFor(const BenchDynamicOptions& options, int steps) {
+    std::vector<Motion> all = allMotions(steps), chosen;
+    for (const std::string& name : options.motions)
+        if (std::none_of(all.begin(), all.end(), [&](const Motion& m) { return m.name == name; }))
+            throw InputError(concat("--motions: unknown motion '", name, "' (light, block, panel)"));
+    for (Motion& m : all) {
+        const bool asked = std::find(options.motions.begin(), options.motions.end(), m.name) != options.motions.end();
+        if (options.quick && m.office && asked)
+            throw InputError("--motions: 'panel' (the office) is not run with --quick");
+        if (options.motions.empty() ? !(options.quick && m.office) : asked) chosen.push_back(std::move(m));
+    }
+    return chosen;
 }
 
 struct Choices {
@@ -181,11 +219,15 @@ std::vector<TimedImage> follow(ProgressiveSession& session, CacheWorker::Reader&
             std::this_thread::sleep_for(std::chrono::duration<double>(std::min(left, 0.02)));
         }
         const CacheSnapshot* s = firstSnapshot(session, reader);
+        // The time the snapshot was taken, not the time it was due: where a
+        // composite takes longer than the interval (the office's meshes at
+        // the error size), later images come late, and are timed so.
+        const double taken = secondsSince(start);
         offers.offer(*s);
         const IndirectShown shown = shownIndirect(offers.realtime, *s, offers.sceneVersion);
         ImageRgb image = compositor.render(camera, s->direct, shown.meshes, comp);
         ImageRgb cacheImage = shown.realtimeShare > 0 ? compositor.render(camera, s->direct, s->indirect, comp) : image;
-        images.push_back({due, std::move(image), s->samples, s->bouncesFinished, s->estimatedError,
+        images.push_back({taken, std::move(image), s->samples, s->bouncesFinished, s->estimatedError,
                           shown.realtimeShare, shown.source, std::move(cacheImage)});
     }
     return images;
@@ -209,6 +251,8 @@ struct MethodRow {
 
 struct MotionResult {
     std::string name;
+    std::string scene;     // its name ("cornell", "office")
+    std::string indirect;  // the plan's gather and bounces there
     std::vector<double> frameMs;      // every frame while moving
     std::vector<double> stepSeconds;  // the helper's time per step
     std::vector<size_t> stepFrames;   // frames drawn while each step was being applied
@@ -334,11 +378,15 @@ std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices
     return rows;
 }
 
-MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& motion, const Choices& choices,
+MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& motion, const Choices& undecided,
                        const Workload& w) {
     MotionResult r;
     r.name = motion.name;
-    Scene live = makeCornellBox();  // the session's: the helper thread changes it
+    Scene live = sceneOf(motion);  // the session's: the helper thread changes it
+    Choices choices = undecided;   // the plan's gather and bounces for this scene
+    choices.indirect.decide(live);
+    r.scene = live.name;
+    r.indirect = concat(choices.indirect.method, ", ", choices.indirect.solver.bounces, " bounces");
     Scene shown = live;             // the compositor's
     const Camera camera = *live.camera;
     auto compositor = std::make_unique<Compositor>(context, shown);
@@ -537,27 +585,28 @@ std::string gnuplotScript(const std::vector<MotionResult>& results) {
 }  // namespace
 
 int runBenchDynamic(const BenchDynamicOptions& options) {
-    BenchRun run(options);
     const Workload w = workloadFor(options.quick);
+    const std::vector<Motion> motions = motionsFor(options, w.steps);  // refused before the folder is made
+    BenchRun run(options);
     const std::unique_ptr<GlContext> context = run.openContext();
-    Choices choices;
+    Choices choices;  // the indirect light decided per scene (runMotion)
     choices.seed = options.seed;
     choices.direct.seed = options.seed;
     choices.direct.backend = options.backend;
-    const Scene cornell = makeCornellBox();
-    choices.indirect.decide(cornell);
     choices.realtime = options.realtime;
     choices.realtime.validate();
-    std::printf("bench dynamic (%s): Cornell box, full GI (%s, %d bounces), frames %dx%d, errors at %dx%d against "
-                "%d spp; %s\n",
-                run.mode(), choices.indirect.method.c_str(), choices.indirect.solver.bounces, w.frameWidth,
-                w.frameHeight, w.errorWidth, w.errorHeight, w.spp, choices.realtime.describe().c_str());
+    const bool cornell = std::any_of(motions.begin(), motions.end(), [](const Motion& m) { return !m.office; });
+    const bool office = std::any_of(motions.begin(), motions.end(), [](const Motion& m) { return m.office; });
+    const std::string scenes = cornell && office ? "the Cornell box and the office" : cornell ? "the Cornell box" : "the office";
+    std::printf("bench dynamic (%s): %s, full GI, frames %dx%d, errors at %dx%d against %d spp; %s\n",
+                run.mode(), scenes.c_str(), w.frameWidth, w.frameHeight,
+                w.errorWidth, w.errorHeight, w.spp, choices.realtime.describe().c_str());
 
     std::vector<MotionResult> results;
-    for (const Motion& m : motionsFor(cornell, w.steps)) results.push_back(runMotion(run, *context, m, choices, w));
+    for (const Motion& m : motions) results.push_back(runMotion(run, *context, m, choices, w));
 
     BenchTable frames({"motion", "frame", "ms"});
-    BenchTable summary({"motion", "steps", "frames", "frame_median_ms", "frame_p95_ms", "frame_max_ms",
+    BenchTable summary({"motion", "scene", "indirect", "steps", "frames", "frame_median_ms", "frame_p95_ms", "frame_max_ms",
                         "step_median_ms", "step_max_ms", "warm_0.5s_vs_converged_pct", "warm_5s_vs_converged_pct",
                         "warm_0.5s_vs_pt_pct", "warm_5s_vs_pt_pct", "cold_0.5s_vs_pt_pct", "cold_5s_vs_pt_pct",
                         "converged_vs_pt_pct", "reference_noise_pct", "warm_within_2pct_s", "cold_within_2pct_s",
@@ -574,7 +623,7 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
         for (double s : r.stepSeconds) stepMs.push_back(1e3 * s);
         const double at05 = errorAt(r.warm, r.warmCurve, 0.5);
         const double at5 = errorAt(r.warm, r.warmCurve, 5.0);
-        summary.addRow({r.name, std::to_string(r.stepSeconds.size()), std::to_string(r.frameMs.size()),
+        summary.addRow({r.name, r.scene, csvCell(r.indirect), std::to_string(r.stepSeconds.size()), std::to_string(r.frameMs.size()),
                         benchNumber(median(r.frameMs)), benchNumber(percentile(r.frameMs, 0.95)),
                         benchNumber(percentile(r.frameMs, 1.0)), benchNumber(median(stepMs)),
                         benchNumber(percentile(stepMs, 1.0)), benchPct(at05), benchPct(at5), benchPct(r.warmPt05),
@@ -630,7 +679,9 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
     run.plot("dynamic_plots.gp", gnuplotScript(results), kPlots);
     const double wall = run.seconds();
     std::ostringstream md;
-    md << "# bench dynamic (" << run.mode() << ")\n\nCornell box, full GI; frames " << w.frameWidth << "x"
+    md << "# bench dynamic (" << run.mode() << ")\n\nMotions:";
+    for (const Motion& m : motions) md << " " << m.name << (m.office ? " (the office, 12 panels)" : " (the Cornell box)");
+    md << "; full GI; frames " << w.frameWidth << "x"
        << w.frameHeight << ", errors at " << w.errorWidth << "x" << w.errorHeight << " against " << w.spp
        << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
        << choices.realtime.describe() << ".\n\n"

@@ -3,13 +3,21 @@
 // cache/CacheInvalidation.h), with the real-time stand-in for indirect light
 // the viewer shows while the cache catches up (cache/RealtimeIndirect.h).
 //
-// Scene: the built-in Cornell box with full global illumination (the plan's
-// gather and bounce count, cache defaults, the production direct sampler).
+// Scenes: the built-in Cornell box and (not quick) the built-in office of
+// 12 panels, with full global illumination (each scene's plan: its gather
+// and bounce count; cache defaults, the production direct sampler).
 // Motions, each from a cache converged for the start (a fresh session
 // refined for `settle` seconds first):
-//   light   the ceiling light moved in steps along x across the ceiling
-//           (and back towards the middle), 2 mm below the ceiling;
-//   block   the short block moved in steps across the floor (+z).
+//   light   the Cornell box's ceiling light moved in steps along x across
+//           the ceiling, 2 mm below it: its only light, so nothing of
+//           direct light is kept and a warm start is a cold one but for
+//           the geometry's structures;
+//   block   the Cornell box's short block moved in steps across the floor
+//           (+z);
+//   panel   (not quick) one of the office's 12 ceiling panels, in the
+//           middle of the view, moved 0.6 m along x in steps (a luminaire
+//           moved by its own width): the other lights' direct light is
+//           kept, as a lighting designer's scene has many.
 // Sessions run as the viewer's: sampling threads at the viewer's niceness
 // (ViewRefinement::kWorkerNice) below this thread and the stand-in's, and
 // the worker told a stand-in shows (WorkerSettings::indirectStandIn) unless
@@ -52,9 +60,9 @@
 // dynamic_targets.csv, dynamic_plots.gp and its PNG, dynamic_summary.md.
 // Times are measured and reported, never asserted.
 //
-// quick: CI size: 320×180 frames, errors at 64×36 against a 64-spp
-// reference, 3 steps per motion, 8 s after the motion and 12 s for the cold
-// start, the methods at their defaults only. Full: 1280×720, errors at
+// quick: CI size: the Cornell box's motions only, 320×180 frames, errors
+// at 64×36 against a 64-spp reference, 3 steps per motion, 8 s after the
+// motion and 12 s for the cold start, the methods at their defaults only. Full: 1280×720, errors at
 // 160×90 against 256 spp, 6 steps, 20 s and 40 s. seed: the worker's jitter
 // and the path tracer's streams.
 #pragma once
@@ -62,12 +70,18 @@
 #include "BenchOptions.h"
 #include "gpu_sampling/SamplerFactory.h"
 
+#include <string>
+#include <vector>
+
 namespace ml {
 
 struct BenchDynamicOptions : BenchOptions {
     // The stand-in for indirect light while the cache catches up, as `view`
     // shows it (--realtime); off: the cache's old bounces.
     RealtimeChoice realtime;
+    // The motions to run, by name (light, block, panel); empty: every one
+    // the mode runs (quick: light and block). --motions.
+    std::vector<std::string> motions;
 };
 
 int runBenchDynamic(const BenchDynamicOptions& options);

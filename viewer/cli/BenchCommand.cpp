@@ -16,7 +16,9 @@
 #include "viewer/bench/BenchScaling.h"
 #include "viewer/bench/BenchView.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <sstream>
 
 namespace ml {
 
@@ -122,11 +124,24 @@ int runDynamic(const std::vector<std::string>& args) {
                             "what stands in for indirect light while the cache catches up, as in 'view': volume, vpl, "
                             "lpv or off (the cache's old bounces)",
                             defaults.realtime.realtime);
+    command.options().value("motions", "LIST",
+                            "the motions to run, comma-separated: light and block (the Cornell box), panel (the "
+                            "office, not with --quick); all: every one the mode runs",
+                            "all");
     if (!command.parse(args)) return 0;
     BenchDynamicOptions options;
     command.read(options);
     options.realtime.realtime = command.options().str("realtime");
     options.realtime.validate();
+    if (const std::string list = command.options().str("motions"); list != "all") {
+        std::stringstream names(list);
+        for (std::string name; std::getline(names, name, ',');) {
+            if (name.empty()) throw InputError(concat("--motions: an empty name in '", list, "'"));
+            if (std::find(options.motions.begin(), options.motions.end(), name) != options.motions.end())
+                throw InputError(concat("--motions: '", name, "' is named twice"));
+            options.motions.push_back(name);
+        }
+    }
     return runBenchDynamic(options);
 }
 
