@@ -143,7 +143,10 @@ void IrradianceCache::sceneChanged(const Scene& after) {
 std::string InvalidationReport::describe() const {
     return concat(lightVertices, " vertices of the moved light, ", shadowVertices, " in its shadow's reach, ",
                   movedVertices, " moved, forgotten; ", keptVertices, " kept; ", indirectVertices,
-                  " indirect vertices stale");
+                  " indirect vertices stale",
+                  oldIndirectKept ? concat(" (the old indirect light shown until gathered again: ",
+                                           std::lround(1000 * movedLightShare) / 10.0, "% of the light moved)")
+                                  : std::string());
 }
 
 Bounds3 lightVolume(const Scene& scene, size_t l, const Vec3& x) {
@@ -224,9 +227,24 @@ InvalidationReport invalidateCache(IrradianceCache& direct, IndirectSolver* indi
     const size_t total = direct.totalVertices();
     const size_t forgotten = direct.unsampledCount();
     r.keptVertices = total > forgotten ? total - forgotten : 0;
+    double moved = 0, all = 0;
+    for (size_t l = 0; l < after.lights.size(); ++l) {
+        const double p = luminance(after.lights[l].power());
+        all += p;
+        if (std::find(change.lights.begin(), change.lights.end(), l) != change.lights.end()) moved += p;
+    }
+    r.movedLightShare = all > 0 ? moved / all : 0;
     if (indirect) {
         r.indirectVertices = indirect->totalVertices();
-        indirect->sceneChanged();
+        // Only emitters moved: a punctual light, or an area light's own faces.
+        bool emittersOnly = !change.lights.empty();
+        if (emittersOnly && change.mesh >= 0) {
+            const Mesh& m = after.meshes.at(size_t(change.mesh));
+            for (uint32_t t : change.triangles) emittersOnly = emittersOnly && after.materials.at(m.materials.at(t)).emissive();
+        }
+        r.oldIndirectKept = emittersOnly && r.movedLightShare <= kKeepOldLightShare;
+        indirect->sceneChanged(r.oldIndirectKept);
+        r.oldIndirectKept = r.oldIndirectKept && indirect->keepingStale();
     }
     return r;
 }

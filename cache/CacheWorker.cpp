@@ -140,6 +140,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->bounces = indirect_->bounces();
         snap->bouncesFinished = indirect_->finished();
         snap->indirectComplete = indirect_->firstPassDone() && !indirect_->showingStale();
+        snap->oldIndirectKept = indirect_->keepingStale();
         if (!snap->indirectComplete) snap->bounceMeshes = indirect_->copyMeshes();
         snap->indirectVertices = indirect_->totalVertices();
         snap->indirectSamples = indirect_->totalSamples();

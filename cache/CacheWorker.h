@@ -52,6 +52,11 @@ struct CacheSnapshot {
     // direct light only.
     bool indirectComplete = true;
     std::vector<IrradianceMeshCopy> bounceMeshes;
+    // `indirect` is the light from before a scene change that moved little
+    // light, kept until every bounce is gathered again
+    // (IndirectSolver::keepingStale, kKeepOldLightShare): no stand-in
+    // replaces it.
+    bool oldIndirectKept = false;
     // How the bounces' base meshes are laid for the worker's gather
     // (bounceCacheLayout(estimator)): the stand-in lays its estimate the
     // same way, vertex for vertex.

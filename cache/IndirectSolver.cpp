@@ -205,7 +205,10 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     RefineReport report = caches_[slot]->refine(gather, budget, seedFor(seed, 0x1d1ec7u, uint32_t(bounce)), view);
     if (bounce == 1 && caches_[0]->unsampledCount() == 0) regathering_ = false;
     if (restarted_ && firstPassDone()) restarted_ = false;
-    if (!stale_.empty() && firstBounceShown()) stale_.clear();
+    if (!stale_.empty() && !showingStale()) {
+        stale_.clear();
+        keepStale_ = false;
+    }
     if (first) {
         report.candidates = std::max<size_t>(report.candidates, 1);  // the first pass goes on
         return report;
@@ -262,9 +265,10 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     for (size_t s = 0; s < sourceBuilt_.size(); ++s) releaseSource(estimator, s);
 }
 
-void IndirectSolver::sceneChanged() {
+void IndirectSolver::sceneChanged(bool keepOld) {
     std::vector<IrradianceMeshCopy> shown = displayMeshes();
     if (!shown.empty()) stale_ = std::move(shown);
+    keepStale_ = keepOld && !stale_.empty();
     caches_.clear();
     ++epoch_;
     surfaces_.reset();
@@ -425,7 +429,7 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshes() const {
 }
 
 std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
-    if (!stale_.empty() && !firstBounceShown()) return stale_;
+    if (showingStale()) return stale_;
     // The bounces whose first pass is complete, bounce 1 from a sixteenth
     // of it on; a bounce 1 being gathered again (restart) counts, its copies
     // showing old values until new ones.

@@ -161,14 +161,20 @@ public:
     // dynamic), each from a source built anew, for the worker's estimator
     // is made anew too. Until bounce 1 is shown again (firstBounceShown),
     // displayMeshes() gives what it gave before the change: the old
-    // indirect light, on the old geometry, as a stand-in.
-    void sceneChanged();
+    // indirect light, on the old geometry, as a stand-in. `keepOld`: until
+    // every bounce's first pass is done instead (a change that moved a
+    // small share of the light, kKeepOldLightShare: the old light is then
+    // closer than bounces partly gathered, or than a real-time method's).
+    void sceneChanged(bool keepOld = false);
     // A new worker's estimator holds none of the sources built in the one
     // before (ProgressiveSession::start after a stop): they are built again
     // when next needed.
     void sourcesLost() { sourceBuilt_.assign(sourceBuilt_.size(), false); }
     // displayMeshes() shows the light from before a scene change.
-    bool showingStale() const { return !stale_.empty() && !firstBounceShown(); }
+    bool showingStale() const { return !stale_.empty() && !(keepStale_ ? firstPassDone() : firstBounceShown()); }
+    // ...and keeps it until every bounce is gathered again (sceneChanged's
+    // keepOld).
+    bool keepingStale() const { return keepStale_ && showingStale(); }
 
     // Once every bounce has converged: one more refinement level for every
     // bounce's cache (IrradianceCache::tighten), and pass 2 again (every
@@ -253,6 +259,7 @@ private:
     bool regathering_ = false;       // bounce 1 gathered again since restart()
     bool restarted_ = false;         // first passes gathered again since restart(), not done yet
     std::vector<IrradianceMeshCopy> stale_;  // shown after sceneChanged() until bounce 1 is
+    bool keepStale_ = false;                 // ...or until every bounce is (sceneChanged's keepOld)
 
     // A bounce's copies and score as last made (copyMesh, displayMeshes,
     // estimatedError), kept while its cache is unchanged: a snapshot copied

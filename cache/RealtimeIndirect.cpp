@@ -155,9 +155,9 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
     IndirectShown out;
     const size_t caustics = std::min(s.causticMeshes, s.indirect.size());
     const bool forScene = estimate && estimate->sceneVersion == sceneVersion;
-    if (!estimate || (s.indirectComplete && !live)) {
+    if (!estimate || ((s.indirectComplete || s.oldIndirectKept) && !live)) {
         out.meshes = s.indirect;
-        out.source = "cache";
+        out.source = s.oldIndirectKept ? "cache (the pose before, until gathered again)" : "cache";
         return out;
     }
     out.estimateSerial = estimate->serial;
@@ -251,7 +251,7 @@ void RealtimeIndirect::configure(const RealtimeSettings& settings) {
 }
 
 void RealtimeIndirect::offer(const CacheSnapshot& s, uint64_t sceneVersion, const std::shared_ptr<const Scene>& scene) {
-    if (settings_.method == "off" || (s.indirectComplete && !settings_.live)) return;
+    if (settings_.method == "off" || ((s.indirectComplete || s.oldIndirectKept) && !settings_.live)) return;
     const double sampled = sampledShare(s.direct);
     const bool newScene = !asked_.any || sceneVersion != asked_.sceneVersion || !asked_.scene;
     const int level = settings_.live ? 0 : chainLevel(s);

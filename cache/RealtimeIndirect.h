@@ -29,7 +29,11 @@
 // neighbours; a bounce whose first pass is complete (refined, or every
 // vertex gathered) shows the cache's. Once every bounce is complete the
 // cache's own display meshes are shown unchanged. Caustics are the cache's throughout (no method estimates
-// them).
+// them). After a change that moved a small share of the light
+// (CacheSnapshot::oldIndirectKept, kKeepOldLightShare) the cache's old
+// bounces are closer than any method's estimate from scratch: they are
+// shown, and nothing is estimated, until the cache has gathered every bounce
+// again.
 //
 // Threads. offer() and display() run on the caller's (frame) thread and do
 // no estimating: offer() hands the snapshot's direct meshes to the

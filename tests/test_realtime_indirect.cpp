@@ -125,6 +125,23 @@ TEST(IndirectBlend, EachVertexGatheredSinceTheChangeShowsTheCache) {
     EXPECT_EQ(quarter.meshes[2].irradiance, e.bounces[2].irradiance);
 }
 
+TEST(IndirectBlend, TheOldLightKeptAfterASmallChangeIsShownOverAnyEstimate) {
+    CacheSnapshot s;
+    s.indirectComplete = false;
+    s.oldIndirectKept = true;  // a light of little of the light moved: the old bounces shown
+    s.indirect = {meshOf(kBase, 9, 3), meshOf(kBase, 4, 3)};
+    s.bounceMeshes = {meshOf(kBase, 10, 0)};
+    for (uint64_t version : {uint64_t(3), uint64_t(4)}) {  // the estimate of the scene before, and of this one
+        const RealtimeEstimate e = estimateOf(2, version);
+        const IndirectShown shown = blendIndirect(s, 4, &e);
+        expectSameMeshes(shown.meshes, s.indirect);
+        EXPECT_EQ(shown.realtimeShare, 0.0);
+        EXPECT_EQ(shown.source, "cache (the pose before, until gathered again)");
+        // Live, the method's estimate still (what the user asked to see).
+        expectSameMeshes(blendIndirect(s, version, &e, true).meshes, e.bounces);
+    }
+}
+
 TEST(IndirectBlend, AnEstimateOfTheSceneBeforeStandsInWholeAndLiveShowsItAlways) {
     CacheSnapshot s;
     s.indirectComplete = false;

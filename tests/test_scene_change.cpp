@@ -232,8 +232,12 @@ SamplerFactory exactFactory(const Scene& scene) {
 
 // A session with indirect light too: the exact direct sampler and the ray
 // gather (Embree, no GL), `bounces` bounces on a coarse indirect cache.
-std::unique_ptr<ProgressiveSession> indirectSession(Scene& scene, int bounces) {
+// `watch` (if given) sees every snapshot on the worker's thread
+// (WorkerSettings::onPublish).
+std::unique_ptr<ProgressiveSession> indirectSession(Scene& scene, int bounces,
+                                                    std::function<void(const CacheSnapshot&)> watch = {}) {
     SessionSettings s = coarse();
+    s.worker.onPublish = std::move(watch);
     IndirectChoice indirect;
     indirect.method = "raytrace";
     indirect.bounces.forced = bounces;
@@ -436,6 +440,88 @@ TEST(CacheInvalidation, IndirectLightIsMarkedStaleAndGatheredAgain) {
 
 namespace ml {
 namespace {
+
+// Nine 0.1 × 0.1 lamps in a 3 × 3 grid at y = 1 facing down, in place of
+// the plate scene's one light: each holds a ninth of the light.
+Scene lampsScene() {
+    Mesh lamps;
+    lamps.name = "lamps";
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) addQuad(lamps, 0, Vec3(-0.35 + 0.3 * i, 1.0, -0.35 + 0.3 * k), 0.1 * kX, 0.1 * kZ);
+    return test::sceneOf("lamps",
+                         {Material::diffuse("light", Rgb(0.0), Rgb(10.0)), Material::diffuse("grey", Rgb(0.5))},
+                         {lamps, test::floorMesh(), plate("plate", 1, Vec3(-0.2, 0.4, -0.2), Vec3(0.2, 0.5, 0.2))});
+}
+
+TEST(CacheInvalidation, ALightOfLittleOfTheLightMovedKeepsTheOldIndirectLightUntilGatheredAgain) {
+    Scene scene = lampsScene();
+    ASSERT_EQ(scene.lights.size(), 9u);
+    // Every snapshot after the move, until every bounce's first pass is
+    // done, shows the old bounces; the first after it the new ones.
+    std::vector<IrradianceMeshCopy> old;
+    bool watching = false;  // set and read only while the worker is stopped
+    size_t kept = 0, partlyGathered = 0, after = 0;
+    const std::unique_ptr<ProgressiveSession> owned =
+        indirectSession(scene, 2, [&](const CacheSnapshot& s) {
+            if (!watching) return;
+            const bool done = s.indirectComplete;
+            EXPECT_EQ(s.oldIndirectKept, !done);
+            if (done) {
+                ++after;
+                return;
+            }
+            ++kept;
+            ASSERT_GE(s.indirect.size(), old.size());
+            for (size_t b = 0; b < old.size(); ++b) {
+                EXPECT_EQ(s.indirect[b].positions, old[b].positions);
+                EXPECT_EQ(s.indirect[b].irradiance, old[b].irradiance);
+            }
+            // Bounce 1 gathered over a sixteenth: shown by now, had the
+            // change moved much of the light.
+            if (!s.bounceMeshes.empty()) {
+                const std::vector<uint32_t>& n = s.bounceMeshes.front().samples;
+                partlyGathered += 16 * size_t(std::count_if(n.begin(), n.end(), [](uint32_t k) { return k > 0; })) >= n.size();
+            }
+        });
+    ProgressiveSession& session = *owned;
+    refineToConvergence(session);
+    old = session.indirect()->displayMeshes();
+    ASSERT_EQ(old.size(), 2u);
+    const Vec3 c = scene.lights[4].centroid;
+    const InvalidationReport r = session.applyChange(scene, SceneChange::moveLight(4, c + Vec3(0.1, 0.0, 0.05)));
+    EXPECT_NEAR(r.movedLightShare, 1.0 / 9, 1e-9);  // ≤ kKeepOldLightShare (1/8)
+    EXPECT_TRUE(r.oldIndirectKept);
+    EXPECT_NE(r.describe().find("the old indirect light shown until gathered again: 11.1% of the light moved"),
+              std::string::npos)
+        << r.describe();
+    watching = true;
+    refineToConvergence(session);
+    watching = false;
+    EXPECT_GT(kept, 0u);
+    EXPECT_GT(partlyGathered, 0u);  // the case the rule is for was met
+    EXPECT_GT(after, 0u);
+    EXPECT_FALSE(session.indirect()->showingStale());
+
+    // An object moved: the stand-in's rule (bounce 1 shown from a
+    // sixteenth gathered), whatever share of the light it shades.
+    const InvalidationReport moved = session.applyChange(scene, SceneChange::moveObject("plate", Vec3(0.2, 0.0, 0.0)));
+    EXPECT_EQ(moved.movedLightShare, 0.0);
+    EXPECT_FALSE(moved.oldIndirectKept);
+    EXPECT_TRUE(session.indirect()->showingStale());
+    EXPECT_FALSE(session.indirect()->keepingStale());
+}
+
+TEST(CacheInvalidation, AllOfTheLightMovedShowsTheNewBouncesAsTheyAreGathered) {
+    Scene scene = plateScene();
+    const std::unique_ptr<ProgressiveSession> owned = indirectSession(scene, 1);
+    refineToConvergence(*owned);
+    const InvalidationReport r =
+        owned->applyChange(scene, SceneChange::moveLight(0, scene.lights[0].centroid + Vec3(0.2, 0.0, 0.0)));
+    EXPECT_EQ(r.movedLightShare, 1.0);
+    EXPECT_FALSE(r.oldIndirectKept);
+    EXPECT_TRUE(owned->indirect()->showingStale());  // until bounce 1 is shown
+    EXPECT_FALSE(owned->indirect()->keepingStale());
+}
 
 TEST(CacheInvalidation, ARefusedChangeLeavesASessionThatRefinesOn) {
     // A change refused (an unknown object) leaves scene and cache as they
