@@ -63,7 +63,7 @@ struct InvalidationReport {
 // moved 0.6 m, the image with the old bounces 2.9% from the converged one,
 // with vpl's estimate 27-30% (the methods from direct light there: volume
 // 9%, lpv 13%, vpl 26%; on the Cornell box, whose one light moved, 1.7-5.6%),
-// and with the cache's bounce 1 a quarter gathered 12.8%. Taken at an
+// and with the cache's own bounce 1, shown from a sixteenth gathered, 12.8%. Taken at an
 // eighth, so that the old light's error (about 4% at this share, by that
 // measure) stays within the methods' on the Cornell box, where they do best.
 // An object's move keeps the stand-in: its old light lies on the old
