@@ -33,7 +33,9 @@
 // compositor made again for the moved geometry. A step is applied every
 // 0.25 s of the loop, or when the one before is done.
 // After the last step, the latest snapshot is composited at the error size
-// every 0.25 s until `limit` seconds (new snapshots offered to the stand-in
+// every 0.05 s for 2 s, then every 0.25 s, until `limit` seconds (each image
+// timed when its snapshot is read: later than due where composites take
+// longer than that, as the office's do; new snapshots offered to the stand-in
 // every 20 ms meanwhile, as frames would); then a cold start (a fresh
 // session and stand-in on the final pose) runs the same way to `cold`
 // seconds. The converged image both are measured against is a third
