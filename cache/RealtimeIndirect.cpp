@@ -8,9 +8,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <unordered_map>
 
 namespace ml {
 
@@ -45,6 +48,41 @@ double luminanceSum(const IrradianceMeshCopy& m) {
     double sum = 0;
     for (const Rgb& e : m.irradiance) sum += luminance(e);
     return sum;
+}
+
+// A vertex by its position and normal, bit for bit (−0 read as 0): the
+// same surface point of two layouts of one scene's unmoved geometry.
+struct VertexKey {
+    std::array<uint64_t, 6> bits;
+    bool operator==(const VertexKey& o) const { return bits == o.bits; }
+};
+
+struct VertexKeyHash {
+    size_t operator()(const VertexKey& k) const {
+        uint64_t h = 0x9e3779b97f4a7c15ull;
+        for (uint64_t b : k.bits) h = (h ^ b) * 0x100000001b3ull, h ^= h >> 29;
+        return size_t(h);
+    }
+};
+
+VertexKey keyOf(const Vec3& p, const Vec3& n) {
+    VertexKey k;
+    const double x[6] = {p.x + 0.0, p.y + 0.0, p.z + 0.0, n.x + 0.0, n.y + 0.0, n.z + 0.0};
+    std::memcpy(k.bits.data(), x, sizeof x);
+    return k;
+}
+
+using VertexIndex = std::unordered_map<VertexKey, uint32_t, VertexKeyHash>;
+
+VertexIndex indexOf(const IrradianceMeshCopy& m) {
+    VertexIndex index;
+    index.reserve(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v) index.emplace(keyOf(m.positions[v], m.normals[v]), uint32_t(v));
+    return index;
+}
+
+bool hasNormals(const IrradianceMeshCopy& m) {
+    return m.normals.size() == m.positions.size() && m.irradiance.size() == m.positions.size();
 }
 
 std::string percent(double share) {
@@ -126,6 +164,35 @@ std::optional<std::vector<IrradianceMeshCopy>> chainBounces(const RealtimeMesh& 
     return bounces;
 }
 
+double correctByChange(std::vector<IrradianceMeshCopy>& estimate, const std::vector<IrradianceMeshCopy>& baseline,
+                       const std::vector<IrradianceMeshCopy>& before) {
+    size_t changed = 0, all = 0;
+    for (size_t b = 0; b < estimate.size(); ++b) {
+        IrradianceMeshCopy& e = estimate[b];
+        all += e.positions.size();
+        if (b >= baseline.size() || b >= before.size() || !hasNormals(e) || !hasNormals(baseline[b]) ||
+            !hasNormals(before[b]))
+            continue;
+        const VertexIndex baseAt = indexOf(baseline[b]), oldAt = indexOf(before[b]);
+        for (size_t v = 0; v < e.positions.size(); ++v) {
+            const VertexKey k = keyOf(e.positions[v], e.normals[v]);
+            const auto i = baseAt.find(k), j = oldAt.find(k);
+            if (i == baseAt.end() || j == oldAt.end()) continue;
+            const Rgb& base = baseline[b].irradiance[i->second];
+            const Rgb& old = before[b].irradiance[j->second];
+            // The trust in the method's old error: 1 where the method's
+            // light did not change, 1/2 where it changed by as much as it
+            // was, towards 0 where it changed far more (1 where both are
+            // dark: the method misses that light in both poses).
+            const double lb = luminance(base), moved = std::abs(luminance(e.irradiance[v]) - lb);
+            const double w = lb + moved > 0 ? lb / (lb + moved) : 1.0;
+            e.irradiance[v] = glm::max(e.irradiance[v] + w * (old - base), Rgb(0.0));
+            ++changed;
+        }
+    }
+    return all ? double(changed) / double(all) : 0.0;
+}
+
 int gatheredBounces(const CacheSnapshot& s) {
     if (s.indirectComplete) return 0;
     int k = 0;
@@ -162,12 +229,13 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
     }
     out.estimateSerial = estimate->serial;
     double fromEstimate = 0, total = 0;
+    const std::string method = estimate->method + (estimate->onOldLight > 0 ? " on the old light" : "");
     if (live || !forScene) {
         // The estimate alone: the viewer's live display, or the one of the
         // scene before while this scene's is made.
         out.meshes = estimate->bounces;
         out.realtimeShare = 1;
-        out.source = estimate->method + (live ? " (live)" : " (real-time, the pose before)");
+        out.source = method + (live ? " (live)" : " (real-time, the pose before)");
     } else {
         for (size_t b = 0; b < estimate->bounces.size(); ++b) {
             const IrradianceMeshCopy& r = estimate->bounces[b];
@@ -209,11 +277,11 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
         }
         out.realtimeShare = total > 0 ? fromEstimate / total : 1.0;
         if (out.realtimeShare >= 1)
-            out.source = estimate->method + " (real-time)";
+            out.source = method + " (real-time)";
         else if (out.realtimeShare <= 0)
             out.source = "cache";
         else
-            out.source = "cache " + percent(1 - out.realtimeShare) + " + " + estimate->method + " " +
+            out.source = "cache " + percent(1 - out.realtimeShare) + " + " + method + " " +
                          percent(out.realtimeShare) + " (catching up)";
     }
     out.meshes.insert(out.meshes.end(), s.indirect.end() - std::ptrdiff_t(caustics), s.indirect.end());
@@ -245,13 +313,20 @@ RealtimeIndirect::~RealtimeIndirect() {
 
 void RealtimeIndirect::configure(const RealtimeSettings& settings) {
     settings.validate();
+    if (settings.method != settings_.method) errorIsBias_ = -1;  // known again from the next estimator
     settings_ = settings;
     asked_.any = false;  // the next offer asks, with these settings
     asked_.directSampled = 0, asked_.directError = 1;
 }
 
 void RealtimeIndirect::offer(const CacheSnapshot& s, uint64_t sceneVersion, const std::shared_ptr<const Scene>& scene) {
-    if (settings_.method == "off" || ((s.indirectComplete || s.oldIndirectKept) && !settings_.live)) return;
+    if (scene) offeredScene_ = scene, offeredVersion_ = sceneVersion;
+    if (settings_.method == "off") return;
+    if (s.indirectComplete && !s.oldIndirectKept && !settings_.live) {
+        keepBefore(s, sceneVersion);
+        return;
+    }
+    if (s.oldIndirectKept && !settings_.live) return;
     const double sampled = sampledShare(s.direct);
     const bool newScene = !asked_.any || sceneVersion != asked_.sceneVersion || !asked_.scene;
     const int level = settings_.live ? 0 : chainLevel(s);
@@ -278,11 +353,32 @@ void RealtimeIndirect::offer(const CacheSnapshot& s, uint64_t sceneVersion, cons
     r.known.assign(s.bounceMeshes.begin(), s.bounceMeshes.begin() + (level + 1) / 2);
     r.level = level;
     r.layout = s.bounceLayout;
+    if (level == 0 && !settings_.live && before_ && before_->sceneVersion != sceneVersion) r.before = before_;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         pending_ = std::move(r);
     }
     wake_.notify_all();
+}
+
+void RealtimeIndirect::keepBefore(const CacheSnapshot& s, uint64_t sceneVersion) {
+    const double now = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+    const size_t caustics = std::min(s.causticMeshes, s.indirect.size());
+    if (!offeredScene_ || offeredVersion_ != sceneVersion || s.indirect.size() == caustics || errorIsBias_ == 0)
+        return;
+    if (before_ && before_->sceneVersion == sceneVersion &&
+        (before_->snapshotVersion == s.version || now - beforeTakenAt_ < kBeforeSeconds))
+        return;
+    auto b = std::make_shared<Before>();
+    b->scene = offeredScene_;
+    b->sceneVersion = sceneVersion;
+    b->snapshotVersion = s.version;
+    b->source = s.direct;
+    b->source.insert(b->source.end(), s.indirect.end() - std::ptrdiff_t(caustics), s.indirect.end());
+    b->bounces.assign(s.indirect.begin(), s.indirect.end() - std::ptrdiff_t(caustics));
+    b->layout = s.bounceLayout;
+    before_ = std::move(b);
+    beforeTakenAt_ = now;
 }
 
 std::shared_ptr<const RealtimeEstimate> RealtimeIndirect::latest() const {
@@ -320,6 +416,12 @@ void RealtimeIndirect::run(int nice) {
     std::unique_ptr<IndirectEstimator> estimator;
     uint64_t version = 0;
     std::string method;
+    // The baseline: the method's bounces for the pose before (Request::before).
+    struct Baseline {
+        std::shared_ptr<const Before> before;
+        RealtimeSettings settings;
+        std::vector<IrradianceMeshCopy> bounces;
+    } baseline;
     try {
         for (;;) {
             Request r;
@@ -340,6 +442,7 @@ void RealtimeIndirect::run(int nice) {
                 if (r.scene != scene || !mesh || relaid) mesh.emplace(*r.scene, indirect_, r.layout);
                 scene = r.scene;
                 estimator = factory_(*scene, r.settings.method);
+                errorIsBias_ = estimator->errorIsBias() ? 1 : 0;
                 version = r.sceneVersion;
                 method = r.settings.method;
             }
@@ -360,9 +463,24 @@ void RealtimeIndirect::run(int nice) {
                                      pending_->settings.method == r.settings.method &&
                                      pending_->level > r.level);
             };
+            // The pose before's baseline, once per complete cache and method.
+            const bool onOld = chained == 0 && r.before && estimator->errorIsBias();
+            if (onOld && (baseline.before != r.before || baseline.settings.method != r.settings.method ||
+                          baseline.settings.methodBounces != r.settings.methodBounces ||
+                          baseline.settings.seed != r.settings.seed)) {
+                baseline = {};
+                const RealtimeMesh old(*r.before->scene, indirect_, r.before->layout);
+                const std::unique_ptr<IndirectEstimator> e = factory_(*r.before->scene, r.settings.method);
+                std::optional<std::vector<IrradianceMeshCopy>> b = estimateBounces(
+                    old, *e, indirect_, r.settings.methodBounces, r.before->source, r.settings.seed, cancelled);
+                if (b) baseline = {r.before, r.settings, std::move(*b)};
+            }
             std::optional<std::vector<IrradianceMeshCopy>> bounces =
                 chainBounces(*mesh, *estimator, indirect_, r.settings.methodBounces, std::move(r.known), source,
                              r.settings.seed, cancelled);
+            double onOldLight = 0;
+            if (bounces && onOld && baseline.before == r.before)
+                onOldLight = correctByChange(*bounces, baseline.bounces, r.before->bounces);
             if (!bounces) {
                 std::lock_guard<std::mutex> lock(mutex_);
                 if (stopping_) break;
@@ -375,6 +493,7 @@ void RealtimeIndirect::run(int nice) {
             e->directSampled = r.directSampled;
             e->chained = int(chained);
             e->bounces = std::move(*bounces);
+            e->onOldLight = onOldLight;
             e->seconds = std::chrono::duration<double>(Clock::now() - start).count();
             {
                 std::lock_guard<std::mutex> lock(mutex_);

@@ -244,6 +244,10 @@ struct MethodRow {
     // on (chainBounces: how the stand-in goes on once the cache has
     // gathered a bounce); 0: from direct light.
     int chained = 0;
+    // The old light moved by the method's change (correctByChange): the
+    // settled cache before the motion, plus this estimate, less the
+    // method's estimate from that cache's direct light on the pose before.
+    bool onOldLight = false;
     double setupSeconds = 0;   // the estimator and the base mesh for the scene (once per pose)
     double updateSeconds = 0;  // every bounce estimated, the tail added
     double error = 0;          // the image with it against the converged image
@@ -310,9 +314,14 @@ std::optional<double> within(const std::vector<TimedImage>& images, const std::v
 // direct light (and caustics), at its default resolution and one coarser
 // and one finer: its time on this thread with nothing else of the bench
 // running, and the image it gives against the converged one.
+// With `before` (the settled cache on the pose before the motion,
+// `beforeScene`) also each default method on the old light: its estimate
+// of every bounce (quick: 3) corrected by its change since then
+// (correctByChange), the baseline's time counted in the update.
 std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices, const CacheSnapshot& converged,
-                                      Compositor& compositor, const Camera& camera, const CompositorSettings& comp,
-                                      const ImageRgb& reference, bool quick) {
+                                      const Scene& beforeScene, const CacheSnapshot& before, Compositor& compositor,
+                                      const Camera& camera, const CompositorSettings& comp, const ImageRgb& reference,
+                                      bool quick) {
     std::vector<IrradianceMeshCopy> source = converged.direct;
     const size_t caustics = std::min(converged.causticMeshes, converged.indirect.size());
     const std::vector<IrradianceMeshCopy> causticMeshes(converged.indirect.end() - std::ptrdiff_t(caustics),
@@ -358,7 +367,29 @@ std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices
             const double update = secondsSince(t);
             bounces.insert(bounces.end(), causticMeshes.begin(), causticMeshes.end());
             const double error = relativeRmse(compositor.render(camera, converged.direct, bounces, comp), reference);
-            rows.push_back({v.method, v.resolution, v.isDefault, n, 0, setup, update, error});
+            rows.push_back({v.method, v.resolution, v.isDefault, n, 0, false, setup, update, error});
+            if (!v.isDefault || n != counts.back()) continue;
+            // On the old light: the baseline on the pose before, then the
+            // same estimate corrected.
+            t = Clock::now();
+            const size_t beforeCaustics = std::min(before.causticMeshes, before.indirect.size());
+            std::vector<IrradianceMeshCopy> beforeSource = before.direct;
+            beforeSource.insert(beforeSource.end(), before.indirect.end() - std::ptrdiff_t(beforeCaustics),
+                                before.indirect.end());
+            const std::vector<IrradianceMeshCopy> beforeBounces(before.indirect.begin(),
+                                                                before.indirect.end() - std::ptrdiff_t(beforeCaustics));
+            const RealtimeMesh beforeMesh(beforeScene, settings, before.bounceLayout);
+            std::unique_ptr<IndirectEstimator> beforeEstimator =
+                realtimeEstimatorFactory(v.choice)(beforeScene, v.method);
+            const std::vector<IrradianceMeshCopy> baseline =
+                *estimateBounces(beforeMesh, *beforeEstimator, settings, n, beforeSource, choices.seed);
+            std::vector<IrradianceMeshCopy> corrected =
+                *estimateBounces(mesh, *estimator, settings, n, source, choices.seed);
+            correctByChange(corrected, baseline, beforeBounces);
+            const double both = secondsSince(t);
+            corrected.insert(corrected.end(), causticMeshes.begin(), causticMeshes.end());
+            const double onOld = relativeRmse(compositor.render(camera, converged.direct, corrected, comp), reference);
+            rows.push_back({v.method, v.resolution, v.isDefault, n, 0, true, setup, both, onOld});
         }
         // Chained onto the converged cache's bounce 1 (on the base mesh, as
         // the solver's first pass leaves it: the bounce's base vertices,
@@ -373,7 +404,7 @@ std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices
         bounces.front() = first;
         bounces.insert(bounces.end(), causticMeshes.begin(), causticMeshes.end());
         const double error = relativeRmse(compositor.render(camera, converged.direct, bounces, comp), reference);
-        rows.push_back({v.method, v.resolution, v.isDefault, settings.bounces - 1, 1, setup, update, error});
+        rows.push_back({v.method, v.resolution, v.isDefault, settings.bounces - 1, 1, false, setup, update, error});
     }
     return rows;
 }
@@ -404,7 +435,10 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     session->start(RefinementCamera{camera, w.frameWidth, w.frameHeight});
     reader = session->reader();
     offers.offered = 0;
-    snapshotAt(*session, reader, Clock::now(), 0);
+    // The settled cache, offered as the viewer offers what it shows: the
+    // stand-in keeps it as the pose before the motion.
+    const CacheSnapshot settled = *snapshotAt(*session, reader, Clock::now(), 0);
+    offers.offer(settled);
 
     // The frame loop while moving, each step applied on a helper thread.
     CompositorSettings frame;
@@ -508,7 +542,8 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
 
     run.progress("%s: the stand-in's methods on the converged direct light\n", motion.name.c_str());
     if (choices.indirect.active()) {
-        r.methods = measureMethods(live, choices, *last, *compositor, camera, comp, converged, run.options().quick);
+        r.methods = measureMethods(live, choices, *last, sceneOf(motion), settled, *compositor, camera, comp, converged,
+                                   run.options().quick);
         r.directOnlyError = relativeRmse(compositor->render(camera, last->direct, {}, comp), converged);
     }
     independentReader = CacheWorker::Reader();
@@ -643,7 +678,9 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
         }
         for (const MethodRow& m : r.methods)
             methods.addRow({r.name, m.method, m.resolution + (m.isDefault ? " (default)" : ""),
-                            m.chained ? concat("the cache's bounce ", m.chained) : std::string("direct light"),
+                            m.chained      ? concat("the cache's bounce ", m.chained)
+                            : m.onOldLight ? std::string("direct light; on the old light")
+                                           : std::string("direct light"),
                             std::to_string(m.bounces), benchNumber(m.setupSeconds), benchNumber(m.updateSeconds),
                             benchPct(m.error)});
         if (!r.methods.empty())
@@ -680,15 +717,18 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
     const double wall = run.seconds();
     std::ostringstream md;
     md << "# bench dynamic (" << run.mode() << ")\n\nMotions:";
-    for (const Motion& m : motions) md << " " << m.name << (m.office ? " (the office, 12 panels)" : " (the Cornell box)");
+    for (size_t i = 0; i < motions.size(); ++i)
+        md << (i ? ", " : " ") << motions[i].name
+           << (motions[i].office ? " (the office, 12 panels)" : " (the Cornell box)");
     md << "; full GI; frames " << w.frameWidth << "x"
        << w.frameHeight << ", errors at " << w.errorWidth << "x" << w.errorHeight << " against " << w.spp
        << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
        << choices.realtime.describe() << ".\n\n"
        << summary.markdown() << "\n" << targets.markdown()
-       << "\nThe stand-in's methods on the final pose, from the converged direct light or chained onto the "
-          "converged cache's bounce 1 (as the stand-in goes on once the cache has gathered it; one thread, nothing "
-          "else running), against the converged image:\n\n"
+       << "\nThe stand-in's methods on the final pose, from the converged direct light, on the old light (the "
+          "settled cache before the motion corrected by the method's change) or chained onto the converged cache's "
+          "bounce 1 (as the stand-in goes on once the cache has gathered it; one thread, nothing else running), "
+          "against the converged image:\n\n"
        << methods.markdown();
     run.write("dynamic_summary.md", md.str());
     run.printWallTime(wall);
