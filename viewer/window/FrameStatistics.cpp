@@ -20,10 +20,17 @@ void FrameStatistics::printStatus(double seconds, size_t vertices, uint64_t samp
     if (!now && seconds - lastStatus_ < 1.0) return;
     static const bool terminal = ::isatty(STDERR_FILENO) != 0;
     lastStatus_ = seconds;
-    std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, estimated error %.3g%%, %.0f frames/s; %s%s",
-                 terminal ? "\r" : "", seconds, vertices, static_cast<unsigned long long>(samples),
-                 100 * estimatedError, frameMsAverage_ > 0 ? 1e3 / frameMsAverage_ : 0.0, lights.c_str(),
-                 terminal ? "   " : "\n");
+    // The cache reads 100% until every light and every bounce has its first
+    // pass: not an error of the image shown (which the stand-in or the old
+    // light fill), but none estimated yet.
+    char error[48];
+    if (estimatedError >= 1)
+        std::snprintf(error, sizeof error, "error not estimated yet");
+    else
+        std::snprintf(error, sizeof error, "estimated error %.3g%%", 100 * estimatedError);
+    std::fprintf(stderr, "%sview %.1f s: %zu vertices, %llu samples, %s, %.0f frames/s; %s%s", terminal ? "\r" : "",
+                 seconds, vertices, static_cast<unsigned long long>(samples), error,
+                 frameMsAverage_ > 0 ? 1e3 / frameMsAverage_ : 0.0, lights.c_str(), terminal ? "   " : "\n");
     std::fflush(stderr);
 }
 

@@ -315,8 +315,12 @@ UiRequests Ui::build(UiModel& m) {
         ImGui::Text("%s vertices, %s triangles (%s in view), %s samples", formatCount(double(s.vertices)).c_str(),
                     formatCount(double(s.triangles)).c_str(), formatCount(double(s.drawnTriangles)).c_str(),
                     formatCount(double(s.samples)).c_str());
-        ImGui::Text("estimated error %.2f%%, round %llu, worker %.1f s", 100 * s.estimatedError,
-                    static_cast<unsigned long long>(s.rounds), s.workerSeconds);
+        if (s.estimatedError >= 1)  // every light's and bounce's first pass not yet done (FrameStatistics)
+            ImGui::Text("error not estimated yet, round %llu, worker %.1f s",
+                        static_cast<unsigned long long>(s.rounds), s.workerSeconds);
+        else
+            ImGui::Text("estimated error %.2f%%, round %llu, worker %.1f s", 100 * s.estimatedError,
+                        static_cast<unsigned long long>(s.rounds), s.workerSeconds);
     } else {
         ImGui::TextDisabled("waiting for the first cache snapshot...");
     }
