@@ -366,19 +366,30 @@ void RealtimeIndirect::keepBefore(const CacheSnapshot& s, uint64_t sceneVersion)
     const size_t caustics = std::min(s.causticMeshes, s.indirect.size());
     if (!offeredScene_ || offeredVersion_ != sceneVersion || s.indirect.size() == caustics || errorIsBias_ == 0)
         return;
-    if (before_ && before_->sceneVersion == sceneVersion &&
-        (before_->snapshotVersion == s.version || now - beforeTakenAt_ < kBeforeSeconds))
-        return;
+    const bool first = !before_ || before_->sceneVersion != sceneVersion;
+    if (!first && (before_->snapshotVersion == s.version || now - beforeTakenAt_ < kBeforeSeconds)) return;
     auto b = std::make_shared<Before>();
     b->scene = offeredScene_;
     b->sceneVersion = sceneVersion;
     b->snapshotVersion = s.version;
-    b->source = s.direct;
-    b->source.insert(b->source.end(), s.indirect.end() - std::ptrdiff_t(caustics), s.indirect.end());
+    if (first) {
+        auto source = std::make_shared<std::vector<IrradianceMeshCopy>>(s.direct);
+        source->insert(source->end(), s.indirect.end() - std::ptrdiff_t(caustics), s.indirect.end());
+        b->source = std::move(source);
+    } else {
+        b->source = before_->source;
+    }
     b->bounces.assign(s.indirect.begin(), s.indirect.end() - std::ptrdiff_t(caustics));
     b->layout = s.bounceLayout;
-    before_ = std::move(b);
+    before_ = b;
     beforeTakenAt_ = now;
+    if (first) {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            baselineWanted_.emplace(std::move(b), settings_);
+        }
+        wake_.notify_all();
+    }
 }
 
 std::shared_ptr<const RealtimeEstimate> RealtimeIndirect::latest() const {
@@ -416,22 +427,51 @@ void RealtimeIndirect::run(int nice) {
     std::unique_ptr<IndirectEstimator> estimator;
     uint64_t version = 0;
     std::string method;
-    // The baseline: the method's bounces for the pose before (Request::before).
+    // The baseline: the method's bounces for the pose before's direct light
+    // (Before::source), with the settings it was made with.
     struct Baseline {
-        std::shared_ptr<const Before> before;
+        const std::vector<IrradianceMeshCopy>* source = nullptr;
         RealtimeSettings settings;
         std::vector<IrradianceMeshCopy> bounces;
     } baseline;
+    const auto haveBaseline = [&](const Before& b, const RealtimeSettings& rs) {
+        return baseline.source == b.source.get() && baseline.settings.method == rs.method &&
+               baseline.settings.methodBounces == rs.methodBounces && baseline.settings.seed == rs.seed;
+    };
+    const auto makeBaseline = [&](const Before& b, const RealtimeSettings& rs, const std::function<bool()>& cancelled) {
+        baseline = {};
+        const RealtimeMesh old(*b.scene, indirect_, b.layout);
+        const std::unique_ptr<IndirectEstimator> e = factory_(*b.scene, rs.method);
+        errorIsBias_ = e->errorIsBias() ? 1 : 0;
+        if (!e->errorIsBias()) return;
+        std::optional<std::vector<IrradianceMeshCopy>> made =
+            estimateBounces(old, *e, indirect_, rs.methodBounces, *b.source, rs.seed, cancelled);
+        if (made) baseline = {b.source.get(), rs, std::move(*made)};
+    };
     try {
         for (;;) {
             Request r;
+            std::optional<std::pair<std::shared_ptr<const Before>, RealtimeSettings>> wanted;
             {
                 std::unique_lock<std::mutex> lock(mutex_);
-                wake_.wait(lock, [&] { return stopping_ || pending_.has_value(); });
+                wake_.wait(lock, [&] { return stopping_ || pending_.has_value() || baselineWanted_.has_value(); });
                 if (stopping_) break;
-                r = std::move(*pending_);
-                pending_.reset();
-                working_ = true;
+                if (pending_) {
+                    r = std::move(*pending_);
+                    pending_.reset();
+                    working_ = true;
+                } else {
+                    wanted = std::move(baselineWanted_);
+                    baselineWanted_.reset();
+                }
+            }
+            if (wanted) {  // idle: the baseline of a complete cache, before any change asks for it
+                if (!haveBaseline(*wanted->first, wanted->second))
+                    makeBaseline(*wanted->first, wanted->second, [this] {
+                        std::lock_guard<std::mutex> lock(mutex_);
+                        return stopping_;
+                    });
+                continue;
             }
             const auto start = Clock::now();
             const bool relaid = mesh && (mesh->layout.borderInset != r.layout.borderInset ||
@@ -463,23 +503,15 @@ void RealtimeIndirect::run(int nice) {
                                      pending_->settings.method == r.settings.method &&
                                      pending_->level > r.level);
             };
-            // The pose before's baseline, once per complete cache and method.
+            // The pose before's baseline (made while idle unless the change
+            // came first).
             const bool onOld = chained == 0 && r.before && estimator->errorIsBias();
-            if (onOld && (baseline.before != r.before || baseline.settings.method != r.settings.method ||
-                          baseline.settings.methodBounces != r.settings.methodBounces ||
-                          baseline.settings.seed != r.settings.seed)) {
-                baseline = {};
-                const RealtimeMesh old(*r.before->scene, indirect_, r.before->layout);
-                const std::unique_ptr<IndirectEstimator> e = factory_(*r.before->scene, r.settings.method);
-                std::optional<std::vector<IrradianceMeshCopy>> b = estimateBounces(
-                    old, *e, indirect_, r.settings.methodBounces, r.before->source, r.settings.seed, cancelled);
-                if (b) baseline = {r.before, r.settings, std::move(*b)};
-            }
+            if (onOld && !haveBaseline(*r.before, r.settings)) makeBaseline(*r.before, r.settings, cancelled);
             std::optional<std::vector<IrradianceMeshCopy>> bounces =
                 chainBounces(*mesh, *estimator, indirect_, r.settings.methodBounces, std::move(r.known), source,
                              r.settings.seed, cancelled);
             double onOldLight = 0;
-            if (bounces && onOld && baseline.before == r.before)
+            if (bounces && onOld && haveBaseline(*r.before, r.settings))
                 onOldLight = correctByChange(*bounces, baseline.bounces, r.before->bounces);
             if (!bounces) {
                 std::lock_guard<std::mutex> lock(mutex_);

@@ -39,8 +39,10 @@
 // bias, IndirectEstimator::errorIsBias: volume and lpv). Once a session has
 // had a complete cache, the cache's bounces from just before a change are exact
 // for that pose, and the method's error there is known: its estimate from
-// that cache's direct light (the baseline, made once per complete cache)
-// less those bounces. So a change's estimate from direct light is shown as
+// that cache's direct light (the baseline, made once per scene from its
+// first complete snapshot, on the estimate's thread while it is idle, so a
+// change's first estimate comes no later) less those bounces (the newest
+// complete snapshot's, at most a second old). So a change's estimate from direct light is shown as
 // the method's estimate plus its old error corrected away, e + w (old −
 // baseline), at every vertex the scene before also had (same position and
 // normal: every surface the change did not move), and as the method's own
@@ -257,10 +259,16 @@ public:
 
 private:
     // The last complete cache offered: the scene before the next change.
+    // The baseline's direct light is the first complete snapshot's of the
+    // scene (the baseline is made from it once, while the thread is idle);
+    // the bounces are the newest complete snapshot's, at most
+    // kBeforeSeconds old (refined further, closer to exact).
     struct Before {
         std::shared_ptr<const Scene> scene;
         uint64_t sceneVersion = 0, snapshotVersion = 0;
-        std::vector<IrradianceMeshCopy> source;   // its direct light and caustics
+        // Its direct light and caustics (shared by the Befores of one scene
+        // version: the baseline's key).
+        std::shared_ptr<const std::vector<IrradianceMeshCopy>> source;
         std::vector<IrradianceMeshCopy> bounces;  // its bounces (CacheSnapshot::indirect without caustics)
         CacheLayout layout;
     };
@@ -309,6 +317,9 @@ private:
     mutable std::mutex mutex_;
     mutable std::condition_variable wake_;
     std::optional<Request> pending_;
+    // A baseline to make while no estimate is asked for: the pose before
+    // and the settings then (the first complete snapshot of a scene).
+    std::optional<std::pair<std::shared_ptr<const Before>, RealtimeSettings>> baselineWanted_;
     bool working_ = false, stopping_ = false;
     std::shared_ptr<const RealtimeEstimate> latest_;
     std::exception_ptr failure_;
