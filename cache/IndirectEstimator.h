@@ -85,12 +85,6 @@ public:
     // room behind (the two rooms of test_indirect: 3.7% of the lit floor's
     // light on the dark one, against 0.5%).
     virtual bool separatesSides() const { return false; }
-    // Whether the estimate's error is mostly a bias that changes smoothly
-    // with the scene (a probe grid's or a propagation volume's resolution),
-    // not the noise of where its samples fall: only then is its error on a
-    // pose just before a change worth correcting away after it
-    // (RealtimeIndirect, "the old light moved by the method's change").
-    virtual bool errorIsBias() const { return false; }
 };
 
 }  // namespace ml

@@ -35,29 +35,28 @@
 // shown, and nothing is estimated, until the cache has gathered every bounce
 // again.
 //
-// The old light moved by the method's change (methods whose error is a
-// bias, IndirectEstimator::errorIsBias: volume and lpv). Once a session has
-// had a complete cache, the cache's bounces from just before a change are exact
+// The old light moved by the method's change. Once a session has had a
+// complete cache, the cache's bounces from just before a change are exact
 // for that pose, and the method's error there is known: its estimate from
 // that cache's direct light (the baseline, made once per scene from its
 // first complete snapshot, on the estimate's thread while it is idle, so a
 // change's first estimate comes no later) less those bounces (the newest
-// complete snapshot's, at most a second old). So a change's estimate from direct light is shown as
-// the method's estimate plus its old error corrected away, e + w (old −
-// baseline), at every vertex the scene before also had (same position and
-// normal: every surface the change did not move), and as the method's own
-// estimate on the moved ones (correctByChange). The weight w trusts the
-// old error as far as the method's light there stayed the same: 1 where it
-// did not change, falling as the change grows against the light it had.
-// Measured (bench dynamic --quick, the table of the methods, 3 bounces
-// estimated, the image against the converged one; each pair from one run):
-// the Cornell box's light moved 30 mm, volume 1.45% -> 0.70%, lpv 4.8% ->
-// 3.3%; the short block moved, volume 1.68% -> 1.27%, lpv 4.9% -> 2.3%; the
+// complete snapshot's, at most a second old). So a change's estimate from
+// direct light is shown as the method's estimate with its old error
+// corrected away, e + w (old − baseline), at every vertex the scene before
+// also had (same position and normal: every surface the change did not
+// move), and as the method's own estimate on the moved ones
+// (correctByChange). The weight w trusts the old error as far as the
+// method's light there stayed the same: 1 where it did not change, falling
+// fast as the change grows against the light it had. Measured (bench
+// dynamic --quick, the table of the methods, 3 bounces estimated, the
+// image against the converged one; each pair from one run), the method
+// alone -> on the old light: the Cornell box's light moved 30 mm, volume
+// 1.45% -> 0.77%, vpl 3.10% -> 2.71%, lpv 4.84% -> 3.47%; its short block
+// moved, volume 1.68% -> 1.16%, vpl 2.91% -> 2.33%, lpv 4.87% -> 2.39%; its
 // light moved 180 mm (a third of the box: little of the old error stays),
-// volume 1.71% -> 2.07%, lpv 4.9% -> 3.9%. vpl is not corrected: its error
-// is mostly the noise of where its lights fall, which a difference does not
-// cancel (3.10% -> 2.96%, 2.57% -> 2.68%, 3.11% -> 3.27% in the same runs).
-// A cold start has no complete cache: the method's estimate alone.
+// volume 1.70% -> 1.67%, vpl 3.00% -> 2.61%, lpv 4.93% -> 4.32%. A cold
+// start has no complete cache: the method's estimate alone.
 //
 // Threads. offer() and display() run on the caller's (frame) thread and do
 // no estimating: offer() hands the snapshot's direct meshes to the
@@ -146,9 +145,9 @@ std::optional<std::vector<IrradianceMeshCopy>> chainBounces(const RealtimeMesh& 
 // before, on that scene's base mesh) and `before` (the cache's complete
 // bounces for the scene before, refined or not) also have, at the same
 // position with the same normal, becomes e + w (before − baseline) per
-// channel, at least 0, with w = L(baseline) / (L(baseline) + |L(e) −
-// L(baseline)|) of the luminances (1 where both are 0); the rest stay as
-// they are. A bounce missing from either stays. Returns the share of the
+// channel, at least 0, with w = (L(baseline) / (L(baseline) + |L(e) −
+// L(baseline)|))^6 of the luminances (1 where both are 0); the rest stay
+// as they are. A bounce missing from either stays. Returns the share of the
 // estimate's vertices changed (RealtimeEstimate::onOldLight).
 double correctByChange(std::vector<IrradianceMeshCopy>& estimate, const std::vector<IrradianceMeshCopy>& baseline,
                        const std::vector<IrradianceMeshCopy>& before);
@@ -224,8 +223,7 @@ public:
     // whenever the scene does (the first offer of a version hands over its
     // scene, kept alive here). A complete snapshot (not live) is kept, at
     // most one a second, as the pose before the next change (the old light
-    // and the baseline's direct light, above), for a method whose error is
-    // a bias. Asks for a new estimate when there is a
+    // and the baseline's direct light, above). Asks for a new estimate when there is a
     // method and the cache still needs a stand-in (or the display is live),
     // and: none was asked for this scene (and settings); or the cache's
     // bounces have gone further (not live): another bounce gathered
@@ -309,10 +307,6 @@ private:
     uint64_t offeredVersion_ = 0;
     std::shared_ptr<const Before> before_;
     double beforeTakenAt_ = 0;  // steady clock, s
-    // The method's errorIsBias() as the thread's last estimator said: 1, 0,
-    // or −1 before the first (no pose before is kept for a method that
-    // would not use it).
-    std::atomic<int> errorIsBias_{-1};
 
     mutable std::mutex mutex_;
     mutable std::condition_variable wake_;

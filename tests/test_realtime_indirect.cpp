@@ -135,25 +135,26 @@ TEST(IndirectBlend, TheMethodsOldErrorIsCorrectedAwayWhereTheSurfaceStayed) {
     // Vertex 0 of bounce 1: the method read 4 before, where the cache's
     // complete bounce had 6 (an error of −2), and reads 4 now (no change:
     // trusted whole): 4 + (6 − 4) = 6, the old light. Of bounce 2: the
-    // method read 4 before (the cache 1) and 12 now, a change of 8 against
-    // 4: trusted 4 / (4 + 8) = 1/3, so 12 + (1 − 4) / 3 = 11.
+    // method read 4 before (the cache 68) and 8 now, a change of 4 against
+    // 4: trusted (4 / (4 + 4))^6 = 1/64, so 8 + (68 − 4) / 64 = 9.
     estimate.irradiance = {Rgb(4.0), Rgb(7.0), Rgb(9.0)};
     baseline.irradiance[0] = Rgb(4.0), before.irradiance[0] = Rgb(6.0);
     std::vector<IrradianceMeshCopy> bounces = {estimate, estimate};
-    bounces[1].irradiance[0] = Rgb(12.0);
+    bounces[1].irradiance[0] = Rgb(8.0);
     std::vector<IrradianceMeshCopy> baselines = {baseline, baseline}, old = {before, before};
-    old[1].irradiance[0] = Rgb(1.0);
+    old[1].irradiance[0] = Rgb(68.0);
     EXPECT_DOUBLE_EQ(correctByChange(bounces, baselines, old), 2.0 / 6.0);
     EXPECT_EQ(bounces[0].irradiance, (std::vector<Rgb>{Rgb(6.0), Rgb(7.0), Rgb(9.0)}));
-    EXPECT_NEAR(bounces[1].irradiance[0].x, 11.0, 1e-12);
+    EXPECT_NEAR(bounces[1].irradiance[0].x, 9.0, 1e-12);
     EXPECT_EQ(bounces[1].irradiance[1], Rgb(7.0));
-    // An old error larger than the light now is clamped at no light; a
+    // The method's light gone (64 -> 0: trusted 1/64): an old error larger
+    // than that, 64 − 0, leaves no light rather than less than none; a
     // bounce the scene before did not have stays the method's.
     bounces = {estimate, estimate};
     old = {before};
     old[0].irradiance[0] = Rgb(0.0);
-    baselines[0].irradiance[0] = Rgb(5.0);
-    bounces[0].irradiance[0] = Rgb(4.0);  // changed by 1 against 5: w = 5/6, 4 − 5 · 5/6 < 0
+    baselines[0].irradiance[0] = Rgb(64.0);
+    bounces[0].irradiance[0] = Rgb(0.0);  // 0 + (0 − 64) / 64 = −1
     correctByChange(bounces, baselines, old);
     EXPECT_EQ(bounces[0].irradiance[0], Rgb(0.0));
     EXPECT_EQ(bounces[1].irradiance, estimate.irradiance);

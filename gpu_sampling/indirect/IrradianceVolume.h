@@ -129,7 +129,6 @@ public:
     ~IrradianceVolume() override;
 
     std::string name() const override;
-    bool errorIsBias() const override { return true; }  // its probes' spacing and SH order
     // Captures every probe from these meshes (the update: all probes, one
     // thread; the cache's SamplerPool gives every thread a volume of its own,
     // and each captures the same probes).

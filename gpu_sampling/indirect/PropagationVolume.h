@@ -163,7 +163,6 @@ public:
     ~PropagationVolume() override;
 
     std::string name() const override;
-    bool errorIsBias() const override { return true; }  // its cells' size
     // Injects the source's light and propagates it (the update; one thread:
     // the cache's SamplerPool gives every thread a volume of its own).
     void setSource(size_t slot, const std::vector<IrradianceMeshCopy>& irradiance, double importance = 1.0) override;
