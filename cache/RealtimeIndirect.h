@@ -55,8 +55,11 @@
 // 1.45% -> 0.77%, vpl 3.10% -> 2.71%, lpv 4.84% -> 3.47%; its short block
 // moved, volume 1.68% -> 1.16%, vpl 2.91% -> 2.33%, lpv 4.87% -> 2.39%; its
 // light moved 180 mm (a third of the box: little of the old error stays),
-// volume 1.70% -> 1.67%, vpl 3.00% -> 2.61%, lpv 4.93% -> 4.32%. A cold
-// start has no complete cache: the method's estimate alone.
+// volume 1.70% -> 1.67%, vpl 3.00% -> 2.61%, lpv 4.93% -> 4.32%. With
+// every bounce estimated (bench dynamic, one run): the block volume 1.73%
+// -> 1.36%, vpl 3.33% -> 2.91%, lpv 5.55% -> 2.67%; the light moved 180 mm
+// vpl 3.92% -> 3.53%, lpv 5.62% -> 4.97%, but volume 1.74% -> 1.93%. A
+// cold start has no complete cache: the method's estimate alone.
 //
 // Threads. offer() and display() run on the caller's (frame) thread and do
 // no estimating: offer() hands the snapshot's direct meshes to the
