@@ -434,14 +434,15 @@ void RealtimeIndirect::run(int nice) {
     uint64_t version = 0;
     std::string method;
     // The baseline: the method's bounces for the pose before's direct light
-    // (Before::source), with the settings it was made with.
+    // (Before::source, held so that its address names it), with the
+    // settings it was made with.
     struct Baseline {
-        const std::vector<IrradianceMeshCopy>* source = nullptr;
+        std::shared_ptr<const std::vector<IrradianceMeshCopy>> source;
         RealtimeSettings settings;
         std::vector<IrradianceMeshCopy> bounces;
     } baseline;
     const auto haveBaseline = [&](const Before& b, const RealtimeSettings& rs) {
-        return baseline.source == b.source.get() && baseline.settings.method == rs.method &&
+        return baseline.source == b.source && baseline.settings.method == rs.method &&
                baseline.settings.methodBounces == rs.methodBounces && baseline.settings.seed == rs.seed;
     };
     const auto makeBaseline = [&](const Before& b, const RealtimeSettings& rs, const std::function<bool()>& cancelled) {
@@ -450,7 +451,7 @@ void RealtimeIndirect::run(int nice) {
         const std::unique_ptr<IndirectEstimator> e = factory_(*b.scene, rs.method);
         std::optional<std::vector<IrradianceMeshCopy>> made =
             estimateBounces(old, *e, indirect_, rs.methodBounces, *b.source, rs.seed, cancelled);
-        if (made) baseline = {b.source.get(), rs, std::move(*made)};
+        if (made) baseline = {b.source, rs, std::move(*made)};
     };
     try {
         for (;;) {

@@ -368,9 +368,10 @@ std::vector<MethodRow> measureMethods(const Scene& scene, const Choices& choices
             bounces.insert(bounces.end(), causticMeshes.begin(), causticMeshes.end());
             const double error = relativeRmse(compositor.render(camera, converged.direct, bounces, comp), reference);
             rows.push_back({v.method, v.resolution, v.isDefault, n, 0, false, setup, update, error});
-            if (!v.isDefault || n != counts.back()) continue;
-            // On the old light: the baseline on the pose before, then the
-            // same estimate corrected.
+            if (!v.isDefault || n != counts.back() || !before.indirectComplete) continue;
+            // On the old light (as the stand-in does it once the cache was
+            // complete): the baseline on the pose before, then the same
+            // estimate corrected.
             t = Clock::now();
             const size_t beforeCaustics = std::min(before.causticMeshes, before.indirect.size());
             std::vector<IrradianceMeshCopy> beforeSource = before.direct;
