@@ -385,7 +385,14 @@ void RealtimeIndirect::keepBefore(const CacheSnapshot& s, uint64_t sceneVersion)
     } else {
         b->source = before_->source;
     }
-    b->bounces.assign(s.indirect.begin(), s.indirect.end() - std::ptrdiff_t(caustics));
+    // Of the bounces, only what correctByChange reads: this copy is made on
+    // the frame thread, once a second while the cache is complete.
+    for (auto m = s.indirect.begin(); m != s.indirect.end() - std::ptrdiff_t(caustics); ++m) {
+        IrradianceMeshCopy& c = b->bounces.emplace_back();
+        c.positions = m->positions;
+        c.normals = m->normals;
+        c.irradiance = m->irradiance;
+    }
     b->layout = s.bounceLayout;
     before_ = b;
     beforeTakenAt_ = now;

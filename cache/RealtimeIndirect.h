@@ -270,7 +270,9 @@ private:
         // Its direct light and caustics (shared by the Befores of one scene
         // version: the baseline's key).
         std::shared_ptr<const std::vector<IrradianceMeshCopy>> source;
-        std::vector<IrradianceMeshCopy> bounces;  // its bounces (CacheSnapshot::indirect without caustics)
+        // Its bounces (CacheSnapshot::indirect without caustics): positions,
+        // normals and irradiance only.
+        std::vector<IrradianceMeshCopy> bounces;
         CacheLayout layout;
     };
     struct Request {
