@@ -57,6 +57,10 @@ struct CacheSnapshot {
     // (IndirectSolver::keepingStale, kKeepOldLightShare): no stand-in
     // replaces it.
     bool oldIndirectKept = false;
+    // `indirect` is the light from before a scene change (on the old
+    // geometry), shown until bounce 1 is gathered again
+    // (IndirectSolver::showingStale); oldIndirectKept: until every bounce is.
+    bool indirectStale = false;
     // How the bounces' base meshes are laid for the worker's gather
     // (bounceCacheLayout(estimator)): the stand-in lays its estimate the
     // same way, vertex for vertex.

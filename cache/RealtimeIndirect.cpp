@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <unordered_map>
 
 namespace ml {
@@ -172,6 +173,10 @@ std::optional<std::vector<IrradianceMeshCopy>> chainBounces(const RealtimeMesh& 
 // 1.74%): its later bounces change more than the first's trust allows for.
 constexpr double kTrustPower = 6;
 
+// Estimates in a row a later scene's request may end (run()): two, so that
+// while a motion's poses come faster than estimates every third is shown.
+constexpr int kObsoleteInARow = 2;
+
 double correctByChange(std::vector<IrradianceMeshCopy>& estimate, const std::vector<IrradianceMeshCopy>& baseline,
                        const std::vector<IrradianceMeshCopy>& before) {
     size_t changed = 0, all = 0;
@@ -199,6 +204,68 @@ double correctByChange(std::vector<IrradianceMeshCopy>& estimate, const std::vec
         }
     }
     return all ? double(changed) / double(all) : 0.0;
+}
+
+double standInError(const std::vector<IrradianceMeshCopy>& estimate, const std::vector<IrradianceMeshCopy>& cache) {
+    const double none = std::numeric_limits<double>::infinity();
+    if (estimate.empty() || cache.empty() || !hasNormals(estimate.front())) return none;
+    const size_t bounces = std::min(estimate.size(), cache.size());
+    std::vector<VertexIndex> at;
+    for (size_t b = 0; b < bounces; ++b) {
+        if (!hasNormals(cache[b]) || !hasNormals(estimate[b]) ||
+            estimate[b].positions.size() != estimate.front().positions.size())
+            return none;
+        at.push_back(indexOf(cache[b]));
+    }
+    double off = 0, light = 0;
+    const IrradianceMeshCopy& mesh = estimate.front();
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        const VertexKey k = keyOf(mesh.positions[v], mesh.normals[v]);
+        double e = 0, c = 0;
+        bool everywhere = true;
+        for (size_t b = 0; b < bounces && everywhere; ++b) {
+            const auto i = at[b].find(k);
+            everywhere = i != at[b].end();
+            if (everywhere) e += luminance(estimate[b].irradiance[v]), c += luminance(cache[b].irradiance[i->second]);
+        }
+        if (!everywhere) continue;
+        off += std::abs(e - c);
+        light += c;
+    }
+    return light > 0 && std::isfinite(off) ? off / light : none;
+}
+
+int chooseStandIn(const std::vector<StandInTrial>& trials) {
+    if (trials.empty()) return -1;
+    double fastest = std::numeric_limits<double>::infinity();
+    for (const StandInTrial& t : trials) fastest = std::min(fastest, t.seconds);
+    const double slowest = std::max(kStandInSlowFactor * fastest, kStandInSlowSeconds);
+    int best = -1;
+    for (size_t i = 0; i < trials.size(); ++i) {
+        if (trials[i].seconds > slowest) continue;
+        // Ties, and methods none of whose vertices compare, go to the
+        // faster (infinity never beats a finite error).
+        if (best < 0 || trials[i].error < trials[size_t(best)].error ||
+            (!(trials[i].error > trials[size_t(best)].error) && trials[i].seconds < trials[size_t(best)].seconds))
+            best = int(i);
+    }
+    return best;
+}
+
+std::string describeTrials(const std::vector<StandInTrial>& trials, int chosen) {
+    std::string out;
+    for (size_t i = 0; i < trials.size(); ++i) {
+        char buf[160];
+        const StandInTrial& t = trials[i];
+        if (std::isfinite(t.error))
+            std::snprintf(buf, sizeof buf, "%s%s %.2g%% in %.2g s%s", i ? "; " : "", t.method.c_str(), 100 * t.error,
+                          t.seconds, int(i) == chosen ? " (chosen)" : "");
+        else
+            std::snprintf(buf, sizeof buf, "%s%s not comparable, %.2g s%s", i ? "; " : "", t.method.c_str(),
+                          t.seconds, int(i) == chosen ? " (chosen)" : "");
+        out += buf;
+    }
+    return out;
 }
 
 int gatheredBounces(const CacheSnapshot& s) {
@@ -299,7 +366,39 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
 void RealtimeSettings::validate() const {
     if (methodBounces < 0 || methodBounces > 256)
         throw InputError(concat("real-time bounces ", methodBounces, " is not in 0..256"));
-    if (live && method == "off") throw InputError("a live indirect display needs a real-time method, not off");
+    if (live && (method == "off" || method == "auto"))
+        throw InputError(concat("a live indirect display needs a real-time method, not ", method));
+    if (method == "auto" && candidates.empty())
+        throw InputError("the real-time stand-in 'auto' needs methods to choose from");
+}
+
+std::string RealtimeIndirect::methodFor(const RealtimeSettings& settings) const {
+    if (settings.method != "auto") return settings.method;
+    std::lock_guard<std::mutex> lock(mutex_);
+    return chosen_.empty() ? settings.candidates.front() : chosen_;
+}
+
+std::string RealtimeIndirect::choice() const {
+    if (settings_.method != "auto") return "";
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (chosen_.empty())
+        return concat(settings_.candidates.front(), " until the methods are measured on the first complete cache");
+    return concat(chosen_, ", chosen by its error on this scene's complete cache: ",
+                  describeTrials(trials_, int(std::find_if(trials_.begin(), trials_.end(),
+                                                           [&](const StandInTrial& t) { return t.method == chosen_; }) -
+                                              trials_.begin())));
+}
+
+std::vector<StandInTrial> RealtimeIndirect::trials() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return trials_;
+}
+
+bool RealtimeIndirect::waitBaseline(double timeoutSeconds) const {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return wake_.wait_for(lock, std::chrono::duration<double>(timeoutSeconds),
+                          [&] { return failure_ || (!baselineWanted_ && !baselining_); }) &&
+           !failure_;
 }
 
 RealtimeIndirect::RealtimeIndirect(const IndirectSettings& indirect, EstimatorFactory factory,
@@ -353,6 +452,7 @@ void RealtimeIndirect::offer(const CacheSnapshot& s, uint64_t sceneVersion, cons
     r.snapshotVersion = s.version;
     r.directSampled = sampled;
     r.settings = settings_;
+    r.settings.method = methodFor(settings_);
     // What bounce 1 reflects: direct light and the caustics (CacheWorker).
     r.source = s.direct;
     const size_t caustics = std::min(s.causticMeshes, s.indirect.size());
@@ -412,7 +512,22 @@ std::shared_ptr<const RealtimeEstimate> RealtimeIndirect::latest() const {
 
 IndirectShown RealtimeIndirect::display(const CacheSnapshot& s, uint64_t sceneVersion) const {
     const std::shared_ptr<const RealtimeEstimate> e = settings_.method == "off" ? nullptr : latest();
-    return blendIndirect(s, sceneVersion, e.get(), settings_.live);
+    // An estimate of an earlier scene made before that scene's cache was
+    // complete (estimates are made only while it is not) is older than the
+    // cache's old light, which is exact for that pose: while this scene's
+    // estimate is made, the old light shows (a single move after the cache
+    // settled; a motion's intermediate poses have newer estimates).
+    if (e && !settings_.live && e->sceneVersion != sceneVersion && s.indirectStale && before_ &&
+        before_->sceneVersion >= e->sceneVersion && before_->sceneVersion != sceneVersion) {
+        IndirectShown shown;
+        shown.meshes = s.indirect;
+        shown.source = "cache (the pose before, until the estimate comes)";
+        shown.choice = choice();
+        return shown;
+    }
+    IndirectShown shown = blendIndirect(s, sceneVersion, e.get(), settings_.live);
+    shown.choice = choice();
+    return shown;
 }
 
 bool RealtimeIndirect::busy() const {
@@ -440,6 +555,7 @@ void RealtimeIndirect::run(int nice) {
     std::unique_ptr<IndirectEstimator> estimator;
     uint64_t version = 0;
     std::string method;
+    int obsoleteInARow = 0;  // estimates ended in a row by a later scene's request
     // The baseline: the method's bounces for the pose before's direct light
     // (Before::source, held so that its address names it), with the
     // settings it was made with.
@@ -475,14 +591,56 @@ void RealtimeIndirect::run(int nice) {
                 } else {
                     wanted = std::move(baselineWanted_);
                     baselineWanted_.reset();
+                    baselining_ = true;
                 }
             }
             if (wanted) {  // idle: the baseline of a complete cache, before any change asks for it
-                if (!haveBaseline(*wanted->first, wanted->second))
-                    makeBaseline(*wanted->first, wanted->second, [this] {
+                const Before& b = *wanted->first;
+                RealtimeSettings rs = wanted->second;
+                std::string chosen;
+                {
+                    std::lock_guard<std::mutex> lock(mutex_);
+                    chosen = chosen_;
+                }
+                if (rs.method == "auto" && chosen.empty()) {
+                    // Auto's measurement: every candidate's baseline, each
+                    // against the complete cache's bounces; a request
+                    // (a change) ends it, and the next complete cache
+                    // measures again.
+                    const auto interrupted = [this] {
                         std::lock_guard<std::mutex> lock(mutex_);
-                        return stopping_;
-                    });
+                        return stopping_ || pending_.has_value();
+                    };
+                    std::vector<StandInTrial> trials;
+                    std::vector<Baseline> made;
+                    for (const std::string& m : rs.candidates) {
+                        RealtimeSettings one = rs;
+                        one.method = m;
+                        const auto t = Clock::now();
+                        makeBaseline(b, one, interrupted);
+                        if (baseline.bounces.empty()) break;
+                        trials.push_back({m, standInError(baseline.bounces, b.bounces),
+                                          std::chrono::duration<double>(Clock::now() - t).count()});
+                        made.push_back(std::move(baseline));
+                        baseline = {};
+                    }
+                    const int best = trials.size() == rs.candidates.size() ? chooseStandIn(trials) : -1;
+                    if (best >= 0) baseline = std::move(made[size_t(best)]);
+                    std::lock_guard<std::mutex> lock(mutex_);
+                    if (best >= 0) chosen_ = trials[size_t(best)].method, trials_ = std::move(trials);
+                } else {
+                    if (rs.method == "auto") rs.method = chosen;
+                    if (!haveBaseline(b, rs))
+                        makeBaseline(b, rs, [this] {
+                            std::lock_guard<std::mutex> lock(mutex_);
+                            return stopping_;
+                        });
+                }
+                {
+                    std::lock_guard<std::mutex> lock(mutex_);
+                    baselining_ = false;
+                }
+                wake_.notify_all();
                 continue;
             }
             const auto start = Clock::now();
@@ -507,12 +665,21 @@ void RealtimeIndirect::run(int nice) {
             const std::vector<IrradianceMeshCopy> source =
                 chained > 0 ? std::vector<IrradianceMeshCopy>{r.known.back()} : std::move(r.source);
             // A request chained further (chainLevel) for the same scene
-            // makes this one obsolete.
-            const auto cancelled = [this, &r] {
+            // makes this one obsolete; so does one for a later scene (a
+            // motion's next pose), unless kObsoleteInARow estimates in a
+            // row ended so: a motion's last pose is then estimated at once,
+            // not after the pose before it, and while poses keep coming an
+            // estimate still comes every few.
+            const bool mayEndForLater = obsoleteInARow < kObsoleteInARow && !r.settings.live;
+            const auto laterScene = [this, &r] {
+                return pending_ && pending_->sceneVersion != r.sceneVersion && !pending_->settings.live;
+            };
+            const auto cancelled = [this, &r, mayEndForLater, &laterScene] {
                 std::lock_guard<std::mutex> lock(mutex_);
-                return stopping_ || (pending_ && pending_->sceneVersion == r.sceneVersion &&
-                                     pending_->settings.method == r.settings.method &&
-                                     pending_->level > r.level);
+                return stopping_ ||
+                       (pending_ && pending_->sceneVersion == r.sceneVersion &&
+                        pending_->settings.method == r.settings.method && pending_->level > r.level) ||
+                       (mayEndForLater && laterScene());
             };
             // The pose before's baseline (made while idle unless the change
             // came first).
@@ -527,8 +694,10 @@ void RealtimeIndirect::run(int nice) {
             if (!bounces) {
                 std::lock_guard<std::mutex> lock(mutex_);
                 if (stopping_) break;
+                if (mayEndForLater && laterScene()) ++obsoleteInARow;
                 continue;  // the pending request follows
             }
+            obsoleteInARow = 0;
             auto e = std::make_shared<RealtimeEstimate>();
             e->method = r.settings.method;
             e->sceneVersion = r.sceneVersion;

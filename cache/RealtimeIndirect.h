@@ -61,12 +61,34 @@
 // vpl 3.92% -> 3.53%, lpv 5.62% -> 4.97%, but volume 1.74% -> 1.93%. A
 // cold start has no complete cache: the method's estimate alone.
 //
+// Which method. No one method is best on every scene: from converged direct
+// light, volume's image is 1.7% from the converged one on the Cornell box
+// and 9% on the office, vpl's 3.9% and 26%, lpv's 5.6% and 13% (bench
+// dynamic's table of the methods), and their times differ as much. "auto"
+// measures them on the scene itself: at the first complete cache (the
+// baseline's moment, while the estimate's thread is idle) each candidate's
+// baseline is made and compared with the cache's bounces (standInError: the
+// indirect light at bounce 1's base vertices), and the one with the least
+// error among those fast enough (chooseStandIn) stands in from the next
+// change on, its baseline kept. The first candidate stands in until then; a
+// change during the measurement ends it, and the next complete cache
+// measures again. The panel says what was chosen and why (choice()).
+//
+// While the new pose's estimate is made. Right after a change the newest
+// estimate is of the pose before; if it is older than that pose's complete
+// cache (made before the cache completed, as every estimate is), the
+// cache's old light shows instead (display()), exact for the pose before.
+//
 // Threads. offer() and display() run on the caller's (frame) thread and do
 // no estimating: offer() hands the snapshot's direct meshes to the
 // estimate's thread, which makes the estimator for each new scene (its
 // Embree scene, probe grid or geometry volume) and the estimate, then
 // publishes it; a request made while one is computed replaces the pending
-// one (the newest wins; the one under way finishes). So frames never wait.
+// one (the newest wins), and ends the one under way between two bounces if
+// it is chained further for the same scene, or is for a later scene (a
+// motion's next pose: its last pose is then estimated at once) unless two
+// estimates in a row ended so (while poses keep coming, every third is
+// shown). So frames never wait.
 #pragma once
 
 #include "CacheWorker.h"
@@ -173,6 +195,9 @@ struct IndirectShown {
     // For the panel and status line: "cache", "volume (real-time)",
     // "cache 40% + volume 60% (catching up)", ...
     std::string source;
+    // For the panel, with "auto": which method stands in and why
+    // (RealtimeIndirect::choice); empty otherwise.
+    std::string choice;
 };
 
 // The blend above of snapshot `s` (of the scene of version `sceneVersion`)
@@ -185,10 +210,13 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
                             bool live = false);
 
 struct RealtimeSettings {
-    // The method ("volume", "vpl" or "lpv", as the factory knows them), or
-    // "off": no stand-in, the cache's own display (its old bounces after a
-    // change, the bounces gathered so far at the start).
+    // The method ("volume", "vpl" or "lpv", as the factory knows them);
+    // "auto": the one of `candidates` chosen by its error on this scene
+    // (chooseStandIn), the first of them until it is measured; or "off": no
+    // stand-in, the cache's own display (its old bounces after a change,
+    // the bounces gathered so far at the start).
     std::string method = "volume";
+    std::vector<std::string> candidates;  // for "auto"
     // Show the method's estimate always, not only while the cache catches
     // up (the viewer's --indirect-display METHOD); needs a method.
     bool live = false;
@@ -200,6 +228,44 @@ struct RealtimeSettings {
     uint32_t seed = 1;
     void validate() const;
 };
+
+// One method measured as "auto" measures it: its estimate from a complete
+// cache's direct light against that cache's bounces.
+struct StandInTrial {
+    std::string method;
+    double error = 0;    // standInError; infinity: nothing to compare
+    double seconds = 0;  // the estimator made and every bounce estimated, one thread
+};
+
+// How far `estimate` (a method's bounces on bounce 1's base mesh) is from
+// `cache` (the cache's complete bounces of the same scene, refined or not):
+// at each vertex of the estimate that every bounce of the cache also has
+// (same position and normal), the luminance of the bounces summed; the sum
+// over those vertices of |estimate − cache| over the sum of the cache's.
+// The vertices of the base mesh weigh alike (they are spread over the
+// surfaces at about the base mesh's spacing). Infinity when no vertex
+// matches or the cache has no light there.
+double standInError(const std::vector<IrradianceMeshCopy>& estimate, const std::vector<IrradianceMeshCopy>& cache);
+
+// The stand-in "auto" picks from `trials` (none: -1): the one with the
+// least error among those whose time is at most kStandInSlowFactor times the
+// fastest's, or kStandInSlowSeconds. Why a limit: until its estimate comes
+// the image shows the pose before's, so a slow method's better estimate can
+// come too late to gain (bench dynamic, the Cornell box's block, an earlier
+// version: volume at 2.4 s an update brought the image within 2% at 4.1 s,
+// vpl at 0.7 s at 1.5 s). Why the floor: where every method takes about a
+// second, the better estimate is worth its time. Measured with this rule
+// (viewer/README.md, "Auto and the end of a motion"): on the office volume
+// is chosen (21% in 1.2 s against vpl's 58% in 2.9 s); on the Cornell box
+// too (6.9% in 1.3 s, vpl 10% in 0.5 s), and its light's move came back
+// within 2% 2-4 times sooner than with vpl, its block's moves later (1.8-2.0
+// s against 0.8-1.5 s).
+int chooseStandIn(const std::vector<StandInTrial>& trials);
+constexpr double kStandInSlowFactor = 2.5;
+constexpr double kStandInSlowSeconds = 1.5;
+
+// "volume 9.0% in 1.0 s (chosen); vpl 26% in 3.0 s; lpv 13% in 0.3 s".
+std::string describeTrials(const std::vector<StandInTrial>& trials, int chosen);
 
 class RealtimeIndirect {
 public:
@@ -236,8 +302,7 @@ public:
     // gathered, direct light has filled in since the last one asked (its
     // sampled share up by a tenth, or complete) or its estimated error has
     // halved. Otherwise does nothing. A request replaces one still waiting,
-    // and a request chained further ends the one under way between two
-    // bounces.
+    // and may end the one under way between two bounces (Threads, above).
     //
     // Why chained: the method's error compounds bounce after bounce from
     // its own first bounce; chained onto the cache's bounce 1 the later
@@ -248,10 +313,23 @@ public:
     void offer(const CacheSnapshot& s, uint64_t sceneVersion, const std::shared_ptr<const Scene>& scene);
     // The newest estimate (null before the first).
     std::shared_ptr<const RealtimeEstimate> latest() const;
-    // blendIndirect of `s` with the newest estimate (none with method off).
+    // blendIndirect of `s` with the newest estimate (none with method off);
+    // but while the newest is of an earlier scene and older than that
+    // scene's complete cache (the pose before), `s`'s old light
+    // (CacheSnapshot::indirectStale) until this scene's estimate comes.
     IndirectShown display(const CacheSnapshot& s, uint64_t sceneVersion) const;
     // An estimate is being made or waits to be.
     bool busy() const;
+    // With "auto": the method standing in and why ("volume, chosen on this
+    // scene: volume 9.0% in 1.0 s; vpl 26% in 3.0 s; lpv 13% in 0.3 s", or
+    // "vpl until the methods are measured on a complete cache"); empty
+    // otherwise.
+    std::string choice() const;
+    // Blocks until no baseline (or auto's measurement) is wanted or being
+    // made, or `timeoutSeconds` pass; true if so.
+    bool waitBaseline(double timeoutSeconds) const;
+    // With "auto": the methods as measured for the choice (empty before).
+    std::vector<StandInTrial> trials() const;
     // What ended the thread, rethrown here (the estimator's failure).
     void rethrowIfFailed() const;
     // Blocks until nothing is pending or under way and the newest estimate
@@ -319,7 +397,14 @@ private:
     // A baseline to make while no estimate is asked for: the pose before
     // and the settings then (the first complete snapshot of a scene).
     std::optional<std::pair<std::shared_ptr<const Before>, RealtimeSettings>> baselineWanted_;
-    bool working_ = false, stopping_ = false;
+    bool working_ = false, stopping_ = false, baselining_ = false;
+    // "auto": the method chosen (empty: not measured yet; a measurement a
+    // request interrupts is made again at the next scene's complete cache)
+    // and the trials it was chosen by.
+    std::string chosen_;
+    std::vector<StandInTrial> trials_;
+    // The method a request of `settings` uses (auto resolved).
+    std::string methodFor(const RealtimeSettings& settings) const;
     std::shared_ptr<const RealtimeEstimate> latest_;
     std::exception_ptr failure_;
     uint64_t serial_ = 0;

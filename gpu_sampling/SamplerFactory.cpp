@@ -341,8 +341,8 @@ const std::vector<std::string>& realtimeMethodNames() {
 void RealtimeChoice::validate() const {
     const std::vector<std::string>& m = realtimeMethodNames();
     const auto known = [&](const std::string& name) { return std::find(m.begin(), m.end(), name) != m.end(); };
-    if (realtime != "off" && !known(realtime))
-        throw InputError(concat("--realtime '", realtime, "': unknown (volume, vpl, lpv or off)"));
+    if (realtime != "off" && realtime != "auto" && !known(realtime))
+        throw InputError(concat("--realtime '", realtime, "': unknown (auto, volume, vpl, lpv or off)"));
     if (display != "cache" && !known(display))
         throw InputError(concat("--indirect-display '", display, "': unknown (cache, volume, vpl or lpv)"));
     if (methodBounces < 0 || methodBounces > 256)
@@ -355,13 +355,20 @@ RealtimeSettings RealtimeChoice::settings(uint32_t seed) const {
     s.method = s.live ? display : realtime;
     s.methodBounces = methodBounces;
     s.seed = seed;
+    // vpl first: it stands in until auto has measured the methods (the
+    // fastest update on the Cornell box, where it was the default).
+    s.candidates = {"vpl", "volume", "lpv"};
     return s;
 }
 
 std::string RealtimeChoice::describe() const {
     if (display != "cache") return concat("indirect light shown: ", display, " alone, live");
     if (realtime == "off") return "indirect light shown: the cache (its old bounces while it catches up)";
-    return concat("indirect light shown: the cache, ", realtime, " standing in while it catches up (",
+    return concat("indirect light shown: the cache, ",
+                  realtime == "auto" ? std::string("the real-time method chosen by its error on the scene's complete "
+                                                   "cache (vpl until then)")
+                                     : realtime,
+                  " standing in while it catches up (",
                   methodBounces > 0 ? concat(methodBounces, " bounces estimated, the rest a tail")
                                     : std::string("every bounce estimated"),
                   ")");

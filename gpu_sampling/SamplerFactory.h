@@ -104,10 +104,13 @@ struct IndirectChoice {
 // estimate alone, live.
 struct RealtimeChoice {
     // The stand-in while the cache catches up: one of realtimeMethodNames(),
-    // or "off" (the cache's own display: its old bounces after a change).
-    // The default by measurement: bench dynamic's table of the methods on the
-    // moved scenes (viewer/README.md).
-    std::string realtime = "vpl";
+    // "auto" (the one with the least error on the scene's first complete
+    // cache among those fast enough: RealtimeIndirect, chooseStandIn), or
+    // "off" (the cache's own display: its old bounces after a change).
+    // Auto by measurement: no one method is best on every scene (bench
+    // dynamic's table of the methods: vpl on the Cornell box, volume on the
+    // office; viewer/README.md).
+    std::string realtime = "auto";
     // "cache", or a method shown live whatever the cache holds.
     std::string display = "cache";
     // Bounces the method estimates, the rest following as a tail (0: all).

@@ -8,7 +8,8 @@
 //
 // Sessions use the exact direct sampler (no noise in direct light) and the
 // ray gather, on the built-in Cornell box with 2 bounces; the stand-in is the
-// irradiance volume at 4 probes a side (deterministic: it draws no jitter).
+// irradiance volume at 4 probes a side (deterministic: it draws no jitter),
+// or auto choosing between it and vpl.
 
 #include "cache/ProgressiveSession.h"
 #include "cache/RealtimeIndirect.h"
@@ -23,7 +24,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -160,6 +164,51 @@ TEST(IndirectBlend, TheMethodsOldErrorIsCorrectedAwayWhereTheSurfaceStayed) {
     EXPECT_EQ(bounces[1].irradiance, estimate.irradiance);
 }
 
+TEST(IndirectBlend, AStandInsErrorIsMeasuredWhereEveryBounceHasTheVertex) {
+    // The estimate's two bounces on four vertices; the cache's bounce 1
+    // refined (its vertices in another order, one more) with vertex 3
+    // turned, its bounce 2 without vertex 2: vertices 0 and 1 compare.
+    const std::vector<Vec3> p = {kBase[0], kBase[1], kBase[2], kBase[3]};
+    std::vector<IrradianceMeshCopy> estimate = {meshOf(p, 0, 0), meshOf(p, 0, 0)};
+    estimate[0].irradiance = {Rgb(1.0), Rgb(2.0), Rgb(3.0), Rgb(4.0)};
+    estimate[1].irradiance = {Rgb(1.0), Rgb(1.0), Rgb(1.0), Rgb(1.0)};
+    std::vector<IrradianceMeshCopy> cache = {meshOf({p[3], p[1], p[2], p[0], Vec3(0.5, 0, 0.5)}, 0, 1),
+                                             meshOf({p[0], p[1], p[3]}, 0, 1)};
+    cache[0].normals[0] = Vec3(1, 0, 0);
+    cache[0].irradiance = {Rgb(9.0), Rgb(2.0), Rgb(9.0), Rgb(2.0), Rgb(9.0)};
+    cache[1].irradiance = {Rgb(1.0), Rgb(3.0), Rgb(9.0)};
+    // Summed over the bounces: the estimate 2 and 3, the cache 3 and 5:
+    // (|2 − 3| + |3 − 5|) / (3 + 5).
+    EXPECT_DOUBLE_EQ(standInError(estimate, cache), 3.0 / 8.0);
+    EXPECT_DOUBLE_EQ(standInError(estimate, estimate), 0.0);
+    // Nothing to compare: no vertex in common, or no light in the cache.
+    for (IrradianceMeshCopy& m : cache)
+        for (Vec3& x : m.positions) x.y += 1;
+    EXPECT_TRUE(std::isinf(standInError(estimate, cache)));
+    std::vector<IrradianceMeshCopy> dark = {meshOf(p, 0, 1)};
+    dark[0].irradiance.assign(4, Rgb(0.0));
+    EXPECT_TRUE(std::isinf(standInError(estimate, dark)));
+}
+
+TEST(IndirectBlend, AutoChoosesTheLeastErrorAmongTheMethodsFastEnough) {
+    const double inf = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(chooseStandIn({}), -1);
+    // The Cornell box's kind: the most accurate 3.5 times the fastest and
+    // over kStandInSlowSeconds: the better of the other two.
+    EXPECT_EQ(chooseStandIn({{"vpl", 0.039, 0.69}, {"volume", 0.017, 2.43}, {"lpv", 0.056, 1.13}}), 0);
+    // The office's: every one within the floor of 1.5 s, or 2.5 times the fastest.
+    EXPECT_EQ(chooseStandIn({{"vpl", 0.26, 1.4}, {"volume", 0.09, 1.03}, {"lpv", 0.13, 0.3}}), 1);
+    EXPECT_EQ(chooseStandIn({{"vpl", 0.26, 3.0}, {"volume", 0.09, 2.49}, {"lpv", 0.13, 1.0}}), 1);
+    EXPECT_EQ(chooseStandIn({{"vpl", 0.26, 3.0}, {"volume", 0.09, 2.51}, {"lpv", 0.13, 1.0}}), 2);
+    // Ties go to the faster; a method with nothing to compare never beats
+    // one that was measured, and only wins when none was.
+    EXPECT_EQ(chooseStandIn({{"vpl", 0.05, 0.9}, {"volume", 0.05, 0.5}}), 1);
+    EXPECT_EQ(chooseStandIn({{"vpl", inf, 0.1}, {"volume", 0.5, 0.5}}), 1);
+    EXPECT_EQ(chooseStandIn({{"vpl", inf, 0.9}, {"volume", inf, 0.5}}), 1);
+    EXPECT_EQ(describeTrials({{"vpl", 0.26, 3.0}, {"volume", 0.09, 1.0}}, 1),
+              "vpl 26% in 3 s; volume 9% in 1 s (chosen)");
+}
+
 TEST(IndirectBlend, TheOldLightKeptAfterASmallChangeIsShownOverAnyEstimate) {
     CacheSnapshot s;
     s.indirectComplete = false;
@@ -235,9 +284,11 @@ std::unique_ptr<ProgressiveSession> cornellSession(Scene& scene, const IndirectC
     return std::make_unique<ProgressiveSession>(scene, s, samplerFactory(scene, direct, indirect));
 }
 
-std::unique_ptr<RealtimeIndirect> standIn(const ProgressiveSession& session, const IndirectChoice& indirect) {
+std::unique_ptr<RealtimeIndirect> standIn(const ProgressiveSession& session, const IndirectChoice& indirect,
+                                           const std::string& method = "volume") {
     RealtimeSettings rs;
-    rs.method = "volume";
+    rs.method = method;
+    rs.candidates = {"volume", "vpl"};
     rs.methodBounces = 2;
     return std::make_unique<RealtimeIndirect>(session.indirect()->settings(), realtimeEstimatorFactory(indirect), rs);
 }
@@ -271,15 +322,50 @@ TEST(RealtimeIndirect, TheSessionShowsTheCacheWhenCompleteAndTheEstimateRightAft
     const IndirectChoice indirect = indirectChoice(scene);
     SnapshotCall watch;
     const std::unique_ptr<ProgressiveSession> session = cornellSession(scene, indirect, &watch);
-    const std::unique_ptr<RealtimeIndirect> realtime = standIn(*session, indirect);
+    const std::unique_ptr<RealtimeIndirect> realtime = standIn(*session, indirect, "auto");
     uint64_t version = 1;
     auto copy = std::make_shared<const Scene>(scene);
-    refineToConvergence(*session, [&](const CacheSnapshot& s) { realtime->offer(s, version, copy); });
+    std::optional<CacheSnapshot> firstComplete;  // what auto measures the methods on
+    refineToConvergence(*session, [&](const CacheSnapshot& s) {
+        if (s.indirectComplete && !firstComplete) firstComplete = s;
+        realtime->offer(s, version, copy);
+    });
     const std::unique_ptr<CacheSnapshot> fresh = snapshotNow(*session);
     ASSERT_TRUE(fresh->indirectComplete);
     ASSERT_TRUE(realtime->waitIdle(version, 120));
     ASSERT_TRUE(realtime->latest() != nullptr);  // made while the cache was gathering its bounces
     EXPECT_EQ(realtime->latest()->onOldLight, 0.0);  // a cold start: no complete cache before it
+    EXPECT_EQ(realtime->latest()->method, "volume");  // the first candidate, until they are measured
+
+    // Auto measured both methods on the first complete cache: the volume's
+    // error (deterministic: no jitter) is its estimate from that cache's
+    // direct light against its bounces, and the method chosen is the one
+    // chooseStandIn picks from the trials.
+    ASSERT_TRUE(firstComplete.has_value());
+    ASSERT_TRUE(realtime->waitBaseline(120));
+    const std::vector<StandInTrial> trials = realtime->trials();
+    ASSERT_EQ(trials.size(), 2u);
+    EXPECT_EQ(trials[0].method, "volume");
+    EXPECT_EQ(trials[1].method, "vpl");
+    {
+        const RealtimeMesh mesh(scene, session->indirect()->settings(), firstComplete->bounceLayout);
+        std::unique_ptr<IndirectEstimator> volume = realtimeEstimatorFactory(indirect)(scene, "volume");
+        const RealtimeSettings rs = realtime->settings();
+        const auto caustics = firstComplete->indirect.end() - std::ptrdiff_t(firstComplete->causticMeshes);
+        std::vector<IrradianceMeshCopy> source = firstComplete->direct;
+        source.insert(source.end(), caustics, firstComplete->indirect.end());
+        const std::vector<IrradianceMeshCopy> bounces = *estimateBounces(
+            mesh, *volume, session->indirect()->settings(), rs.methodBounces, source, rs.seed);
+        const std::vector<IrradianceMeshCopy> cached(firstComplete->indirect.begin(), caustics);
+        const double error = standInError(bounces, cached);
+        EXPECT_NEAR(trials[0].error, error, 1e-12 * error);
+        // A coarse volume of 4 probes a side: off, but not wholly.
+        EXPECT_GT(error, 0.0);
+        EXPECT_LT(error, 0.5);
+    }
+    EXPECT_TRUE(std::isfinite(trials[1].error));
+    const std::string chosen = trials[size_t(chooseStandIn(trials))].method;
+    EXPECT_EQ(realtime->choice().rfind(chosen + ", chosen by its error", 0), 0u) << realtime->choice();
     const IndirectShown complete = realtime->display(*fresh, version);
     expectSameMeshes(complete.meshes, fresh->indirect);
     EXPECT_EQ(complete.realtimeShare, 0.0);
@@ -292,6 +378,13 @@ TEST(RealtimeIndirect, TheSessionShowsTheCacheWhenCompleteAndTheEstimateRightAft
     const std::unique_ptr<CacheSnapshot> after = snapshotNow(*session);
     ASSERT_FALSE(after->indirectComplete);
     EXPECT_TRUE(after->bounceMeshes.empty());
+    // Until the estimate of the new pose is made, the cache's old light (on
+    // the old geometry, exact for that pose) shows, not the estimate made
+    // at the start, before the cache was complete.
+    ASSERT_TRUE(after->indirectStale);
+    const IndirectShown waiting = realtime->display(*after, version);
+    expectSameMeshes(waiting.meshes, after->indirect);
+    EXPECT_EQ(waiting.source, "cache (the pose before, until the estimate comes)");
     realtime->offer(*after, version, copy);
     ASSERT_TRUE(realtime->waitIdle(version, 120));
     const std::shared_ptr<const RealtimeEstimate> estimate = realtime->latest();
@@ -304,7 +397,8 @@ TEST(RealtimeIndirect, TheSessionShowsTheCacheWhenCompleteAndTheEstimateRightAft
     // wherever the block did not move (correctByChange).
     EXPECT_GT(estimate->onOldLight, 0.5);
     EXPECT_LT(estimate->onOldLight, 1.0);  // the block's faces moved
-    EXPECT_EQ(shown.source, "volume on the old light (real-time)");
+    EXPECT_EQ(estimate->method, chosen);
+    EXPECT_EQ(shown.source, chosen + " on the old light (real-time)");
     double light = 0;
     for (const Rgb& e : estimate->bounces.front().irradiance) light += luminance(e);
     EXPECT_GT(light, 0.0);  // the real method's light, from the kept direct light

@@ -275,6 +275,11 @@ struct MotionResult {
     std::optional<double> warmCacheWithin2, coldCacheWithin2;
     std::vector<MethodRow> methods;   // the stand-in's candidates on the final pose
     double directOnlyError = 0;       // the converged direct light alone against the converged image
+    // The stand-in (RealtimeIndirect::choice: with auto, the method chosen
+    // on the settled cache and why) and the time its baseline took, waited
+    // for before the motion as a user looks at the settled image.
+    std::string standIn;
+    double standInSeconds = 0;
 };
 
 // Relative RMSE of each image (or, `cacheAlone`, its cache's own) against `reference`.
@@ -440,6 +445,11 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     // stand-in keeps it as the pose before the motion.
     const CacheSnapshot settled = *snapshotAt(*session, reader, Clock::now(), 0);
     offers.offer(settled);
+    const Clock::time_point baselineAt = Clock::now();
+    realtime->waitBaseline(300);  // a guard against a stall only
+    r.standInSeconds = secondsSince(baselineAt);
+    r.standIn = realtime->choice();
+    if (!r.standIn.empty()) run.progress("%s: stand-in %s\n", motion.name.c_str(), r.standIn.c_str());
 
     // The frame loop while moving, each step applied on a helper thread.
     CompositorSettings frame;
@@ -724,7 +734,11 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
     md << "; full GI; frames " << w.frameWidth << "x"
        << w.frameHeight << ", errors at " << w.errorWidth << "x" << w.errorHeight << " against " << w.spp
        << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
-       << choices.realtime.describe() << ".\n\n"
+       << choices.realtime.describe() << ".\n\n";
+    for (const MotionResult& r : results)
+        md << "- " << r.name << ": the stand-in's baseline on the settled cache took " << r.standInSeconds
+           << " s before the motion" << (r.standIn.empty() ? std::string() : "; stand-in " + r.standIn) << ".\n";
+    md << "\n"
        << summary.markdown() << "\n" << targets.markdown()
        << "\nThe stand-in's methods on the final pose, from the converged direct light, on the old light (the "
           "settled cache before the motion corrected by the method's change) or chained onto the converged cache's "

@@ -121,8 +121,8 @@ int runDynamic(const std::vector<std::string>& args) {
                               "jitter seed of the cache's sampler and the path tracer's streams"},
                              defaults);
     command.options().value("realtime", "METHOD",
-                            "what stands in for indirect light while the cache catches up, as in 'view': volume, vpl, "
-                            "lpv or off (the cache's old bounces)",
+                            "what stands in for indirect light while the cache catches up, as in 'view': auto, "
+                            "volume, vpl, lpv or off (the cache's old bounces)",
                             defaults.realtime.realtime);
     command.options().value("motions", "LIST",
                             "the motions to run, comma-separated: light and block (the Cornell box), panel (the "

@@ -66,7 +66,8 @@ int runView(const std::vector<std::string>& args) {
     o.value("realtime", "METHOD",
             "what stands in for the cache's indirect light while it catches up after a light or an object moves (and "
             "at the start): volume, vpl or lpv, estimated on a thread of its own from the cache's direct light and "
-            "blended into the cache's bounces as they are gathered; off: the old bounces",
+            "blended into the cache's bounces as they are gathered; auto: the one of those with the least error on "
+            "the scene's first complete cache, among the fast enough (vpl until then); off: the old bounces",
             realtime.realtime);
     o.value("indirect-display", "WHAT",
             "the indirect light shown: cache (with the --realtime stand-in), or volume, vpl or lpv: that method's "

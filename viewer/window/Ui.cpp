@@ -194,14 +194,20 @@ void indirectControls(const UiModel& m, UiRequests& r) {
     if (c.display == "cache" && c.realtime != "off") {
         // The stand-in: off only from the command line (the worker then
         // starts indirect light at once after a move).
-        int method = int(std::find(methods.begin(), methods.end(), c.realtime) - methods.begin());
+        std::vector<std::string> standIns = {"auto"};
+        standIns.insert(standIns.end(), methods.begin(), methods.end());
+        int method = int(std::find(standIns.begin(), standIns.end(), c.realtime) - standIns.begin());
         std::vector<const char*> names;
-        for (const std::string& n : methods) names.push_back(n.c_str());
+        for (const std::string& n : standIns) names.push_back(n.c_str());
         if (ImGui::Combo("stand-in", &method, names.data(), int(names.size()))) {
             RealtimeChoice next = c;
-            next.realtime = methods[size_t(method)];
+            next.realtime = standIns[size_t(method)];
             r.realtime = next;
         }
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("auto: the method with the least error on this scene's first complete cache,\n"
+                              "among those whose estimate is fast enough to come before the cache's");
+        if (!m.stats.standInChoice.empty()) ImGui::TextWrapped("stand-in: %s", m.stats.standInChoice.c_str());
     }
     ImGui::TextWrapped("indirect shown: %s", m.stats.indirectSource.c_str());
 }

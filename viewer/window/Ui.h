@@ -39,6 +39,8 @@ struct UiStats {
     // "volume (real-time)", a blend while catching up); empty: none.
     std::string indirectSource;
     double realtimeShare = 0;
+    // With the stand-in "auto": the method chosen and why (IndirectShown::choice).
+    std::string standInChoice;
 };
 
 // What a frame of controls reads and changes.

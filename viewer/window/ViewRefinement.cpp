@@ -179,6 +179,7 @@ bool ViewRefinement::pump(double& uploadMs) {
             shown_.converged = s.converged;
             shown_.indirectSource = uploadingIndirect_.source;
             shown_.realtimeShare = uploadingIndirect_.realtimeShare;
+            shown_.standInChoice = uploadingIndirect_.choice;
             if (onShown_) onShown_(s, realtime_ ? uploadingIndirect_.meshes : s.indirect);
             uploading_ = nullptr;
         }

@@ -35,6 +35,7 @@ public:
         // real-time stand-in, or a blend) and the stand-in's share of it.
         std::string indirectSource = "cache";
         double realtimeShare = 0;
+        std::string standInChoice;  // IndirectShown::choice
     };
     // How a save ended, once it has (finishSave).
     struct SaveOutcome {

@@ -332,6 +332,7 @@ struct ViewSession::Impl : ScriptHost {
         s.converged = shown.converged;
         s.indirectSource = settings.indirect.active() ? shown.indirectSource : "";
         s.realtimeShare = shown.realtimeShare;
+        s.standInChoice = settings.indirect.active() ? shown.standInChoice : "";
         s.finished = refinement->finished();
         s.paused = refinement->paused();
         s.saving = refinement->saving();
