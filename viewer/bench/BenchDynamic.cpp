@@ -445,11 +445,13 @@ MotionResult runMotion(const BenchRun& run, GlContext& context, const Motion& mo
     // stand-in keeps it as the pose before the motion.
     const CacheSnapshot settled = *snapshotAt(*session, reader, Clock::now(), 0);
     offers.offer(settled);
-    const Clock::time_point baselineAt = Clock::now();
-    realtime->waitBaseline(300);  // a guard against a stall only
-    r.standInSeconds = secondsSince(baselineAt);
-    r.standIn = realtime->choice();
-    if (!r.standIn.empty()) run.progress("%s: stand-in %s\n", motion.name.c_str(), r.standIn.c_str());
+    if (realtime) {
+        const Clock::time_point baselineAt = Clock::now();
+        realtime->waitBaseline(300);  // a guard against a stall only
+        r.standInSeconds = secondsSince(baselineAt);
+        r.standIn = realtime->choice();
+        if (!r.standIn.empty()) run.progress("%s: stand-in %s\n", motion.name.c_str(), r.standIn.c_str());
+    }
 
     // The frame loop while moving, each step applied on a helper thread.
     CompositorSettings frame;
@@ -736,8 +738,9 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
        << " spp. " << run.glDescription() << "; load at start " << run.loadAtStart() << ".\n\n"
        << choices.realtime.describe() << ".\n\n";
     for (const MotionResult& r : results)
-        md << "- " << r.name << ": the stand-in's baseline on the settled cache took " << r.standInSeconds
-           << " s before the motion" << (r.standIn.empty() ? std::string() : "; stand-in " + r.standIn) << ".\n";
+        if (r.standInSeconds > 0)
+            md << "- " << r.name << ": the stand-in's baseline on the settled cache took " << r.standInSeconds
+               << " s before the motion" << (r.standIn.empty() ? std::string() : "; stand-in " + r.standIn) << ".\n";
     md << "\n"
        << summary.markdown() << "\n" << targets.markdown()
        << "\nThe stand-in's methods on the final pose, from the converged direct light, on the old light (the "
