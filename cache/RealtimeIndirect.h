@@ -264,7 +264,8 @@ int chooseStandIn(const std::vector<StandInTrial>& trials);
 constexpr double kStandInSlowFactor = 2.5;
 constexpr double kStandInSlowSeconds = 1.5;
 
-// "volume 9.0% in 1.0 s (chosen); vpl 26% in 3.0 s; lpv 13% in 0.3 s".
+// "vpl 58% in 2.9 s; volume 21% in 1.2 s (chosen); lpv 25% in 0.56 s"
+// (two significant digits).
 std::string describeTrials(const std::vector<StandInTrial>& trials, int chosen);
 
 class RealtimeIndirect {
@@ -320,10 +321,10 @@ public:
     IndirectShown display(const CacheSnapshot& s, uint64_t sceneVersion) const;
     // An estimate is being made or waits to be.
     bool busy() const;
-    // With "auto": the method standing in and why ("volume, chosen on this
-    // scene: volume 9.0% in 1.0 s; vpl 26% in 3.0 s; lpv 13% in 0.3 s", or
-    // "vpl until the methods are measured on a complete cache"); empty
-    // otherwise.
+    // With "auto": the method standing in and why ("volume, chosen by its
+    // error on this scene's complete cache: vpl 58% in 2.9 s; volume 21% in
+    // 1.2 s (chosen); lpv 25% in 0.56 s", or "vpl until the methods are
+    // measured on the first complete cache"); empty otherwise.
     std::string choice() const;
     // Blocks until no baseline (or auto's measurement) is wanted or being
     // made, or `timeoutSeconds` pass; true if so.
