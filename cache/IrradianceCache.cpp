@@ -300,6 +300,7 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     if (layout.coverage)
         for (size_t l = 0; l < scene.lights.size(); ++l)
             if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
+    for (const Light& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
     const double maxEdge = settings.maxEdgeFraction * s.diagonal;
@@ -728,19 +729,29 @@ namespace detail {
 Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh) {
     const Vec3 x = toVec3(mesh.point(vh));
     if (!mesh.is_boundary(vh)) return x;
-    // A vertex on an object's border is sampled a thousandth of its
-    // shortest edge inside its own faces (with CacheLayout::insetBorders,
-    // borderInset of it): the limit from inside the object, which is what
-    // the mesh interpolates over its faces. On the border itself the point
-    // can lie in the plane of a surface that meets it there, where samplers
-    // see that surface edge-on: a floor against a glowing wall counted none
-    // of the wall's light; the top of a wall under a ceiling saw a light
-    // above the ceiling (the sampler's eye, lifted off the wall, lay in the
-    // ceiling's plane, and its rays up never crossed the ceiling: the
-    // Cornell box of ../shared/scenes with its light raised above the
-    // ceiling lit every wall's top edge, where the path tracer gives 0,
-    // test_hard_cases); a floor's edge under a wall saw both rooms (the
-    // gathers' larger inset).
+    // A vertex on an object's border where an emitter meets it (a floor
+    // against a glowing wall) lies in the emitter's plane, where samplers
+    // see it edge-on and count none of its light; the limit from inside the
+    // object, which is what the mesh interpolates, counts it. So such a
+    // point is moved a thousandth of its shortest edge into its own faces;
+    // with CacheLayout::insetBorders every border vertex is, by
+    // CacheLayout::borderInset of it (a floor's edge under a wall, which
+    // would otherwise see both rooms).
+    const double eps = 1e-9 * s.diagonal;
+    const Vec3 own = toVec3(mesh.normal(vh));
+    bool onEmitter = false;
+    for (const Triangle3& t : s.emitters) {
+        const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
+        if (!(glm::length(n) > 0) || std::abs(glm::dot(x - t[0], glm::normalize(n))) > eps) continue;
+        if (std::abs(glm::dot(own, glm::normalize(n))) > 0.999) continue;  // the emitter's own surface
+        Bounds3 b;
+        for (const Vec3& p : t) b.extend(p);
+        if (glm::all(glm::greaterThanEqual(x, b.lo - eps)) && glm::all(glm::lessThanEqual(x, b.hi + eps))) {
+            onEmitter = true;
+            break;
+        }
+    }
+    if (!onEmitter && !s.insetBorders) return x;
     Vec3 inward(0.0);
     double shortest = kInf;
     for (auto f : mesh.vf_range(vh)) {

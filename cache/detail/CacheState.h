@@ -102,6 +102,7 @@ struct CacheState {
     // (IrradianceCache::tighten). Saved in the cache file.
     int level = 0;
     double diagonal = 1;          // of the scene's bounds
+    std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
     double borderInset = CacheLayout::kDefaultInset;  // CacheLayout::borderInset
     uint64_t sceneFingerprint = 0;
