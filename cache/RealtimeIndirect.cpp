@@ -255,14 +255,11 @@ int chooseStandIn(const std::vector<StandInTrial>& trials) {
 std::string describeTrials(const std::vector<StandInTrial>& trials, int chosen) {
     std::string out;
     for (size_t i = 0; i < trials.size(); ++i) {
-        char buf[160];
         const StandInTrial& t = trials[i];
-        if (std::isfinite(t.error))
-            std::snprintf(buf, sizeof buf, "%s%s %.2g%% in %.2g s%s", i ? "; " : "", t.method.c_str(), 100 * t.error,
-                          t.seconds, int(i) == chosen ? " (chosen)" : "");
-        else
-            std::snprintf(buf, sizeof buf, "%s%s not comparable, %.2g s%s", i ? "; " : "", t.method.c_str(),
-                          t.seconds, int(i) == chosen ? " (chosen)" : "");
+        char error[32] = "not comparable,", buf[160];
+        if (std::isfinite(t.error)) std::snprintf(error, sizeof error, "%.2g%% in", 100 * t.error);
+        std::snprintf(buf, sizeof buf, "%s%s %s %.2g s%s", i ? "; " : "", t.method.c_str(), error, t.seconds,
+                      int(i) == chosen ? " (chosen)" : "");
         out += buf;
     }
     return out;
@@ -375,18 +372,16 @@ void RealtimeSettings::validate() const {
 std::string RealtimeIndirect::methodFor(const RealtimeSettings& settings) const {
     if (settings.method != "auto") return settings.method;
     std::lock_guard<std::mutex> lock(mutex_);
-    return chosen_.empty() ? settings.candidates.front() : chosen_;
+    return chosen_ < 0 ? settings.candidates.front() : trials_[size_t(chosen_)].method;
 }
 
 std::string RealtimeIndirect::choice() const {
     if (settings_.method != "auto") return "";
     std::lock_guard<std::mutex> lock(mutex_);
-    if (chosen_.empty())
+    if (chosen_ < 0)
         return concat(settings_.candidates.front(), " until the methods are measured on the first complete cache");
-    return concat(chosen_, ", chosen by its error on this scene's complete cache: ",
-                  describeTrials(trials_, int(std::find_if(trials_.begin(), trials_.end(),
-                                                           [&](const StandInTrial& t) { return t.method == chosen_; }) -
-                                              trials_.begin())));
+    return concat(trials_[size_t(chosen_)].method, ", chosen by its error on this scene's complete cache: ",
+                  describeTrials(trials_, chosen_));
 }
 
 std::vector<StandInTrial> RealtimeIndirect::trials() const {
@@ -568,9 +563,12 @@ void RealtimeIndirect::run(int nice) {
         return baseline.source == b.source && baseline.settings.method == rs.method &&
                baseline.settings.methodBounces == rs.methodBounces && baseline.settings.seed == rs.seed;
     };
-    const auto makeBaseline = [&](const Before& b, const RealtimeSettings& rs, const std::function<bool()>& cancelled) {
+    // `laid`: the pose before's mesh, if already laid (null: laid here).
+    const auto makeBaseline = [&](const Before& b, const RealtimeSettings& rs, const std::function<bool()>& cancelled,
+                                  const RealtimeMesh* laid = nullptr) {
         baseline = {};
-        const RealtimeMesh old(*b.scene, indirect_, b.layout);
+        std::optional<RealtimeMesh> own;
+        const RealtimeMesh& old = laid ? *laid : own.emplace(*b.scene, indirect_, b.layout);
         const std::unique_ptr<IndirectEstimator> e = factory_(*b.scene, rs.method);
         std::optional<std::vector<IrradianceMeshCopy>> made =
             estimateBounces(old, *e, indirect_, rs.methodBounces, *b.source, rs.seed, cancelled);
@@ -600,7 +598,7 @@ void RealtimeIndirect::run(int nice) {
                 std::string chosen;
                 {
                     std::lock_guard<std::mutex> lock(mutex_);
-                    chosen = chosen_;
+                    if (chosen_ >= 0) chosen = trials_[size_t(chosen_)].method;
                 }
                 if (rs.method == "auto" && chosen.empty()) {
                     // Auto's measurement: every candidate's baseline, each
@@ -611,23 +609,28 @@ void RealtimeIndirect::run(int nice) {
                         std::lock_guard<std::mutex> lock(mutex_);
                         return stopping_ || pending_.has_value();
                     };
+                    // The pose before's mesh is laid once; each method's
+                    // time counts it, as each lays it after a change.
+                    const auto laying = Clock::now();
+                    const RealtimeMesh old(*b.scene, indirect_, b.layout);
+                    const double laid = std::chrono::duration<double>(Clock::now() - laying).count();
                     std::vector<StandInTrial> trials;
                     std::vector<Baseline> made;
                     for (const std::string& m : rs.candidates) {
                         RealtimeSettings one = rs;
                         one.method = m;
                         const auto t = Clock::now();
-                        makeBaseline(b, one, interrupted);
+                        makeBaseline(b, one, interrupted, &old);
                         if (baseline.bounces.empty()) break;
                         trials.push_back({m, standInError(baseline.bounces, b.bounces),
-                                          std::chrono::duration<double>(Clock::now() - t).count()});
+                                          laid + std::chrono::duration<double>(Clock::now() - t).count()});
                         made.push_back(std::move(baseline));
                         baseline = {};
                     }
                     const int best = trials.size() == rs.candidates.size() ? chooseStandIn(trials) : -1;
                     if (best >= 0) baseline = std::move(made[size_t(best)]);
                     std::lock_guard<std::mutex> lock(mutex_);
-                    if (best >= 0) chosen_ = trials[size_t(best)].method, trials_ = std::move(trials);
+                    if (best >= 0) chosen_ = best, trials_ = std::move(trials);
                 } else {
                     if (rs.method == "auto") rs.method = chosen;
                     if (!haveBaseline(b, rs))

@@ -399,11 +399,11 @@ private:
     // and the settings then (the first complete snapshot of a scene).
     std::optional<std::pair<std::shared_ptr<const Before>, RealtimeSettings>> baselineWanted_;
     bool working_ = false, stopping_ = false, baselining_ = false;
-    // "auto": the method chosen (empty: not measured yet; a measurement a
-    // request interrupts is made again at the next scene's complete cache)
-    // and the trials it was chosen by.
-    std::string chosen_;
+    // "auto": the trials and the one chosen (-1: not measured yet; a
+    // measurement a request interrupts is made again at the next scene's
+    // complete cache).
     std::vector<StandInTrial> trials_;
+    int chosen_ = -1;
     // The method a request of `settings` uses (auto resolved).
     std::string methodFor(const RealtimeSettings& settings) const;
     std::shared_ptr<const RealtimeEstimate> latest_;
