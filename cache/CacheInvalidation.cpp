@@ -135,8 +135,7 @@ size_t IrradianceCache::moveFaces(const Scene& before, const AppliedChange& chan
 
 void IrradianceCache::sceneChanged(const Scene& after) {
     detail::CacheState& s = impl_->state;
-    s.emitters.clear();
-    for (const Light& light : after.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
+    s.edgeOn = EdgeOnSurfaces(after);
     s.sceneFingerprint = detail::sceneFingerprint(after);
 }
 

@@ -2,6 +2,8 @@
 // alone in the library meshlight_contact_cuts.
 #include "ContactCuts.h"
 
+#include "core/BoundsGrid.h"
+
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Constrained_triangulation_face_base_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -68,50 +70,21 @@ PositionPair keyOf(const Vec3& p, const Vec3& q) {
 
 Vec3 unitNormal(const Mesh& m, size_t t) { return glm::normalize(m.areaNormal(t)); }
 
-// A uniform grid of the edges' bounds, for the edges near a receiver.
-class EdgeGrid {
-public:
-    EdgeGrid(const Bounds3& bounds, const std::vector<SceneEdge>& edges, double closeness) : lo_(bounds.lo) {
-        const Vec3 extent = glm::max(bounds.extent(), Vec3(1e-12));
-        const double cells = std::clamp(std::cbrt(double(edges.size())), 1.0, 48.0);
-        cell_ = std::max({extent.x, extent.y, extent.z}) / cells;
-        for (int k = 0; k < 3; ++k) n_[k] = std::max(1, int(std::ceil(extent[k] / cell_)));
-        cells_.resize(size_t(n_[0]) * n_[1] * n_[2]);
-        for (size_t e = 0; e < edges.size(); ++e) {
-            Bounds3 b;
-            b.extend(edges[e].a);
-            b.extend(edges[e].b);
-            const double pad = closeness * glm::length(edges[e].b - edges[e].a) + 1e-9 * cell_;
-            b.lo -= Vec3(pad);
-            b.hi += Vec3(pad);
-            forCells(b, [&](size_t c) { cells_[c].push_back(uint32_t(e)); });
-        }
+// The edges' bounds, padded by how far in front of a receiver an edge may
+// hang, in a grid: the edges near a receiver.
+BoundsGrid edgeGrid(const Bounds3& bounds, const std::vector<SceneEdge>& edges, double closeness) {
+    const Vec3 extent = glm::max(bounds.extent(), Vec3(1e-12));
+    const double cell = std::max({extent.x, extent.y, extent.z}) / std::clamp(std::cbrt(double(edges.size())), 1.0, 48.0);
+    std::vector<Bounds3> boxes(edges.size());
+    for (size_t e = 0; e < edges.size(); ++e) {
+        boxes[e].extend(edges[e].a);
+        boxes[e].extend(edges[e].b);
+        const double pad = closeness * glm::length(edges[e].b - edges[e].a) + 1e-9 * cell;
+        boxes[e].lo -= Vec3(pad);
+        boxes[e].hi += Vec3(pad);
     }
-    // The edges whose padded bounds may meet `b`, ascending, each once.
-    void query(const Bounds3& b, std::vector<uint32_t>& out) const {
-        out.clear();
-        forCells(b, [&](size_t c) { out.insert(out.end(), cells_[c].begin(), cells_[c].end()); });
-        std::sort(out.begin(), out.end());
-        out.erase(std::unique(out.begin(), out.end()), out.end());
-    }
-
-private:
-    template <class F>
-    void forCells(const Bounds3& b, F f) const {
-        int lo[3], hi[3];
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::clamp(int(std::floor((b.lo[k] - lo_[k]) / cell_)), 0, n_[k] - 1);
-            hi[k] = std::clamp(int(std::floor((b.hi[k] - lo_[k]) / cell_)), 0, n_[k] - 1);
-        }
-        for (int z = lo[2]; z <= hi[2]; ++z)
-            for (int y = lo[1]; y <= hi[1]; ++y)
-                for (int x = lo[0]; x <= hi[0]; ++x) f((size_t(z) * n_[1] + y) * n_[0] + x);
-    }
-    Vec3 lo_;
-    double cell_ = 1;
-    int n_[3] = {1, 1, 1};
-    std::vector<std::vector<uint32_t>> cells_;
-};
+    return BoundsGrid(bounds, boxes);
+}
 
 // A point of a cut, in the receiver's barycentric coordinates (x along
 // corner 0 → 1, y along 0 → 2): a corner, a point on an edge, or inside.
@@ -239,7 +212,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                                   unitNormal(scene.meshes[f[1].first], f[1].second));
         flat[e] = c > 1.0 - 1e-6;
     }
-    const EdgeGrid grid(scene.bounds, edges, settings.closeness);
+    const BoundsGrid grid = edgeGrid(scene.bounds, edges, settings.closeness);
 
     std::vector<CutMesh> cuts(scene.meshes.size());
     std::vector<uint32_t> near, lines;  // scratch: the edges and the hanging faces' lines near a receiver
@@ -267,13 +240,13 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     // own lines (the header's paragraph on the hanging face's side): for
     // each (edge, face of the hanging surface beside it), lines in that face
     // kInside·h inside the edge, each kept as an edge with that face as its
-    // one entry, so that EdgeGrid finds it near every triangle of that mesh
+    // one entry, so that the edges' grid finds it near every triangle of that mesh
     // it may cross (a quad's line crosses both halves). The second cuts.
     std::vector<SceneEdge> inner;
     std::set<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> innerDone;
-    std::unique_ptr<EdgeGrid> innerGrid;
+    std::unique_ptr<BoundsGrid> innerGrid;
     for (int pass = 0; pass < 2; ++pass) {
-        if (pass == 1 && !inner.empty()) innerGrid = std::make_unique<EdgeGrid>(scene.bounds, inner, 0.0);
+        if (pass == 1 && !inner.empty()) innerGrid = std::make_unique<BoundsGrid>(edgeGrid(scene.bounds, inner, 0.0));
         for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
             // A skipped receiver is not cut, but what hangs over it still
             // gets its own lines.

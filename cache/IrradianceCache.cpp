@@ -300,7 +300,7 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     if (layout.coverage)
         for (size_t l = 0; l < scene.lights.size(); ++l)
             if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
-    for (const Light& light : scene.lights) s.emitters.insert(s.emitters.end(), light.geometry.begin(), light.geometry.end());
+    s.edgeOn = EdgeOnSurfaces(scene);
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
     const double maxEdge = settings.maxEdgeFraction * s.diagonal;
@@ -726,32 +726,36 @@ size_t IrradianceCache::memoryBytes() const {
 
 namespace detail {
 
+namespace {
+// Whether every face around a vertex lies within 2.6 degrees of the plane
+// facing `n` (cos 0.999, EdgeOnSurfaces' parallel test).
+bool flatAround(const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh, const Vec3& n) {
+    for (auto f : mesh.vf_range(vh)) {
+        Vec3 p[3];
+        int i = 0;
+        for (auto u : mesh.fv_range(f)) p[i++] = toVec3(mesh.point(u));
+        const Vec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);
+        const double len = glm::length(c);
+        if (!(len > 0) || glm::dot(c, n) < 0.999 * len) return false;
+    }
+    return true;
+}
+}  // namespace
+
 Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh) {
     const Vec3 x = toVec3(mesh.point(vh));
     if (!mesh.is_boundary(vh)) return x;
-    // A vertex on an object's border where an emitter meets it (a floor
-    // against a glowing wall) lies in the emitter's plane, where samplers
-    // see it edge-on and count none of its light; the limit from inside the
-    // object, which is what the mesh interpolates, counts it. So such a
-    // point is moved a thousandth of its shortest edge into its own faces;
-    // with CacheLayout::insetBorders every border vertex is, by
-    // CacheLayout::borderInset of it (a floor's edge under a wall, which
-    // would otherwise see both rooms).
-    const double eps = 1e-9 * s.diagonal;
-    const Vec3 own = toVec3(mesh.normal(vh));
-    bool onEmitter = false;
-    for (const Triangle3& t : s.emitters) {
-        const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
-        if (!(glm::length(n) > 0) || std::abs(glm::dot(x - t[0], glm::normalize(n))) > eps) continue;
-        if (std::abs(glm::dot(own, glm::normalize(n))) > 0.999) continue;  // the emitter's own surface
-        Bounds3 b;
-        for (const Vec3& p : t) b.extend(p);
-        if (glm::all(glm::greaterThanEqual(x, b.lo - eps)) && glm::all(glm::lessThanEqual(x, b.hi + eps))) {
-            onEmitter = true;
-            break;
-        }
-    }
-    if (!onEmitter && !s.insetBorders) return x;
+    // A vertex on an object's border that lies in the plane of a surface
+    // meeting it there (a wall's top under a ceiling, a floor's edge
+    // against a wall) is sampled a thousandth of its shortest edge inside
+    // its own faces (EdgeOnSurfaces.h); with CacheLayout::insetBorders every
+    // border vertex is, by CacheLayout::borderInset of it (a floor's edge
+    // under a wall, which would otherwise see both rooms). Only where its
+    // faces are flat: at a fold (pages bound at a spine, fins on a hinge) a
+    // point moved in the tangent plane leaves every face, and the vertex
+    // itself is the only point they share.
+    const Vec3 n = toVec3(mesh.normal(vh));
+    if (!s.insetBorders && !(s.edgeOn.through(x, n) && flatAround(mesh, vh, n))) return x;
     Vec3 inward(0.0);
     double shortest = kInf;
     for (auto f : mesh.vf_range(vh)) {
@@ -760,7 +764,6 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
         inward += c / 3.0 - x;
     }
     for (auto u : mesh.vv_range(vh)) shortest = std::min(shortest, glm::length(toVec3(mesh.point(u)) - x));
-    const Vec3 n = toVec3(mesh.normal(vh));
     inward -= glm::dot(inward, n) * n;
     if (!(glm::length(inward) > 0) || !(shortest < kInf)) return x;
     return x + (s.insetBorders ? s.borderInset : CacheLayout::kDefaultInset) * shortest * glm::normalize(inward);

@@ -168,12 +168,13 @@ struct CacheLayout {
     };
     size_t meshes = 0;  // 0: one per light
     BackFaces backFaces = BackFaces::LitFromBehind;
-    // How far a vertex in an emitter's plane is sampled inside its faces, in
-    // its shortest edge, and every border vertex's by default.
+    // How far a border vertex in the plane of a surface meeting it there
+    // (EdgeOnSurfaces) is sampled inside its faces, in its shortest edge,
+    // and every border vertex's by default.
     static constexpr double kDefaultInset = 1e-3;
     // Sample every vertex on an object's border `borderInset` of its
-    // shortest edge inside its faces, not only those an emitter's plane
-    // passes through (kDefaultInset; see position()): for gathers, to which
+    // shortest edge inside its faces, not only those in the plane of a
+    // surface meeting them (kDefaultInset; see position()): for gathers, to which
     // a floor's edge under a wall would otherwise see both rooms, and a
     // block's foot only the sliver of floor beside it
     // (IndirectEstimator::borderInset).
@@ -241,9 +242,10 @@ public:
     }
     size_t unsampledCount() const;  // vertices (and grid samples) without a sample yet
     // The shading point of a vertex: where and facing where it is sampled
-    // (on an object's border that an emitter meets, a thousandth of its
-    // shortest edge inside its faces: right on the border, samplers would see
-    // the emitter edge-on and miss its light).
+    // (on an object's border in the plane of a surface meeting it there,
+    // EdgeOnSurfaces, a thousandth of its shortest edge inside its faces:
+    // right on the border, samplers would see that surface edge-on, and miss
+    // an emitter's light or see past a ceiling into the light above it).
     Vec3 position(size_t light, size_t vertex) const;
     Vec3 normal(size_t light, size_t vertex) const;
 
@@ -310,8 +312,9 @@ public:
     // more to sample again where it was forgotten than to refine anew
     // (bench dynamic). Returns the vertices that kept their samples.
     size_t rebuildKeepingBase(size_t mesh, const Scene& scene);
-    // Follows the changed scene: its emitters (where border vertices are
-    // sampled) and the fingerprint a saved cache records.
+    // Follows the changed scene: its surfaces (which border vertices are
+    // sampled inside their faces, EdgeOnSurfaces) and the fingerprint a
+    // saved cache records.
     void sceneChanged(const Scene& after);
 
     // Bytes held by the meshes and their properties.

@@ -26,6 +26,7 @@
 //  * unbiasedness: the mean of 32 jittered passes (fresh seeds) lies within
 //    4 standard errors of the exact value, a much sharper test of anything
 //    systematic (a missed occluder, a misplaced edge, a double-counted face).
+#include "cache/IrradianceCache.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/reference/Lambert.h"
 #include "core/scenes/BenchScene.h"
@@ -506,6 +507,45 @@ TEST(HardCases, OccluderJustBelowTheLight) {
     const double all = exact.unoccludedCosineSolidAngle(0, Vec3(0.0, 0.0, 0.0), kY);
     EXPECT_GT(seen, 0.4 * all);  // the plate covers 0.5 × 0.3 of the light
     EXPECT_LT(seen, 0.95 * all);
+}
+
+TEST(HardCases, AWallMeetingACeilingSeesNoLightAboveTheCeiling) {
+    // A wall (z = −1, facing +z) meets a ceiling (y = 0.9, facing down)
+    // along its top edge; the light (y = 1, facing down) is above the
+    // ceiling: nothing under the ceiling sees it (the path tracer gives
+    // exactly 0). The cache samples the wall's top-edge vertices a
+    // thousandth of an edge inside the wall, below the ceiling's plane,
+    // where the ceiling hides the whole light. On the edge itself a point
+    // lies in the ceiling's plane, which it sees edge-on: the light was
+    // counted there and interpolated down the wall (the Cornell box of
+    // ../shared/scenes with its light raised above its ceiling lit every
+    // wall's top). Checked: the wall's front and the ceiling's underside
+    // (the cache also keeps the backs of surfaces lit from behind: the
+    // ceiling's top sees the light). Tolerance: the light unoccluded gives
+    // over 0.01 at the wall's top. The wall's bottom edge meets nothing:
+    // its vertices are sampled where they are, exactly (EdgeOnSurfaces.h).
+    const Scene scene = makeScene({unitLight(), quadMesh("ceiling", 1, Vec3(-1.5, 0.9, -1.0), 3.0 * kX, 2.5 * kZ),
+                                   quadMesh("wall", 1, Vec3(-1.5, 0.0, -1.0), 3.0 * kX, 0.9 * kY)});
+    const IrradianceCache cache(scene);
+    const ExactDirect exact(scene);
+    const IrradianceMeshCopy vertices = cache.copyMesh(0);
+    size_t topEdge = 0, bottomEdge = 0;
+    for (size_t v = 0; v < cache.vertexCount(0); ++v) {
+        const Vec3 x = cache.position(0, v), n = cache.normal(0, v);
+        if (vertices.positions[v].y == 0.0) {
+            ++bottomEdge;
+            EXPECT_EQ(x, vertices.positions[v]);
+        }
+        if (n.z < 0.5 && n.y > -0.5) continue;  // the wall's back, the ceiling's top
+        EXPECT_NEAR(exact.cosineSolidAngle(0, x, n), 0.0, 1e-9) << "at " << x.x << ", " << x.y << ", " << x.z;
+        if (n.z > 0.5 && x.y > 0.9 - 1e-3) {
+            ++topEdge;
+            EXPECT_LT(x.y, 0.9);
+            EXPECT_GT(exact.unoccludedCosineSolidAngle(0, x, n), 0.01);  // the ceiling is what hides it
+        }
+    }
+    EXPECT_GE(topEdge, 2u);  // the wall's top corners at least
+    EXPECT_GE(bottomEdge, 2u);
 }
 
 // === scale and position ======================================================

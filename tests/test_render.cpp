@@ -106,7 +106,9 @@ TEST(Render, EveryPixelFiniteAndTheLightShowsItsRadiance) {
 TEST(Render, UnoccludedCacheVerticesHoldLambertsValue) {
     // Wherever the exact reference finds nothing in the way, the control
     // variate's estimate is Lambert's closed form at the receiver itself:
-    // equal to rounding (1e-9 relative), whatever the jitter.
+    // equal to rounding (1e-9 relative), whatever the jitter. The receiver is
+    // the vertex's shading point (position(): a border vertex in the plane of
+    // a surface meeting it is sampled just inside its faces).
     IrradianceCache cache(cornell(), coarseCache());
     DirectLightSampler sampler(test::glContext(), cornell(), DirectSamplerSettings{});
     const ExactDirect exact(cornell());
@@ -114,11 +116,12 @@ TEST(Render, UnoccludedCacheVerticesHoldLambertsValue) {
     const IrradianceMeshCopy view = cache.copyMesh(0);
     size_t checked = 0;
     for (size_t v = 0; v < view.positions.size(); ++v) {
-        const Vec3& p = view.positions[v];
-        const double visible = exact.cosineSolidAngle(0, p, view.normals[v]);
-        const double unoccluded = exact.unoccludedCosineSolidAngle(0, p, view.normals[v]);
+        const Vec3 p = cache.position(0, v);
+        const Vec3 n = cache.normal(0, v);
+        const double visible = exact.cosineSolidAngle(0, p, n);
+        const double unoccluded = exact.unoccludedCosineSolidAngle(0, p, n);
         if (!(visible > 0) || visible < unoccluded * (1 - 1e-12)) continue;
-        const Rgb e = exact.irradiance(0, p, view.normals[v]);
+        const Rgb e = exact.irradiance(0, p, n);
         ASSERT_NEAR(view.irradiance[v].r, e.r, 1e-9 * e.r) << "vertex " << v << " at " << p.x << "," << p.y << "," << p.z;
         ++checked;
     }

@@ -19,8 +19,8 @@ double edgeLength(const CacheTriMesh& mesh, CacheTriMesh::VertexHandle a, CacheT
 // normal is the normalised mean of the ends'. Returns the new vertex.
 CacheTriMesh::VertexHandle splitAtMidpoint(CacheTriMesh& mesh, CacheTriMesh::EdgeHandle e);
 // Where vertex vh is sampled: the vertex itself, or, on an object's border
-// that an emitter's plane passes through, a hair inside its own faces (see
-// IrradianceCache.cpp).
+// in the plane of a surface meeting it there (EdgeOnSurfaces), a hair inside
+// its own faces (see IrradianceCache.cpp).
 Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::VertexHandle vh);
 // A sample to take: vertex `index` of mesh `mesh`, or grid sample `index`
 // (over all grid objects) of that mesh.

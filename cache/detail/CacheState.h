@@ -3,6 +3,7 @@
 #pragma once
 
 #include "CacheMesh.h"
+#include "cache/EdgeOnSurfaces.h"
 #include "cache/GridCache.h"
 #include "cache/IrradianceCache.h"
 
@@ -102,7 +103,7 @@ struct CacheState {
     // (IrradianceCache::tighten). Saved in the cache file.
     int level = 0;
     double diagonal = 1;          // of the scene's bounds
-    std::vector<Triangle3> emitters;  // every light's triangles (from the scene, not saved)
+    EdgeOnSurfaces edgeOn;            // the scene's faces, for border vertices in them (not saved)
     bool insetBorders = false;        // CacheLayout::insetBorders
     double borderInset = CacheLayout::kDefaultInset;  // CacheLayout::borderInset
     uint64_t sceneFingerprint = 0;
