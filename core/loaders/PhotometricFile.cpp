@@ -100,14 +100,14 @@ double TokenStream::number(const std::string& what) {
     if (!next(token, line)) throwInputError(at(lastLine()), "the file ends before ", what);
     double value = 0;
     if (!parseNumber(token, value))
-        throwInputError(at(line), what, ": expected a finite number, found ", quoted(token));
+        throwInputError(at(line), what, ": expected a finite number, found ", photometric::quoted(token));
     return value;
 }
 
 void TokenStream::expectEnd(const std::string& after) {
     std::string token;
     int line = 0;
-    if (next(token, line)) throwInputError(at(line), "unexpected ", quoted(token), " after ", after);
+    if (next(token, line)) throwInputError(at(line), "unexpected ", photometric::quoted(token), " after ", after);
 }
 
 int TokenStream::count(const std::string& what, int lo, int hi) {
@@ -144,7 +144,7 @@ std::vector<double> readIntensities(TokenStream& in, size_t total, const std::st
         double v = 0;
         if (!parseNumber(token, v))
             throwInputError(in.at(line), what, " ", k + 1, " of ", total, ": expected a finite number, found ",
-                            quoted(token));
+                            photometric::quoted(token));
         if (v < 0) throwInputError(in.at(line), what, " ", k + 1, " of ", total, " is negative: ", v);
         v *= scale;
         if (!(v <= kMaxCandela))

@@ -93,7 +93,9 @@ std::vector<double> readAngles(TokenStream& in, int n, const std::string& what, 
 std::vector<double> readIntensities(TokenStream& in, size_t total, const std::string& what, double scale,
                                     const std::string& expected);
 
-// A token as messages quote it: at most 40 characters.
+// A token as messages quote it: at most 40 characters. Call it qualified
+// (photometric::quoted): for a std::string, argument-dependent lookup also
+// finds std::quoted wherever <iomanip> is visible (<filesystem> includes it).
 std::string quoted(const std::string& token);
 
 }  // namespace photometric
