@@ -234,7 +234,7 @@ struct RealtimeSettings {
 struct StandInTrial {
     std::string method;
     double error = 0;    // standInError; infinity: nothing to compare
-    double seconds = 0;  // the estimator made and every bounce estimated, one thread
+    double seconds = 0;  // the estimator made and every bounce estimated, on the estimate's thread (and its helpers)
 };
 
 // How far `estimate` (a method's bounces on bounce 1's base mesh) is from

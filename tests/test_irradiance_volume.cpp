@@ -159,6 +159,8 @@ TEST(IrradianceVolumeSettings, OutOfRangeIsAnInputError) {
     EXPECT_THROW(s.validate(), InputError);
     s.faceSize = 16;
     EXPECT_NO_THROW(s.validate());
+    s.threads = 0;
+    EXPECT_THROW(s.validate(), InputError);
 }
 
 TEST(IrradianceVolume, TheFactoryMakesItByName) {
@@ -288,6 +290,37 @@ TEST(IrradianceVolume, ProbesInsideSolidObjectsAreLeftOut) {
                 expected += inside;
             }
     EXPECT_GT(expected, 10u);
+}
+
+TEST(IrradianceVolume, ProbesCapturedOnThreadsAreTheSameAsOnOne) {
+    // Each probe is captured on its own and written to its own slot, so the
+    // fields cannot depend on how many threads share the probes: equal bit
+    // for bit (every probe, the 6 axes and an oblique normal; which probes
+    // are inside solid objects too), on the Cornell box lit by its exact
+    // direct light.
+    const Scene scene = makeCornellBox();
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
+    IrradianceVolumeSettings one;
+    one.faceSize = 8;
+    IrradianceVolumeSettings three = one;
+    three.threads = 3;
+    IrradianceVolume a(scene, one), b(scene, three);
+    a.setSource(0, source);
+    b.setSource(0, source);
+    ASSERT_EQ(a.insideProbes(0), b.insideProbes(0));
+    EXPECT_GT(a.insideProbes(0), 10u);
+    const Vec3 normals[7] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
+                             glm::normalize(Vec3(0.48, -0.6, 0.64))};
+    double lit = 0;
+    for (size_t i = 0; i < a.grid().count(); ++i) {
+        ASSERT_EQ(a.insideProbe(0, i), b.insideProbe(0, i)) << "probe " << i;
+        for (const Vec3& n : normals) {
+            const Rgb ea = a.probeIrradiance(0, i, n), eb = b.probeIrradiance(0, i, n);
+            ASSERT_EQ(ea, eb) << "probe " << i << " facing " << n.x << ", " << n.y << ", " << n.z;
+            lit += luminance(ea);
+        }
+    }
+    EXPECT_GT(lit, 0.0);
 }
 
 // --- The Cornell box against the path tracer ----------------------------------------------

@@ -4,6 +4,7 @@
 #include "RayGather.h"
 #include "TriangleGather.h"
 #include "core/Error.h"
+#include "core/ParallelFor.h"
 #include "core/raytrace/EmbreeScene.h"
 
 #include <algorithm>
@@ -17,6 +18,8 @@ void IrradianceVolumeSettings::validate() const {
         throw InputError(concat("irradiance volume: ", probes, " probes along the longest side is not within 1..64"));
     if (faceSize < 2 || faceSize > 128)
         throw InputError(concat("irradiance volume: cube-map faces of ", faceSize, " texels are not within 2..128"));
+    if (threads < 1 || threads > 1024)
+        throw InputError(concat("irradiance volume: ", threads, " threads is not within 1..1024"));
 }
 
 // --- The grid ------------------------------------------------------------------
@@ -150,27 +153,27 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
                  int(std::lround(settings_.faceSize * std::sqrt(std::clamp(importance, 0.0, 1.0)))));
     const CubeMapDirections& directions = directions_.try_emplace(faceSize, faceSize).first->second;
     const size_t rayCount = directions.direction.size();
-    for (int k = 0; k < grid_.dims[2]; ++k)
-        for (int j = 0; j < grid_.dims[1]; ++j)
-            for (int i = 0; i < grid_.dims[0]; ++i) {
-                const Capture c = capture(grid_.position(i, j, k), directions, lookups);
-                const size_t index = grid_.index(i, j, k);
-                source->fields[index] = c.field;
-                if (settings_.axisCorrection)
-                    for (int a = 0; a < 6; ++a) {
-                        Vec3 axis(0.0);
-                        axis[a / 2] = a % 2 ? -1.0 : 1.0;
-                        source->residual[index][size_t(a)] = c.axisIrradiance[size_t(a)] - c.field.irradiance(axis);
-                    }
-                // Mostly back faces, or a quarter of the sphere of a closed
-                // object's inside (which no probe outside it sees at all: a
-                // probe inside a block standing on the floor sees the floor
-                // below it from the front).
-                if (settings_.skipInside && (c.backSolidAngle > 2 * kPi || c.closedBackSolidAngle > kPi)) {
-                    source->inside[index] = 1;
-                    ++source->insideCount;
-                }
+    // Each probe on its own (the lookups and the ray scene are read-only),
+    // written to its own slot: the same fields for any thread count.
+    parallelFor(grid_.count(), settings_.threads, [&](size_t index) {
+        const int i = int(index % size_t(grid_.dims[0]));
+        const int j = int(index / size_t(grid_.dims[0]) % size_t(grid_.dims[1]));
+        const int k = int(index / (size_t(grid_.dims[0]) * size_t(grid_.dims[1])));
+        const Capture c = capture(grid_.position(i, j, k), directions, lookups);
+        source->fields[index] = c.field;
+        if (settings_.axisCorrection)
+            for (int a = 0; a < 6; ++a) {
+                Vec3 axis(0.0);
+                axis[a / 2] = a % 2 ? -1.0 : 1.0;
+                source->residual[index][size_t(a)] = c.axisIrradiance[size_t(a)] - c.field.irradiance(axis);
             }
+        // Mostly back faces, or a quarter of the sphere of a closed object's
+        // inside (which no probe outside it sees at all: a probe inside a
+        // block standing on the floor sees the floor below it from the front).
+        if (settings_.skipInside && (c.backSolidAngle > 2 * kPi || c.closedBackSolidAngle > kPi))
+            source->inside[index] = 1;
+    });
+    source->insideCount = size_t(std::count(source->inside.begin(), source->inside.end(), 1));
     stats_.source = concat(grid_.dims[0], "x", grid_.dims[1], "x", grid_.dims[2], " probes (", source->insideCount,
                            " inside objects), ", rayCount, " rays each");
     sources_[slot] = std::move(source);

@@ -79,7 +79,13 @@ struct IrradianceVolumeSettings {
     bool visibility = true;      // weight probes by a ray test from the point
     bool skipInside = true;      // drop probes inside solid objects
     bool axisCorrection = true;  // add the SH's residual at the 6 axis normals (6 more RGB per probe)
-    void validate() const;       // InputError unless 1 <= probes <= 64 and 2 <= faceSize <= 128
+    // Threads capturing the probes (parallelFor, a probe at a time; the
+    // fields are the same for any count). 1: the calling thread alone, as
+    // inside the cache's workers, which already use every core. The
+    // real-time stand-in uses one per core: its estimate is what the next
+    // frames show (realtimeEstimatorFactory).
+    int threads = 1;
+    void validate() const;  // InputError unless 1 <= probes <= 64, 2 <= faceSize <= 128, 1 <= threads <= 1024
 };
 
 // The probe grid laid over bounds: probes at the corners of cells of

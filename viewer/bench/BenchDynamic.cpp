@@ -745,8 +745,8 @@ int runBenchDynamic(const BenchDynamicOptions& options) {
        << summary.markdown() << "\n" << targets.markdown()
        << "\nThe stand-in's methods on the final pose, from the converged direct light, on the old light (the "
           "settled cache before the motion corrected by the method's change) or chained onto the converged cache's "
-          "bounce 1 (as the stand-in goes on once the cache has gathered it; one thread, nothing else running), "
-          "against the converged image:\n\n"
+          "bounce 1 (as the stand-in goes on once the cache has gathered it; one thread, volume's probes on "
+          "every core, nothing else running), against the converged image:\n\n"
        << methods.markdown();
     run.write("dynamic_summary.md", md.str());
     run.printWallTime(wall);

@@ -4,7 +4,7 @@
 #include "BenchStatistics.h"
 #include "BenchTable.h"
 #include "Gnuplot.h"
-#include "ParallelFor.h"
+#include "core/ParallelFor.h"
 
 #include "cache/IrradianceCache.h"
 #include "core/Error.h"

@@ -1,6 +1,6 @@
 #include "ExactDirectImage.h"
 
-#include "ParallelFor.h"
+#include "core/ParallelFor.h"
 
 #include "core/Error.h"
 #include "core/raytrace/EmbreeScene.h"

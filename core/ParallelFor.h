@@ -1,5 +1,8 @@
-// Work spread over threads for the benches' CPU references (exact images,
-// exact-geometry gathers), where each item is independent of the others.
+// Work spread over threads where each item is independent of the others:
+// the benches' CPU references (exact images, exact-geometry gathers), the
+// irradiance volume's probes (gpu_sampling/indirect/IrradianceVolume.h).
+// New threads inherit the caller's niceness (Linux), so helpers of a thread
+// running at the frames' priority run at it too.
 #pragma once
 
 #include <cstddef>
