@@ -192,6 +192,12 @@ void IrradianceCache::load(const std::string& path) {
     detail::CacheState next;
     next.settings = s.settings;
     next.diagonal = s.diagonal;
+    // Where border vertices are sampled comes from the scene and the
+    // layout, not the file: kept, so that a loaded cache samples each
+    // vertex where the one saved did.
+    next.edgeOn = s.edgeOn;
+    next.insetBorders = s.insetBorders;
+    next.borderInset = s.borderInset;
     next.sceneFingerprint = s.sceneFingerprint;
     next.gatheredSalt = s.gatheredSalt;
     next.grids = s.grids;  // made from the scene, which matches

@@ -135,8 +135,8 @@ size_t IrradianceCache::moveFaces(const Scene& before, const AppliedChange& chan
 
 void IrradianceCache::sceneChanged(const Scene& after) {
     detail::CacheState& s = impl_->state;
-    s.edgeOn = EdgeOnSurfaces(after);
     s.sceneFingerprint = detail::sceneFingerprint(after);
+    s.edgeOn = EdgeOnSurfaces::forScene(after, s.sceneFingerprint);
 }
 
 std::string InvalidationReport::describe() const {

@@ -1,6 +1,8 @@
 #include "EdgeOnSurfaces.h"
 
 #include <cmath>
+#include <map>
+#include <mutex>
 
 namespace ml {
 
@@ -41,6 +43,18 @@ bool EdgeOnSurfaces::through(const Vec3& x, const Vec3& normal) const {
         const double slack1 = eps_ / std::sqrt(f.g11), slack2 = eps_ / std::sqrt(f.g22);
         return b1 >= -slack1 && b2 >= -slack2 && b1 + b2 <= 1 + slack1 + slack2;
     });
+}
+
+std::shared_ptr<const EdgeOnSurfaces> EdgeOnSurfaces::forScene(const Scene& scene, uint64_t fingerprint) {
+    static std::mutex mutex;
+    static std::map<uint64_t, std::weak_ptr<const EdgeOnSurfaces>> alive;
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto i = alive.begin(); i != alive.end();) i = i->second.expired() ? alive.erase(i) : std::next(i);
+    std::weak_ptr<const EdgeOnSurfaces>& slot = alive[fingerprint];
+    if (std::shared_ptr<const EdgeOnSurfaces> kept = slot.lock()) return kept;
+    auto made = std::make_shared<const EdgeOnSurfaces>(scene);
+    slot = made;
+    return made;
 }
 
 }  // namespace ml

@@ -19,6 +19,8 @@
 #include "core/BoundsGrid.h"
 #include "core/Scene.h"
 
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ml {
@@ -38,6 +40,13 @@ public:
     // Loaded and transformed scenes put a wall's top within rounding of
     // the ceiling's plane, not on it.
     static constexpr double kPlaneTolerance = 1e-6;
+
+    // The index of a scene, shared by every cache of it that is alive: the
+    // direct meshes' and each bounce's IrradianceCache ask for the same
+    // scene, and one index of a million-triangle scene holds about 130 MB.
+    // `fingerprint` names the scene (detail::sceneFingerprint: its
+    // geometry and materials); a scene of another fingerprint gets its own.
+    static std::shared_ptr<const EdgeOnSurfaces> forScene(const Scene& scene, uint64_t fingerprint);
 
 private:
     struct Face {

@@ -300,7 +300,7 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
     if (layout.coverage)
         for (size_t l = 0; l < scene.lights.size(); ++l)
             if (layout.coverage->gathered(l)) s.gatheredSalt = (s.gatheredSalt ^ (l + 1)) * 0x100000001b3ull;
-    s.edgeOn = EdgeOnSurfaces(scene);
+    s.edgeOn = EdgeOnSurfaces::forScene(scene, s.sceneFingerprint);
     // Every light's mesh starts as the same refined copy of the scene; they
     // part ways once refinement follows each light's own shadows.
     const double maxEdge = settings.maxEdgeFraction * s.diagonal;
@@ -755,7 +755,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     // point moved in the tangent plane leaves every face, and the vertex
     // itself is the only point they share.
     const Vec3 n = toVec3(mesh.normal(vh));
-    if (!s.insetBorders && !(s.edgeOn.through(x, n) && flatAround(mesh, vh, n))) return x;
+    if (!s.insetBorders && !(s.edgeOn && s.edgeOn->through(x, n) && flatAround(mesh, vh, n))) return x;
     Vec3 inward(0.0);
     double shortest = kInf;
     for (auto f : mesh.vf_range(vh)) {

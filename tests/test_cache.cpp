@@ -2,6 +2,7 @@
 // irradiance functions (no GL): what is split, where, how a saved cache
 // resumes, which files are refused, and what readers of snapshots see.
 #include "cache/CacheWorker.h"
+#include "cache/EdgeOnSurfaces.h"
 #include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
 #include "TestSamplers.h"
@@ -604,6 +605,54 @@ TEST(CacheFile, ALoadedCacheRefinesExactlyLikeOneNeverSaved) {
     EXPECT_EQ(straight.totalSamples(), resumed.totalSamples());
     expectSameView(viewOf(straight), viewOf(resumed));
     std::filesystem::remove(path);
+}
+
+TEST(CacheFile, ALoadedCacheSamplesEveryVertexWhereTheSavedOneDid) {
+    // Where a vertex is sampled (IrradianceCache::position) comes from the
+    // scene and the layout, not from the file: a loaded cache must keep
+    // them, or its next samples land elsewhere than the saved cache's did.
+    // The Cornell box's walls meet, so the vertices of their edges lie in
+    // the plane of the wall beside them and are sampled inside their own
+    // faces (EdgeOnSurfaces); with CacheLayout::insetBorders, as the bounce
+    // meshes are laid, every border vertex is. Equal bit for bit.
+    const std::string path = tempPath("where.mlc");
+    const Scene scene = makeCornellBox();
+    for (const bool insetEveryBorder : {false, true}) {
+        CacheLayout layout;
+        layout.insetBorders = insetEveryBorder;
+        IrradianceCache saved(scene, coarse(), layout);
+        saved.save(path);
+        IrradianceCache loaded(scene, coarse(), layout);
+        loaded.load(path);
+        ASSERT_EQ(saved.meshCount(), loaded.meshCount());
+        size_t moved = 0;
+        for (size_t l = 0; l < saved.meshCount(); ++l) {
+            const IrradianceMeshCopy vertices = saved.copyMesh(l);
+            ASSERT_EQ(saved.vertexCount(l), loaded.vertexCount(l));
+            for (size_t v = 0; v < saved.vertexCount(l); ++v) {
+                ASSERT_EQ(saved.position(l, v), loaded.position(l, v)) << "mesh " << l << ", vertex " << v;
+                moved += saved.position(l, v) != vertices.positions[v];
+            }
+        }
+        EXPECT_GT(moved, 8u) << (insetEveryBorder ? "every border inset" : "edge-on borders inset");
+    }
+    std::filesystem::remove(path);
+}
+
+TEST(EdgeOnSurfaces, OneIndexPerSceneWhileAnyHolderLives) {
+    // The direct meshes' cache and each bounce's ask for the index of the
+    // same scene: they share one (a million-triangle scene's holds about
+    // 130 MB). Another fingerprint is another scene, with an index of its own.
+    const Scene scene = makeCornellBox();
+    const std::shared_ptr<const EdgeOnSurfaces> a = EdgeOnSurfaces::forScene(scene, 17);
+    const std::shared_ptr<const EdgeOnSurfaces> b = EdgeOnSurfaces::forScene(scene, 17);
+    const std::shared_ptr<const EdgeOnSurfaces> other = EdgeOnSurfaces::forScene(scene, 18);
+    EXPECT_EQ(a.get(), b.get());
+    EXPECT_NE(a.get(), other.get());
+    // The Cornell box's back wall meets its floor along z = 559.2: the
+    // floor's plane passes through a point of that edge, not the wall's own.
+    EXPECT_TRUE(a->through(Vec3(300.0, 0.0, 559.2), Vec3(0.0, 0.0, -1.0)));
+    EXPECT_FALSE(a->through(Vec3(300.0, 200.0, 559.2), Vec3(0.0, 0.0, -1.0)));
 }
 
 TEST(CacheFile, BadFilesAreRefusedAndLeaveTheCacheAsItWas) {

@@ -103,7 +103,9 @@ struct CacheState {
     // (IrradianceCache::tighten). Saved in the cache file.
     int level = 0;
     double diagonal = 1;          // of the scene's bounds
-    EdgeOnSurfaces edgeOn;            // the scene's faces, for border vertices in them (not saved)
+    // The scene's faces, for border vertices in them (EdgeOnSurfaces::forScene,
+    // shared with the scene's other caches; not saved).
+    std::shared_ptr<const EdgeOnSurfaces> edgeOn;
     bool insetBorders = false;        // CacheLayout::insetBorders
     double borderInset = CacheLayout::kDefaultInset;  // CacheLayout::borderInset
     uint64_t sceneFingerprint = 0;
