@@ -10,6 +10,10 @@
 namespace ml {
 
 void parallelFor(size_t count, int threads, const std::function<void(size_t)>& work) {
+    if (threads <= 1 || count <= 1) {  // no thread to start: in order, on the caller's
+        for (size_t i = 0; i < count; ++i) work(i);
+        return;
+    }
     std::atomic<size_t> next{0};
     std::exception_ptr error;
     std::mutex errorMutex;

@@ -10,10 +10,11 @@
 
 namespace ml {
 
-// Runs work(i) for every i in [0, count) on `threads` threads (at least
-// one), handing out items one at a time so that uneven items balance. Once
-// an item throws, no more are handed out; when every thread has stopped,
-// the first exception is rethrown on the calling thread.
+// Runs work(i) for every i in [0, count) on `threads` threads, handing out
+// items one at a time so that uneven items balance. Once an item throws, no
+// more are handed out; when every thread has stopped, the first exception
+// is rethrown on the calling thread. With one thread (or at most one item)
+// the items run in order on the calling thread, which starts none.
 void parallelFor(size_t count, int threads, const std::function<void(size_t)>& work);
 
 }  // namespace ml

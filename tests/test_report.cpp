@@ -4,6 +4,7 @@
 // sections are test fixtures; the error against a noisy reference and the
 // switch that turns Blender Cycles off.
 #include "core/Error.h"
+#include "core/ParallelFor.h"
 #include "core/scenes/BenchScene.h"
 #include "core/scenes/CornellBox.h"
 #include "core/scenes/OfficeScene.h"
@@ -24,15 +25,44 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 using namespace ml;
 namespace fs = std::filesystem;
+
+// --- Work on threads ----------------------------------------------------------------
+
+TEST(ParallelFor, EveryItemOnceAndTheFirstFailureRethrown) {
+    for (const int threads : {1, 3, 8}) {
+        std::vector<std::atomic<int>> hits(100);
+        parallelFor(hits.size(), threads, [&](size_t i) { ++hits[i]; });
+        for (size_t i = 0; i < hits.size(); ++i) ASSERT_EQ(hits[i].load(), 1) << threads << " threads, item " << i;
+    }
+    // One thread: in order, on the caller's own (no thread started).
+    std::vector<size_t> order;
+    std::vector<std::thread::id> on;
+    parallelFor(5, 1, [&](size_t i) { order.push_back(i), on.push_back(std::this_thread::get_id()); });
+    EXPECT_EQ(order, (std::vector<size_t>{0, 1, 2, 3, 4}));
+    for (const std::thread::id& id : on) EXPECT_EQ(id, std::this_thread::get_id());
+    // A failing item's exception reaches the caller, on threads or not.
+    for (const int threads : {1, 3}) {
+        try {
+            parallelFor(1000, threads, [&](size_t i) {
+                if (i == 7) throw std::runtime_error("item seven");
+            });
+            ADD_FAILURE() << "no exception on " << threads << " threads";
+        } catch (const std::runtime_error& e) {
+            EXPECT_STREQ(e.what(), "item seven");
+        }
+    }
+}
 
 // --- Power-law fit ------------------------------------------------------------------
 
