@@ -73,8 +73,7 @@ Vec3 unitNormal(const Mesh& m, size_t t) { return glm::normalize(m.areaNormal(t)
 // The edges' bounds, padded by how far in front of a receiver an edge may
 // hang, in a grid: the edges near a receiver.
 BoundsGrid edgeGrid(const Bounds3& bounds, const std::vector<SceneEdge>& edges, double closeness) {
-    const Vec3 extent = glm::max(bounds.extent(), Vec3(1e-12));
-    const double cell = std::max({extent.x, extent.y, extent.z}) / std::clamp(std::cbrt(double(edges.size())), 1.0, 48.0);
+    const double cell = BoundsGrid::cellSize(bounds, edges.size());
     std::vector<Bounds3> boxes(edges.size());
     for (size_t e = 0; e < edges.size(); ++e) {
         boxes[e].extend(edges[e].a);

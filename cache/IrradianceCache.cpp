@@ -755,7 +755,7 @@ Vec3 samplePoint(const CacheState& s, const CacheTriMesh& mesh, CacheTriMesh::Ve
     // point moved in the tangent plane leaves every face, and the vertex
     // itself is the only point they share.
     const Vec3 n = toVec3(mesh.normal(vh));
-    if (!s.insetBorders && !(s.edgeOn && s.edgeOn->through(x, n) && flatAround(mesh, vh, n))) return x;
+    if (!s.insetBorders && !(flatAround(mesh, vh, n) && s.edgeOn && s.edgeOn->through(x, n))) return x;
     Vec3 inward(0.0);
     double shortest = kInf;
     for (auto f : mesh.vf_range(vh)) {

@@ -24,14 +24,21 @@ public:
     BoundsGrid() = default;
     // items[i]: item i's bounds (already padded by what the queries need).
     // Empty bounds are listed nowhere.
-    BoundsGrid(const Bounds3& domain, const std::vector<Bounds3>& items, double maxCells = 48) : lo_(domain.lo) {
+    BoundsGrid(const Bounds3& domain, const std::vector<Bounds3>& items, double maxCells = 48)
+        : lo_(domain.lo), cell_(cellSize(domain, items.size(), maxCells)) {
         const Vec3 extent = glm::max(domain.extent(), Vec3(1e-12));
-        const double cells = std::clamp(std::cbrt(double(items.size())), 1.0, std::max(1.0, maxCells));
-        cell_ = std::max({extent.x, extent.y, extent.z}) / cells;
         for (int k = 0; k < 3; ++k) n_[k] = std::max(1, int(std::ceil(extent[k] / cell_)));
         cells_.resize(size_t(n_[0]) * n_[1] * n_[2]);
         for (size_t i = 0; i < items.size(); ++i)
             if (!items[i].empty()) forCells(items[i], [&](size_t c) { cells_[c].push_back(uint32_t(i)); });
+    }
+
+    // The side of the cells a grid of `count` items over `domain` gets (for
+    // padding the items' bounds by a share of it before they are listed).
+    static double cellSize(const Bounds3& domain, size_t count, double maxCells = 48) {
+        const Vec3 extent = glm::max(domain.extent(), Vec3(1e-12));
+        const double cells = std::clamp(std::cbrt(double(count)), 1.0, std::max(1.0, maxCells));
+        return std::max({extent.x, extent.y, extent.z}) / cells;
     }
 
     // The items whose bounds may meet `b`, ascending, each once.

@@ -18,7 +18,7 @@ void parallelFor(size_t count, int threads, const std::function<void(size_t)>& w
     std::exception_ptr error;
     std::mutex errorMutex;
     std::vector<std::thread> pool;
-    for (int t = 0; t < std::max(threads, 1); ++t)
+    for (int t = 0; t < threads; ++t)
         pool.emplace_back([&] {
             try {
                 for (size_t i; (i = next++) < count;) work(i);
