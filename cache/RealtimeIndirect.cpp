@@ -361,7 +361,7 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
 }
 
 void RealtimeSettings::validate() const {
-    if (methodBounces < 0 || methodBounces > 256)
+    if (methodBounces != kBouncesFromScene && (methodBounces < 0 || methodBounces > 256))
         throw InputError(concat("real-time bounces ", methodBounces, " is not in 0..256"));
     if (live && (method == "off" || method == "auto"))
         throw InputError(concat("a live indirect display needs a real-time method, not ", method));
@@ -396,10 +396,24 @@ bool RealtimeIndirect::waitBaseline(double timeoutSeconds) const {
            !failure_;
 }
 
+int standInBounces(const IndirectSettings& indirect) {
+    const double r = std::clamp(indirect.tailAlbedo, 0.0, 0.999);
+    int k = 1;
+    while (k < indirect.bounces && std::pow(r, k) > kStandInTailShare) ++k;
+    return std::max(0, std::min(k, indirect.bounces));
+}
+
+RealtimeSettings RealtimeIndirect::resolved(RealtimeSettings settings) const {
+    settings.validate();
+    // Live, the method itself is shown: every bounce of it.
+    if (settings.methodBounces == RealtimeSettings::kBouncesFromScene)
+        settings.methodBounces = settings.live ? 0 : standInBounces(indirect_);
+    return settings;
+}
+
 RealtimeIndirect::RealtimeIndirect(const IndirectSettings& indirect, EstimatorFactory factory,
                                    const RealtimeSettings& settings, int nice)
-    : indirect_(indirect), factory_(std::move(factory)), settings_(settings) {
-    settings_.validate();
+    : indirect_(indirect), factory_(std::move(factory)), settings_(resolved(settings)) {
     ML_ASSERT(factory_, "the real-time estimate needs an estimator factory");
     thread_ = std::thread([this, nice] { run(nice); });
 }
@@ -414,8 +428,7 @@ RealtimeIndirect::~RealtimeIndirect() {
 }
 
 void RealtimeIndirect::configure(const RealtimeSettings& settings) {
-    settings.validate();
-    settings_ = settings;
+    settings_ = resolved(settings);
     asked_.any = false;  // the next offer asks, with these settings
     asked_.directSampled = 0, asked_.directError = 1;
 }

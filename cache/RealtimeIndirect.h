@@ -220,14 +220,34 @@ struct RealtimeSettings {
     // Show the method's estimate always, not only while the cache catches
     // up (the viewer's --indirect-display METHOD); needs a method.
     bool live = false;
-    // Bounces the method estimates, later ones a tail (0: every bounce).
-    // Each costs an update of the method, weaker ones less; the tail is far
-    // from the bounces' light (bench dynamic: 3 of 8 bounces estimated
-    // leave 1.1-1.5x the image error of all 8).
-    int methodBounces = 0;
+    // Bounces the method estimates, later ones a tail (0: every bounce;
+    // kBouncesFromScene: standInBounces, chosen by the scene's albedo;
+    // every bounce when live, which shows the method itself).
+    static constexpr int kBouncesFromScene = -1;
+    int methodBounces = kBouncesFromScene;
     uint32_t seed = 1;
     void validate() const;
 };
+
+// The bounces a stand-in estimates when the scene chooses: the fewest k
+// after which the tail (each later bounce tailAlbedo r times the one
+// before) carries at most kStandInTailShare of the indirect light (r^k of
+// it), and at most every bounce: the Cornell box 3 of 8 (r = 0.535), the
+// office 4 of 7 (r = 0.63), a white room more. The tail's light is right in
+// total (a ratio of bounce k), only its spread is guessed
+// (shapeAsLaterBounces), and on the old light correctByChange takes out
+// most of that guess, while every bounce estimated costs an update of the
+// method, and the image shows the pose before until the estimate comes.
+// Measured (bench dynamic --motions light,block, two runs each, the Cornell
+// box, auto choosing volume): every bounce estimated, auto's volume trial
+// 0.88-0.92 s, the light back within 2% after 1.99-2.13 s against a cold
+// start's 2.80-2.87 s, the block after 1.04 s against 1.23-1.52 s; three,
+// the trial 0.44-0.74 s, the light after 0.56 s against 1.95 s and the
+// block after 0.27 s against 1.39 s (viewer/README.md, "Fewer bounces
+// estimated"). Three of eight estimated from converged direct light leave
+// 1.1x the image error of all eight (bench dynamic's table of the methods).
+int standInBounces(const IndirectSettings& indirect);
+constexpr double kStandInTailShare = 1.0 / 6;
 
 // One method measured as "auto" measures it: its estimate from a complete
 // cache's direct light against that cache's bounces.
@@ -375,6 +395,8 @@ private:
     void keepBefore(const CacheSnapshot& s, uint64_t sceneVersion);
     static constexpr double kBeforeSeconds = 1.0;
 
+    // `settings` validated, its methodBounces chosen from the scene if asked.
+    RealtimeSettings resolved(RealtimeSettings settings) const;
     IndirectSettings indirect_;
     EstimatorFactory factory_;
     RealtimeSettings settings_;  // the caller's thread only

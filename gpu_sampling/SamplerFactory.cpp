@@ -346,8 +346,26 @@ void RealtimeChoice::validate() const {
         throw InputError(concat("--realtime '", realtime, "': unknown (auto, volume, vpl, lpv or off)"));
     if (display != "cache" && !known(display))
         throw InputError(concat("--indirect-display '", display, "': unknown (cache, volume, vpl or lpv)"));
-    if (methodBounces < 0 || methodBounces > 256)
+    if (methodBounces != RealtimeSettings::kBouncesFromScene && (methodBounces < 0 || methodBounces > 256))
         throw InputError(concat("--realtime-bounces ", methodBounces, " is not in 0..256"));
+}
+
+int RealtimeChoice::parseBounces(const std::string& text) {
+    if (text == "auto") return RealtimeSettings::kBouncesFromScene;
+    size_t end = 0;
+    int n = -1;
+    try {
+        n = std::stoi(text, &end);
+    } catch (const std::exception&) {
+        end = 0;
+    }
+    if (end == 0 || end != text.size() || n < 0 || n > 256)
+        throw InputError(concat("--realtime-bounces '", text, "': not auto or a whole number in 0..256"));
+    return n;
+}
+
+std::string RealtimeChoice::bouncesText() const {
+    return methodBounces == RealtimeSettings::kBouncesFromScene ? std::string("auto") : concat(methodBounces);
 }
 
 RealtimeSettings RealtimeChoice::settings(uint32_t seed) const {
@@ -370,8 +388,11 @@ std::string RealtimeChoice::describe() const {
                                                    "cache (vpl until then)")
                                      : realtime,
                   " standing in while it catches up (",
-                  methodBounces > 0 ? concat(methodBounces, " bounces estimated, the rest a tail")
-                                    : std::string("every bounce estimated"),
+                  methodBounces == RealtimeSettings::kBouncesFromScene
+                      ? std::string("bounces estimated until the rest carry at most a sixth of the light, by the "
+                                    "scene's albedo, the rest a tail")
+                  : methodBounces > 0 ? concat(methodBounces, " bounces estimated, the rest a tail")
+                                      : std::string("every bounce estimated"),
                   ")");
 }
 

@@ -113,10 +113,17 @@ struct RealtimeChoice {
     std::string realtime = "auto";
     // "cache", or a method shown live whatever the cache holds.
     std::string display = "cache";
-    // Bounces the method estimates, the rest following as a tail (0: all).
-    int methodBounces = 0;
+    // Bounces the method estimates, the rest following as a tail (0: all;
+    // RealtimeSettings::kBouncesFromScene: standInBounces).
+    int methodBounces = RealtimeSettings::kBouncesFromScene;
     // InputError for an unknown name (the options' words in the message).
     void validate() const;
+    // --realtime-bounces: "auto" (from the scene) or a count, 0 for all.
+    static int parseBounces(const std::string& text);
+    static constexpr const char* kBouncesHelp =
+        "bounces the real-time method estimates, later ones following as a tail: auto (until the rest carry at most "
+        "a sixth of the light, by the scene's albedo), or a count, 0 for all";
+    std::string bouncesText() const;
     // For RealtimeIndirect: the displayed method if live, else the stand-in.
     RealtimeSettings settings(uint32_t seed) const;
     std::string describe() const;  // "volume stands in while the cache catches up", "vpl, live"

@@ -13,6 +13,7 @@
 
 #include "cache/ProgressiveSession.h"
 #include "cache/RealtimeIndirect.h"
+#include "core/Error.h"
 #include "core/SceneChange.h"
 #include "core/image/ImageMetrics.h"
 #include "core/scenes/CornellBox.h"
@@ -207,6 +208,59 @@ TEST(IndirectBlend, AutoChoosesTheLeastErrorAmongTheMethodsFastEnough) {
     EXPECT_EQ(chooseStandIn({{"vpl", inf, 0.9}, {"volume", inf, 0.5}}), 1);
     EXPECT_EQ(describeTrials({{"vpl", 0.26, 3.0}, {"volume", 0.09, 1.0}}, 1),
               "vpl 26% in 3 s; volume 9% in 1 s (chosen)");
+}
+
+TEST(IndirectBlend, TheSceneChoosesHowManyBouncesTheMethodEstimates) {
+    IndirectSettings s;
+    // The Cornell box (r = 0.535): 0.535^2 = 0.29 of the light after two
+    // bounces, 0.153 after three, the first at most a sixth.
+    s.bounces = 8;
+    s.tailAlbedo = 0.535;
+    EXPECT_EQ(standInBounces(s), 3);
+    s.bounces = 7;  // the office: 0.63^3 = 0.25, 0.63^4 = 0.158
+    s.tailAlbedo = 0.63;
+    EXPECT_EQ(standInBounces(s), 4);
+    s.tailAlbedo = 0.95;  // a white room: every bounce (0.95^7 = 0.70)
+    EXPECT_EQ(standInBounces(s), 7);
+    s.tailAlbedo = 0;  // nothing after bounce 1
+    EXPECT_EQ(standInBounces(s), 1);
+    s.bounces = 0;
+    EXPECT_EQ(standInBounces(s), 0);
+    // The rule over albedos: the fewest bounces after which at most a
+    // sixth is left, unless every bounce is estimated.
+    s.bounces = 8;
+    for (double r = 0.01; r < 1; r += 0.01) {
+        s.tailAlbedo = r;
+        const int k = standInBounces(s);
+        ASSERT_GE(k, 1);
+        ASSERT_LE(k, 8);
+        if (k < 8) {
+            EXPECT_LE(std::pow(r, k), kStandInTailShare) << r;
+        }
+        if (k > 1) {
+            EXPECT_GT(std::pow(r, k - 1), kStandInTailShare) << r;
+        }
+    }
+    // A stand-in asked to choose holds the scene's count; a count asked is kept.
+    const auto none = [](const Scene&, const std::string&) -> std::unique_ptr<IndirectEstimator> { return nullptr; };
+    s.tailAlbedo = 0.535;
+    RealtimeSettings rs;
+    EXPECT_EQ(rs.methodBounces, RealtimeSettings::kBouncesFromScene);
+    EXPECT_EQ(RealtimeIndirect(s, none, rs).settings().methodBounces, 3);
+    rs.methodBounces = 2;
+    EXPECT_EQ(RealtimeIndirect(s, none, rs).settings().methodBounces, 2);
+    // Live, the method itself: every bounce unless a count is asked.
+    rs.live = true;
+    rs.method = "volume";
+    EXPECT_EQ(RealtimeIndirect(s, none, rs).settings().methodBounces, 2);
+    rs.methodBounces = RealtimeSettings::kBouncesFromScene;
+    EXPECT_EQ(RealtimeIndirect(s, none, rs).settings().methodBounces, 0);
+    // --realtime-bounces: auto or a count.
+    EXPECT_EQ(RealtimeChoice::parseBounces("auto"), RealtimeSettings::kBouncesFromScene);
+    EXPECT_EQ(RealtimeChoice::parseBounces("0"), 0);
+    EXPECT_EQ(RealtimeChoice::parseBounces("5"), 5);
+    for (const char* bad : {"", "x", "3x", "-1", "257", "1e2"})
+        EXPECT_THROW(RealtimeChoice::parseBounces(bad), InputError) << bad;
 }
 
 TEST(IndirectBlend, TheOldLightKeptAfterASmallChangeIsShownOverAnyEstimate) {

@@ -124,6 +124,7 @@ int runDynamic(const std::vector<std::string>& args) {
                             "what stands in for indirect light while the cache catches up, as in 'view': auto, "
                             "volume, vpl, lpv or off (the cache's old bounces)",
                             defaults.realtime.realtime);
+    command.options().value("realtime-bounces", "N", RealtimeChoice::kBouncesHelp, defaults.realtime.bouncesText());
     command.options().value("motions", "LIST",
                             "the motions to run, comma-separated: light and block (the Cornell box), panel (the "
                             "office, not with --quick); all: every one the mode runs",
@@ -132,6 +133,7 @@ int runDynamic(const std::vector<std::string>& args) {
     BenchDynamicOptions options;
     command.read(options);
     options.realtime.realtime = command.options().str("realtime");
+    options.realtime.methodBounces = RealtimeChoice::parseBounces(command.options().str("realtime-bounces"));
     options.realtime.validate();
     if (const std::string list = command.options().str("motions"); list != "all") {
         std::stringstream names(list);

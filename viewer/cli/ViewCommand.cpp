@@ -73,8 +73,7 @@ int runView(const std::vector<std::string>& args) {
             "the indirect light shown: cache (with the --realtime stand-in), or volume, vpl or lpv: that method's "
             "estimate alone, live (the panel switches too)",
             realtime.display);
-    o.value("realtime-bounces", "N", "bounces the real-time method estimates, later ones following as a tail; 0: all",
-            concat(realtime.methodBounces));
+    o.value("realtime-bounces", "N", RealtimeChoice::kBouncesHelp, realtime.bouncesText());
     declareDirectOptions(o);
     declareCacheOptions(o);
     declareIndirectOptions(o);
@@ -91,7 +90,7 @@ int runView(const std::vector<std::string>& args) {
     s.indirect = readIndirectOptions(o);
     s.realtime.realtime = o.str("realtime");
     s.realtime.display = o.str("indirect-display");
-    s.realtime.methodBounces = o.integer("realtime-bounces", 0, 256);
+    s.realtime.methodBounces = RealtimeChoice::parseBounces(o.str("realtime-bounces"));
     s.realtime.validate();
     s.worker.seed = s.direct.seed;
     s.worker.publishSeconds = o.number("publish", 0, 3600);
