@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -812,23 +813,54 @@ std::string whereSampled(const CacheState& s, const PendingSample& p, const Samp
     throw std::runtime_error(concat("sampling failed at ", whereSampled(s, pending[i], requests[i]), ": ", e.what()));
 }
 
-void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending) {
-    if (pending.empty()) return;
+namespace {
+
+// One batch: pending[first, first + count).
+void takeBatch(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending,
+               size_t first, size_t count) {
+    const std::vector<PendingSample> batch(pending.begin() + std::ptrdiff_t(first),
+                                           pending.begin() + std::ptrdiff_t(first + count));
     std::vector<SampleRequest> requests;
-    requests.reserve(pending.size());
-    for (const PendingSample& p : pending) requests.push_back(requestFor(s, p, seed));
+    requests.reserve(count);
+    for (const PendingSample& p : batch) requests.push_back(requestFor(s, p, seed));
     std::vector<VertexSample> results;
     try {
         sampler.sampleBatch(requests, results);
     } catch (const SampleBatchError& e) {
-        throwWhereSampled(s, pending, requests, e);
+        throwWhereSampled(s, batch, requests, e);
     }
-    ML_ASSERT(results.size() == pending.size(), "the sampler returned ", results.size(), " of ", pending.size(),
-              " samples");
-    for (size_t i = 0; i < pending.size(); ++i) {
-        const PendingSample& p = pending[i];
+    ML_ASSERT(results.size() == count, "the sampler returned ", results.size(), " of ", count, " samples");
+    for (size_t i = 0; i < count; ++i) {
+        const PendingSample& p = batch[i];
         p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
     }
+}
+
+}  // namespace
+
+size_t takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending,
+                   const std::function<bool()>& interrupt) {
+    if (pending.empty()) return 0;
+    if (!interrupt) {
+        takeBatch(s, sampler, seed, pending, 0, pending.size());
+        return pending.size();
+    }
+    // Batches of about kInterruptBatchSeconds at the last one's rate (a
+    // sample costs microseconds to tens of milliseconds by the scene), each
+    // at least kFirstBatch (a batch is spread over the threads).
+    constexpr size_t kFirstBatch = 32;
+    size_t done = 0, size = kFirstBatch;
+    while (done < pending.size()) {
+        if (interrupt()) break;
+        const size_t count = std::min(size, pending.size() - done);
+        const auto start = std::chrono::steady_clock::now();
+        takeBatch(s, sampler, seed, pending, done, count);
+        done += count;
+        const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double next = took > 0 ? double(count) * kInterruptBatchSeconds / took : 4.0 * double(count);
+        size = size_t(std::clamp(next, double(kFirstBatch), 4.0 * double(count)));
+    }
+    return done;
 }
 
 }  // namespace detail
@@ -869,13 +901,14 @@ void flag(std::vector<char>& flags, size_t i, size_t size) {
 // until `budget` are taken: each asked once (LightMesh::needsGpu remembers
 // the ones declined). Returns how many were taken.
 size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t seed,
-                             const std::vector<PendingSample>& ranked, size_t budget) {
+                             const std::vector<PendingSample>& ranked, size_t budget,
+                             const std::function<bool()>& interrupt) {
     std::vector<PendingSample> ask;
     std::vector<SampleRequest> requests;
     std::vector<VertexSample> results;
     std::vector<char> answered;
     size_t taken = 0, next = 0;
-    while (taken < budget && next < ranked.size()) {
+    while (taken < budget && next < ranked.size() && !(interrupt && interrupt())) {
         ask.clear();
         for (; next < ranked.size() && ask.size() < budget - taken; ++next) {
             const PendingSample& p = ranked[next];
@@ -906,7 +939,8 @@ size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t see
 
 }  // namespace
 
-size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget) {
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
+                       const std::function<bool()>& interrupt) {
     // Every mesh's first vertices before any mesh's later ones: base
     // vertices (numbered first) of every light before the vertices that
     // refinement added, so that all the light is in the image early; grid
@@ -936,15 +970,14 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
     std::vector<PendingSample> order;
     order.reserve(ranked.size());
     for (const auto& r : ranked) order.push_back(r.second);
-    const size_t cheap = takeSamplesWithoutGpu(s, sampler, seed, order, budget);
+    const size_t cheap = takeSamplesWithoutGpu(s, sampler, seed, order, budget, interrupt);
     std::vector<PendingSample> pending;
     for (const PendingSample& p : order) {
         if (pending.size() + cheap >= budget) break;
         const LightMesh& lm = s.meshes[p.mesh];
         if ((p.grid ? lm.gridStats[p.index] : lm.stats[p.index]).count == 0) pending.push_back(p);
     }
-    takeSamples(s, sampler, seed, pending);
-    return cheap + pending.size();
+    return cheap + takeSamples(s, sampler, seed, pending, interrupt);
 }
 
 void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& sample) {

@@ -405,6 +405,8 @@ double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& vi
     return score(impl_->state, view, false).error;
 }
 
+void IrradianceCache::setInterrupt(std::function<bool()> interrupted) { impl_->interrupt = std::move(interrupted); }
+
 RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint32_t seed,
                                      const std::optional<RefinementCamera>& view) {
     ML_ASSERT(budget > 0, "refinement budget 0");
@@ -417,7 +419,7 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
     if (unsampled > 0) {
         report.estimatedError = 1;
         const FirstSamples first(sampler);
-        report.estimates = detail::sampleUnsampled(s, sampler, seed, budget);
+        report.estimates = detail::sampleUnsampled(s, sampler, seed, budget, impl_->interrupt);
         report.candidates = unsampled - report.estimates + 1;  // at least the scoring is still to come
         ++s.rounds;
         return report;
@@ -463,6 +465,8 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
         cost += added;
     }
 
+    // The vertices the splits made, whole even when interrupted: a cache
+    // left with unsampled vertices has no estimate of its error.
     report.estimates += detail::sampleUnsampled(s, sampler, seed, ~size_t(0));
     // Resamples in one batch: (mesh, vertex) order, vertices before grid samples.
     std::sort(resample.begin(), resample.end());
@@ -470,9 +474,9 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
     std::vector<detail::PendingSample> pending;
     for (const auto& [l, v] : resample) pending.push_back({l, v, false});
     for (const auto& [l, g] : resampleGrid) pending.push_back({l, g, true});
-    detail::takeSamples(s, sampler, seed, pending);
-    report.estimates += pending.size();
-    report.resamples += pending.size();
+    const size_t resampled = detail::takeSamples(s, sampler, seed, pending, impl_->interrupt);
+    report.estimates += resampled;
+    report.resamples += resampled;
     ++s.rounds;
     return report;
 }

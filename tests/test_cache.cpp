@@ -794,6 +794,80 @@ TEST(CacheWorker, AFailureReachesTheMainThreadWithWhereItHappened) {
     }
 }
 
+TEST(CacheRefinement, AnInterruptEndsARoundBetweenBatchesAndKeepsWhatItTook) {
+    IrradianceCache cache(bench(), coarse());
+    size_t taken = 0;
+    auto sampler = samplerOf([&](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
+        ++taken;
+        return step(l, x, n, seed);
+    });
+    const size_t all = cache.unsampledCount();
+    ASSERT_GT(all, 300u);
+    // The first pass, asked to stop once anything is taken: it ends after
+    // the batch under way (the first, a few dozen), keeping those samples
+    // and counting them.
+    cache.setInterrupt([&] { return taken > 0; });
+    RefineReport r = cache.refine(sampler, all, 1);
+    EXPECT_GT(taken, 0u);
+    EXPECT_LT(taken, all / 4);
+    EXPECT_EQ(r.estimates, taken);
+    EXPECT_EQ(cache.unsampledCount(), all - taken);
+    EXPECT_EQ(cache.totalSamples(), taken);
+    // Asked to stop before anything: nothing taken.
+    cache.setInterrupt([] { return true; });
+    r = cache.refine(sampler, all, 1);
+    EXPECT_EQ(r.estimates, 0u);
+    EXPECT_EQ(cache.unsampledCount(), all - taken);
+    // No interrupt: the round whole.
+    cache.setInterrupt({});
+    cache.refine(sampler, all, 1);
+    ASSERT_EQ(cache.unsampledCount(), 0u);
+    // A refinement round interrupted at once still samples the vertices its
+    // splits made (the cache keeps an estimate of its error), and takes
+    // none of its resamples.
+    cache.setInterrupt([] { return true; });
+    const size_t before = taken;
+    r = cache.refine(sampler, 4096, 1);
+    EXPECT_GT(r.splits, 0u);
+    EXPECT_EQ(r.resamples, 0u);
+    EXPECT_EQ(cache.unsampledCount(), 0u);
+    EXPECT_EQ(r.estimates, taken - before);
+    EXPECT_LT(cache.estimatedError(), 1.0);
+}
+
+TEST(CacheWorker, AStopEndsTheRoundUnderWayUnlessASampleBudgetRules) {
+    // One round of every base vertex, each sample a millisecond. Stopped
+    // once 10 are taken: without a sample budget the round ends
+    // there (its other vertices unsampled); with one, the stop waits for the
+    // round, whose extent no clock may decide.
+    for (const bool budget : {false, true}) {
+        SCOPED_TRACE(budget ? "a sample budget" : "no budget");
+        IrradianceCache cache(bench(), coarse());
+        const size_t all = cache.unsampledCount();
+        std::atomic<size_t> taken{0};
+        const auto slow = [&taken](size_t l, const Vec3& x, const Vec3& n, uint32_t seed) {
+            ++taken;
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+            return step(l, x, n, seed);
+        };
+        WorkerSettings ws;
+        ws.roundBudget = all;
+        ws.threads = 1;
+        if (budget) ws.maxSamples = 10 * all;
+        CacheWorker worker(cache, test::functionSamplers(slow), ws);
+        worker.start();
+        while (taken < 10 && !worker.finished()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        worker.stop();
+        worker.rethrowIfFailed();
+        if (budget) {
+            EXPECT_EQ(cache.unsampledCount(), 0u);
+        } else {
+            EXPECT_GT(cache.unsampledCount(), all / 2);
+            EXPECT_EQ(cache.totalSamples(), taken.load());
+        }
+    }
+}
+
 TEST(CacheWorker, ASampleBudgetEndsTheWorkerAndRepeatsExactly) {
     auto run = [] {
         auto cache = std::make_unique<IrradianceCache>(bench(), coarse());

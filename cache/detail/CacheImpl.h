@@ -10,6 +10,7 @@ namespace ml {
 struct IrradianceCache::Impl {
     detail::CacheState state;
     CacheLayout layout;  // as made: rebuildMesh lays a mesh again the same way
+    std::function<bool()> interrupt;  // setInterrupt's (not saved, not part of the state)
 };
 
 namespace detail {
@@ -32,8 +33,12 @@ struct PendingSample {
 // Takes them in one batch (VertexSampler::sampleBatch, which may spread it
 // over threads), each seeded from (seed, vertex, mesh, samples so far), and
 // adds them in order: the same cache whatever the threads. Errors carry the
-// mesh, vertex and point.
-void takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending);
+// mesh, vertex and point. With `interrupt` (IrradianceCache::setInterrupt),
+// in batches of about kInterruptBatchSeconds each, asking it before each
+// and stopping when it says so. Returns how many were taken.
+size_t takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending,
+                   const std::function<bool()>& interrupt = {});
+constexpr double kInterruptBatchSeconds = 0.05;
 const GridObject& gridOf(const CacheState& s, size_t g);  // the object grid sample g belongs to
 void addVertexSample(CacheState& s, size_t light, size_t v, const VertexSample& sample);
 void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sample);
@@ -42,7 +47,8 @@ size_t unsampledCount(const CacheState& s);
 // Samples up to `budget` of them, in an order that scatters them over the
 // scene and takes every mesh's sample at a vertex together (a partial first
 // pass then covers every object and every light evenly). Returns how many.
-size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget);
+size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
+                       const std::function<bool()>& interrupt = {});
 // The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:
 // - where its samples measured their own variance (a ray gather's), `own`
 //   (a unit of work's: VertexStats::ownUnitVariance, or ringOwnVariances')
