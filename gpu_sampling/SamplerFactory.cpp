@@ -400,10 +400,11 @@ RealtimeIndirect::EstimatorFactory realtimeEstimatorFactory(const IndirectChoice
     return [indirect](const Scene& scene, const std::string& method) {
         IndirectChoice c = indirect;
         c.method = method;
-        // The volume's probes on every core: the stand-in runs at the
-        // frames' priority, above the cache's workers, and its estimate is
-        // what the next frames show (IrradianceVolumeSettings::threads).
-        c.volume.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+        // The volume's probes and the lights' sums on every core: the
+        // stand-in runs at the frames' priority, above the cache's workers,
+        // and its estimate is what the next frames show
+        // (IrradianceVolumeSettings::threads, VirtualPointLightSettings::threads).
+        c.volume.threads = c.vpl.threads = int(std::max(1u, std::thread::hardware_concurrency()));
         std::unique_ptr<IndirectEstimator> e = makeCpuIndirectEstimator(scene, c);
         if (!e) throw InputError(concat("'", method, "' cannot stand in for the cache's indirect light"));
         return e;

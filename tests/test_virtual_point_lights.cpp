@@ -71,6 +71,50 @@ TEST(VirtualPointLights, SettingsOutOfRangeAreInputErrors) {
     EXPECT_THROW(u.validate(), InputError);
 }
 
+TEST(VirtualPointLights, ABatchOnThreadsIsTheSameAsOnOne) {
+    // Each point's sum (and its near field's rays) is on its own, so a batch
+    // spread over threads gives every request what one thread gives it, bit
+    // for bit: the Cornell box lit by its exact direct light, points over
+    // its surfaces facing every way, a batch not a whole number of blocks.
+    const Scene scene = makeCornellBox();
+    const std::vector<IrradianceMeshCopy> source = test::exactDirectSource(scene);
+    VirtualPointLightSettings one;
+    one.lights = 64;
+    VirtualPointLightSettings three = one;
+    three.threads = 3;
+    VirtualPointLights a(scene, one), b(scene, three);
+    a.setSource(0, source);
+    b.setSource(0, source);
+    std::vector<SampleRequest> requests;
+    for (const IrradianceMeshCopy& m : source)
+        for (size_t v = 0; v < m.positions.size() && requests.size() < 1000; v += 3) {
+            SampleRequest r;
+            r.x = m.positions[v];
+            r.n = m.normals[v];
+            r.seed = uint32_t(7 * requests.size() + 1);
+            requests.push_back(r);
+        }
+    ASSERT_GT(requests.size(), 200u);
+    ASSERT_NE(requests.size() % 64, 0u);
+    std::vector<VertexSample> ra, rb;
+    a.estimateBatch(0, requests, ra);
+    b.estimateBatch(0, requests, rb);
+    ASSERT_EQ(ra.size(), requests.size());
+    ASSERT_EQ(rb.size(), requests.size());
+    double lit = 0;
+    for (size_t i = 0; i < requests.size(); ++i) {
+        ASSERT_EQ(ra[i].irradiance, rb[i].irradiance) << "request " << i;
+        ASSERT_EQ(ra[i].visibility, rb[i].visibility) << "request " << i;
+        ASSERT_EQ(rb[i].irradiance, b.estimate(0, requests[i].x, requests[i].n, requests[i].seed)) << "request " << i;
+        lit += luminance(ra[i].irradiance);
+    }
+    EXPECT_GT(lit, 0.0);
+    EXPECT_EQ(b.stats().estimates, 2 * requests.size());
+    VirtualPointLightSettings bad;
+    bad.threads = 0;
+    EXPECT_THROW(bad.validate(), InputError);
+}
+
 TEST(VirtualPointLights, TheFactoryMakesThemByName) {
     const Scene scene = test::furnaceBox(0.5, 0.0);
     IndirectChoice choice;

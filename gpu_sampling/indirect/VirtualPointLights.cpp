@@ -3,12 +3,14 @@
 #include "RadianceProxy.h"
 #include "RayGather.h"
 #include "core/Error.h"
+#include "core/ParallelFor.h"
 #include "core/Random.h"
 #include "core/raytrace/EmbreeScene.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 
 namespace ml {
 
@@ -21,6 +23,8 @@ void VirtualPointLightSettings::validate() const {
         throw InputError(concat("virtual point lights: ", sitesPerLight, " candidate points per light is not within 1..64"));
     if (nearRays < 0 || nearRays > 4096)
         throw InputError(concat("virtual point lights: ", nearRays, " near-field rays is not within 0..4096"));
+    if (threads < 1 || threads > 1024)
+        throw InputError(concat("virtual point lights: ", threads, " threads is not within 1..1024"));
 }
 
 // --- Sampling ------------------------------------------------------------------------------
@@ -319,15 +323,48 @@ const std::vector<VirtualLight>& VirtualPointLights::positive(size_t slot) const
 const std::vector<VirtualLight>& VirtualPointLights::negative(size_t slot) const { return source(slot).negative; }
 Rgb VirtualPointLights::reflectedPower(size_t slot) const { return source(slot).power; }
 
-Rgb VirtualPointLights::estimate(size_t slot, const Vec3& x, const Vec3& nIn, uint32_t seed) {
-    const Source& s = source(slot);
-    const auto start = std::chrono::steady_clock::now();
+Rgb VirtualPointLights::irradianceAt(const Source& s, const Vec3& x, const Vec3& nIn, uint32_t seed) const {
     const Vec3 n = glm::normalize(nIn);
     Rgb e = glm::max(virtualLightIrradiance(s.positive, x, n) - virtualLightIrradiance(s.negative, x, n), Rgb(0.0));
     if (!s.lookups.empty()) e += nearCompensation(s, x, n, seed);
+    return e;
+}
+
+Rgb VirtualPointLights::estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) {
+    const Source& s = source(slot);
+    const auto start = std::chrono::steady_clock::now();
+    const Rgb e = irradianceAt(s, x, n, seed);
     stats_.estimates++;
     stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return e;
+}
+
+void VirtualPointLights::estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
+                                       std::vector<VertexSample>& results) {
+    if (settings_.threads <= 1) return IndirectEstimator::estimateBatch(slot, requests, results);
+    const Source& s = source(slot);
+    const auto start = std::chrono::steady_clock::now();
+    results.assign(requests.size(), VertexSample{});
+    // Blocks of requests, each point's sum on its own; a failure is
+    // reported for the first request that failed, as on one thread.
+    constexpr size_t kBlock = 64;
+    const size_t blocks = (requests.size() + kBlock - 1) / kBlock;
+    std::vector<std::exception_ptr> failed(requests.size());
+    parallelFor(blocks, settings_.threads, [&](size_t b) {
+        for (size_t i = b * kBlock; i < std::min(requests.size(), (b + 1) * kBlock); ++i) {
+            const SampleRequest& r = requests[i];
+            try {
+                results[i].irradiance = irradianceAt(s, r.x, r.n, r.seed);
+            } catch (...) {
+                failed[i] = std::current_exception();
+                return;
+            }
+        }
+    });
+    for (size_t i = 0; i < failed.size(); ++i)
+        if (failed[i]) asBatchRequest(i, [&] { std::rethrow_exception(failed[i]); });
+    stats_.estimates += requests.size();
+    stats_.estimateSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 Rgb VirtualPointLights::nearCompensation(const Source& source, const Vec3& x, const Vec3& n, uint32_t seed) const {

@@ -106,7 +106,12 @@ struct VirtualPointLightSettings {
     // Rays per estimate compensating the clamp near x (above); 0: none, the
     // clamp's bias stays (the paper's own). Typical 16..64.
     int nearRays = 16;
-    void validate() const;   // InputError unless 1 <= lights <= 65536, 0 <= negativeShare <= 4, 1 <= sitesPerLight <= 64, 0 <= nearRays <= 4096
+    // Threads a batch of estimates is spread over (estimateBatch; each
+    // point's sum is on its own, so the results do not depend on it). The
+    // real-time stand-in uses every core (realtimeEstimatorFactory); inside
+    // the cache's workers, which already do, one.
+    int threads = 1;
+    void validate() const;   // InputError unless 1 <= lights <= 65536, 0 <= negativeShare <= 4, 1 <= sitesPerLight <= 64, 0 <= nearRays <= 4096, 1 <= threads <= 1024
 };
 
 // A point light standing for a patch of surface: it emits flux Φ in a lobe
@@ -151,6 +156,10 @@ public:
     // The lights' sum, plus the near field's compensation when nearRays > 0
     // (jittered from `seed`; without it the seed is not used).
     Rgb estimate(size_t slot, const Vec3& x, const Vec3& n, uint32_t seed) override;
+    // The same for every request, on `threads` threads (each result what
+    // estimate gives for it).
+    void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
+                       std::vector<VertexSample>& results) override;
     IndirectStats stats() const override;
 
     const std::vector<VirtualLight>& positive(size_t slot) const;
@@ -182,6 +191,8 @@ private:
     // Whether light leaving `origin` along `direction` meets a surface that
     // is lit from that side (anything but a closed mesh's inside).
     bool reachesASurface(const Vec3& origin, const Vec3& direction) const;
+    // estimate's value, touching nothing (thread-safe).
+    Rgb irradianceAt(const Source& source, const Vec3& x, const Vec3& n, uint32_t seed) const;
     // What the clamp leaves out near x (see above), from nearRays rays.
     Rgb nearCompensation(const Source& source, const Vec3& x, const Vec3& n, uint32_t seed) const;
 
