@@ -189,16 +189,28 @@ void CacheWorker::run() {
             if (caustics_) m.push_back(caustics_->copyMesh());
             return m;
         };
-        // A stop ends the direct round under way between two of its batches
+        // A stop ends the round under way between two of its batches
         // (IrradianceCache::setInterrupt), not after it: a round of the back
         // rooms' direct light took 25 s, and render --time 15 ran to 42 s.
+        // The bounces' gathers are cut the same way (a round of them lasts
+        // up to kRoundSeconds); what else a round does (scoring, a bounce's
+        // source built) is not: the Cornell box's block moved in bench
+        // dynamic --quick still waited up to 0.2-0.3 s for its worker's loop.
         // Not under a sample budget (or repeatable), whose rounds no clock
         // may decide: a stop then waits for the round.
         struct InterruptWhileHere {
             IrradianceCache& cache;
-            ~InterruptWhileHere() { cache.setInterrupt({}); }
-        } interruptible{cache_};
-        if (!settings_.maxSamples && !settings_.repeatable) cache_.setInterrupt([this] { return stopping_.load(); });
+            IndirectSolver* indirect;
+            ~InterruptWhileHere() {
+                cache.setInterrupt({});
+                if (indirect) indirect->setInterrupt({});
+            }
+        } interruptible{cache_, indirect_};
+        if (!settings_.maxSamples && !settings_.repeatable) {
+            const auto stopping = [this] { return stopping_.load(); };
+            cache_.setInterrupt(stopping);
+            if (indirect_) indirect_->setInterrupt(stopping);
+        }
         double lastPublish = -1e30, publishCost = 0;
         bool converged = false, directConverged = false, indirectStarted = false, sourceIncomplete = false;
         double directRate = 0;  // direct samples per second in the last round

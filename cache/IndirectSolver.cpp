@@ -164,6 +164,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
         layout.surfaces = surfaces_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
+        caches_.back()->setInterrupt(interrupt_);
         prepareSource(estimator, bounce, direct, true);
     }
     const bool first = !firstPassDone();
@@ -263,6 +264,11 @@ void IndirectSolver::restart(IndirectEstimator& estimator) {
     resetPass2();
     directRefreshed_ = true;  // the source about to be built is direct light as it is now
     for (size_t s = 0; s < sourceBuilt_.size(); ++s) releaseSource(estimator, s);
+}
+
+void IndirectSolver::setInterrupt(std::function<bool()> interrupted) {
+    interrupt_ = std::move(interrupted);
+    for (auto& c : caches_) c->setInterrupt(interrupt_);
 }
 
 void IndirectSolver::sceneChanged(bool keepOld) {

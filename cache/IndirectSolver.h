@@ -166,6 +166,10 @@ public:
     // small share of the light, kKeepOldLightShare: the old light is then
     // closer than bounces partly gathered, or than a real-time method's).
     void sceneChanged(bool keepOld = false);
+    // Every bounce's cache, and those made later, ends a round under way
+    // when `interrupted` says so (IrradianceCache::setInterrupt); empty:
+    // rounds whole.
+    void setInterrupt(std::function<bool()> interrupted);
     // A new worker's estimator holds none of the sources built in the one
     // before (ProgressiveSession::start after a stop): they are built again
     // when next needed.
@@ -258,6 +262,7 @@ private:
     bool directRefreshed_ = false;   // bounce 1's source rebuilt for pass 2
     bool regathering_ = false;       // bounce 1 gathered again since restart()
     bool restarted_ = false;         // first passes gathered again since restart(), not done yet
+    std::function<bool()> interrupt_;        // setInterrupt's, for every bounce's cache
     std::vector<IrradianceMeshCopy> stale_;  // shown after sceneChanged() until bounce 1 is
     bool keepStale_ = false;                 // ...or until every bounce is (sceneChanged's keepOld)
 

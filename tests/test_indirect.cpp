@@ -512,6 +512,35 @@ void expectFirstPassEffort(double firstPassGathers) {
     EXPECT_GE(laterBuilds, 1u);      // bounce 1's source is rebuilt for pass 2
 }
 
+// The solver's interrupt reaches every bounce's cache, those made after it
+// was set too: asked at once, a round gathers nothing; cleared, rounds go on.
+TEST(IndirectInterrupt, EveryBouncesCacheEndsItsRoundWhenAsked) {
+    const Scene scene = test::furnaceBox(0.5, 0.0);
+    IndirectSettings is;
+    is.bounces = 2;
+    is.albedo = 0.5;
+    IndirectSolver solver(scene, is);
+    EffortRecorder recorder;
+    const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, 1.0);
+    bool stop = true;
+    solver.setInterrupt([&] { return stop; });
+    RefineReport r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    ASSERT_EQ(solver.started(), 1);
+    EXPECT_EQ(r.estimates, 0u);
+    EXPECT_EQ(solver.cache(1).totalSamples(), 0u);
+    stop = false;
+    for (int k = 0; k < 400 && solver.started() < 2; ++k) solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    ASSERT_EQ(solver.started(), 2);  // bounce 2's cache made while the interrupt was set
+    const uint64_t second = solver.cache(2).totalSamples();
+    stop = true;
+    r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    EXPECT_EQ(r.estimates, 0u);
+    EXPECT_EQ(solver.cache(2).totalSamples(), second);
+    solver.setInterrupt({});
+    r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    EXPECT_GT(r.estimates, 0u);
+}
+
 TEST(FirstPassEffort, ALargeBaseIsGatheredFirstAtItsShare) { expectFirstPassEffort(10); }
 TEST(FirstPassEffort, ASmallBaseIsGatheredAtFullEffort) { expectFirstPassEffort(1e9); }
 
