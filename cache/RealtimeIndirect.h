@@ -238,14 +238,15 @@ struct RealtimeSettings {
 // (shapeAsLaterBounces), and on the old light correctByChange takes out
 // most of that guess, while every bounce estimated costs an update of the
 // method, and the image shows the pose before until the estimate comes.
-// Measured (bench dynamic --motions light,block, two runs each, the Cornell
-// box, auto choosing volume): every bounce estimated, auto's volume trial
-// 0.88-0.92 s, the light back within 2% after 1.99-2.13 s against a cold
-// start's 2.80-2.87 s, the block after 1.04 s against 1.23-1.52 s; three,
-// the trial 0.44-0.74 s, the light after 0.56 s against 1.95 s and the
-// block after 0.27 s against 1.39 s (viewer/README.md, "Fewer bounces
-// estimated"). Three of eight estimated from converged direct light leave
-// 1.1x the image error of all eight (bench dynamic's table of the methods).
+// Measured (bench dynamic, the Cornell box, auto choosing volume): every
+// bounce estimated (two runs), auto's volume trial 0.88-0.92 s, the light
+// back within 2% after 1.99-2.13 s against a cold start's 2.80-2.87 s, the
+// block after 1.04 s against 1.23-1.52 s; three (four runs), the trial
+// 0.43-0.74 s, the light after 0.50-0.62 s against 1.78-2.27 s, the block
+// after 0.25-0.28 s against 1.39-1.88 s (viewer/README.md, "Fewer bounces
+// estimated"). From converged direct light, three of eight leave about the
+// image error of all eight (volume 1.84% against 1.74%, vpl 2.72% against
+// 2.69%, lpv 5.44% against 5.56%: bench dynamic's table of the methods).
 int standInBounces(const IndirectSettings& indirect);
 constexpr double kStandInTailShare = 1.0 / 6;
 
