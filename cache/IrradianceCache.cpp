@@ -818,20 +818,19 @@ namespace {
 // One batch: pending[first, first + count).
 void takeBatch(CacheState& s, VertexSampler& sampler, uint32_t seed, const std::vector<PendingSample>& pending,
                size_t first, size_t count) {
-    const std::vector<PendingSample> batch(pending.begin() + std::ptrdiff_t(first),
-                                           pending.begin() + std::ptrdiff_t(first + count));
+    const auto begin = pending.begin() + std::ptrdiff_t(first), end = begin + std::ptrdiff_t(count);
     std::vector<SampleRequest> requests;
     requests.reserve(count);
-    for (const PendingSample& p : batch) requests.push_back(requestFor(s, p, seed));
+    for (auto p = begin; p != end; ++p) requests.push_back(requestFor(s, *p, seed));
     std::vector<VertexSample> results;
     try {
         sampler.sampleBatch(requests, results);
     } catch (const SampleBatchError& e) {
-        throwWhereSampled(s, batch, requests, e);
+        throwWhereSampled(s, std::vector<PendingSample>(begin, end), requests, e);
     }
     ML_ASSERT(results.size() == count, "the sampler returned ", results.size(), " of ", count, " samples");
     for (size_t i = 0; i < count; ++i) {
-        const PendingSample& p = batch[i];
+        const PendingSample& p = pending[first + i];
         p.grid ? addGridSample(s, p.mesh, p.index, results[i]) : addVertexSample(s, p.mesh, p.index, results[i]);
     }
 }

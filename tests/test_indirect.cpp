@@ -475,14 +475,20 @@ struct EffortRecorder : IndirectEstimator {
     IndirectStats stats() const override { return {}; }
 };
 
+// Two bounces, each half the one before: the furnace tests' solver settings.
+IndirectSettings twoHalfBounces() {
+    IndirectSettings is;
+    is.bounces = 2;
+    is.albedo = 0.5;
+    return is;
+}
+
 // Each source built while the first passes run, and only those, spends
 // firstPassGathers over the base's vertices (times ā^(n−1) for bounce n);
 // a base no larger than firstPassGathers is gathered at full effort.
 void expectFirstPassEffort(double firstPassGathers) {
     const Scene scene = test::furnaceBox(0.5, 0.0);
-    IndirectSettings is;
-    is.bounces = 2;
-    is.albedo = 0.5;
+    IndirectSettings is = twoHalfBounces();
     is.firstPassGathers = firstPassGathers;
     IndirectSolver solver(scene, is);
     EffortRecorder recorder;
@@ -516,29 +522,26 @@ void expectFirstPassEffort(double firstPassGathers) {
 // was set too: asked at once, a round gathers nothing; cleared, rounds go on.
 TEST(IndirectInterrupt, EveryBouncesCacheEndsItsRoundWhenAsked) {
     const Scene scene = test::furnaceBox(0.5, 0.0);
-    IndirectSettings is;
-    is.bounces = 2;
-    is.albedo = 0.5;
-    IndirectSolver solver(scene, is);
+    IndirectSolver solver(scene, twoHalfBounces());
     EffortRecorder recorder;
     const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, 1.0);
+    const auto round = [&] { return solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt); };
     bool stop = true;
     solver.setInterrupt([&] { return stop; });
-    RefineReport r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    RefineReport r = round();
     ASSERT_EQ(solver.started(), 1);
     EXPECT_EQ(r.estimates, 0u);
     EXPECT_EQ(solver.cache(1).totalSamples(), 0u);
     stop = false;
-    for (int k = 0; k < 400 && solver.started() < 2; ++k) solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    for (int k = 0; k < 400 && solver.started() < 2; ++k) round();
     ASSERT_EQ(solver.started(), 2);  // bounce 2's cache made while the interrupt was set
     const uint64_t second = solver.cache(2).totalSamples();
     stop = true;
-    r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
+    r = round();
     EXPECT_EQ(r.estimates, 0u);
     EXPECT_EQ(solver.cache(2).totalSamples(), second);
     solver.setInterrupt({});
-    r = solver.step(recorder, [&] { return direct; }, 64, 7, std::nullopt);
-    EXPECT_GT(r.estimates, 0u);
+    EXPECT_GT(round().estimates, 0u);
 }
 
 TEST(FirstPassEffort, ALargeBaseIsGatheredFirstAtItsShare) { expectFirstPassEffort(10); }
@@ -563,10 +566,7 @@ struct NoisyEstimator : EffortRecorder {
 // again as bounce 1's samples double. Both converge.
 TEST(PassTwo, TheBounceWithTheLargestShareOfTheErrorGoesFirst) {
     const Scene scene = test::furnaceBox(0.5, 0.0);
-    IndirectSettings is;
-    is.bounces = 2;
-    is.albedo = 0.5;
-    IndirectSolver solver(scene, is);
+    IndirectSolver solver(scene, twoHalfBounces());
     NoisyEstimator estimator;
     const std::vector<IrradianceMeshCopy> direct = test::uniformSource(scene, 1.0);
     int r = 0;
