@@ -23,6 +23,11 @@ struct BounceCountSettings {
     std::optional<int> forced;         // --bounces N: this many, whatever the albedo
     int points = 4096;                 // surface points the albedo is averaged over
     int lightSamples = 16;             // shadow rays per light and point
+    // Past this many lights, each point draws lightSamples × everyLightUpTo
+    // lights in proportion to their power instead of lightSamples rays to
+    // every light (countBounces).
+    int everyLightUpTo = 16;
+    int threads = 0;                   // 0: every core; the count is the same for any
     uint32_t seed = 1;
     void validate() const;
 };
