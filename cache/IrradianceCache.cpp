@@ -274,15 +274,16 @@ std::vector<int> compactedOrder(const std::vector<char>& keep) {
     return slot;
 }
 
-// `base`'s faces where keepFace says so, with their vertices (and a vertex
-// of no face), numbered as copying `base`, deleting the other faces with
-// the vertices they leave alone and collecting the garbage would number
-// them: the same cache, vertex for vertex. Built from the faces kept
-// alone, it costs what they are, not the whole base: a light's own mesh
-// covers 1-2% of the 192-panel office, whose 192 copies of the base and
-// deletions took 2.3 s of the cache's making. False where a face cannot be
-// added again (OpenMesh refuses a complex vertex in some orders); `out` is
-// then to be ignored.
+// `base`'s faces where keepFace says so, with their vertices (and any
+// vertex of no face), numbered as copying `base`, deleting the other faces
+// with the vertices that leaves without one and collecting the garbage
+// would number them: the same cache, vertex for vertex. Built from the
+// faces kept alone, it costs what they are, not the whole base: a light's
+// own mesh covers 1-2% of the 192-panel office, whose 192 copies of the
+// base and deletions took 2.3 s of the cache's making. False where a face
+// cannot be added again (OpenMesh may refuse a complex vertex when faces
+// come in some orders; not seen on the scenes measured): `out` is then to
+// be ignored, and layMesh deletes from a copy as before.
 bool keptFaces(const CacheTriMesh& base, const std::vector<char>& keepFace, CacheTriMesh& out) {
     std::vector<char> keepVertex(base.n_vertices(), 0);
     for (const auto vh : base.vertices()) {
