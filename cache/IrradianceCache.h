@@ -280,10 +280,11 @@ public:
     // so, the round ends with what it took (a first pass's vertices not
     // reached stay unsampled, resamples not reached are not taken; the
     // vertices a round's splits made are always sampled, so that a refined
-    // cache keeps an estimate of its error), and the report counts those. For a worker's stop under a time limit (CacheWorker), where a
-    // round of thousands of samples at milliseconds each (the back rooms)
-    // held the stop for tens of seconds; never under a sample budget, whose
-    // rounds no clock may decide. Empty: every round whole, in one batch.
+    // cache keeps an estimate of its error), and the report counts those.
+    // For a worker's stop under a time limit (CacheWorker), where a round of
+    // thousands of samples at milliseconds each (the back rooms) held the
+    // stop for tens of seconds; never under a sample budget, whose rounds no
+    // clock may decide. Empty: every round whole, in one batch.
     void setInterrupt(std::function<bool()> interrupted);
 
     // The error the cache itself predicts, relative to the displayed level:
