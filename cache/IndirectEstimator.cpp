@@ -23,4 +23,9 @@ void IndirectEstimator::estimateBatch(size_t slot, const std::vector<SampleReque
     }
 }
 
+std::optional<std::vector<Rgb>> IndirectEstimator::seenAlbedo(const IrradianceMeshCopy&, size_t, size_t, int,
+                                                              uint32_t) {
+    return std::nullopt;
+}
+
 }  // namespace ml

@@ -14,6 +14,7 @@
 #include "IrradianceCache.h"
 #include "VertexSampler.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,20 @@ public:
     // room behind (the two rooms of test_indirect: 3.7% of the lit floor's
     // light on the dark one, against 0.5%).
     virtual bool separatesSides() const { return false; }
+    // The cosine-weighted albedo each vertex of `mesh` sees on its normal's
+    // side: what a gather of a source holding 1 W·m⁻² on every surface
+    // returns, 1/N Σ Kd over the surfaces N rays land on (0 where they leave
+    // the scene or meet a closed object's inside), from `rays` rays per
+    // vertex drawn from `seed`, for vertices [begin, end) (the same values
+    // however the range is split). Light that has bounced a few times is near
+    // uniform over a room, so the bounces after the first are about this
+    // albedo times it: an office's ceiling, which sees the grey carpet, gets
+    // less of them than the floor under the white ceiling
+    // (IndirectSolver's guess of the bounces not yet gathered). nullopt
+    // where the method has no cheap rays (the default): a voxel gather
+    // costs as much for this as for light.
+    virtual std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end,
+                                                       int rays, uint32_t seed);
 };
 
 }  // namespace ml

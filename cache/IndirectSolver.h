@@ -112,18 +112,37 @@ CacheLayout bounceCacheLayout(const IndirectEstimator& estimator);
 void fillHiddenVertices(IrradianceMeshCopy& mesh);
 
 // `mesh` (bounce k's light) reshaped as the bounces after it are guessed,
-// each a ratio of the one before: after bounce 1, half its own shape and
-// half its area-weighted mean; after a later bounce, its own shape. Bounce
-// 1 carries direct light's pattern (an office's ceiling, which no panel
-// lights, holds the most of it, its floor little), and the bounces after it
-// tend, as a power iteration does, to the transport's dominant shape, near
-// uniform where surfaces see each other (progressive radiosity's ambient
-// term, Cohen et al. 1988); bounce 2 is most of the way there. Measured
-// (320x180, before bounce 2 is shown): the 12-panel office 19.9% relative
-// RMSE with bounce 1's shape, 13.1% uniform, 13.4% half and half; the
-// Cornell box (256x256) 10.4%, 9.5%, 8.2%. After bounce 2, its own shape
-// (Cornell 2.9%) beats half its mean (3.1%) and the mean (4.6%).
-void shapeAsLaterBounces(IrradianceMeshCopy& mesh, int bounce);
+// each a ratio of the one before; after a later bounce than the first, its
+// own shape. After bounce 1, with `seenAlbedo` (one value per vertex,
+// seenAlbedoOver): its area-weighted mean times the albedo each vertex sees
+// over that albedo's area-weighted mean, channel by channel (the mean is
+// kept: the tail's ratio says how much light is left); without it, half its
+// own shape and half its mean. Bounce 1 carries direct light's pattern (an
+// office's ceiling, which no panel lights, holds the most of it, its floor
+// little), and the bounces after it tend, as a power iteration does, to
+// the transport's dominant shape, near uniform where surfaces see each
+// other (progressive radiosity's ambient term, Cohen et al. 1988). A
+// uniform light over the room reaches a point as the albedo it sees times
+// that light: the ceiling, which sees the grey carpet, gets about 0.6 of
+// what the floor under the white ceiling gets (the path tracer, 12-panel
+// office: bounces 2-8 over bounce 1 are 0.7 on the ceiling, 1.9-2.0 on the
+// floor, 1.6-1.9 on the walls). Measured (before bounce 2 is shown, net of
+// the reference's noise): the 12-panel office (320x180, --samples 84000)
+// 13.5% relative RMSE half and half, 8.9% by the albedo seen (the ceiling
+// 36% too bright before); the Cornell box (256x256, --samples 8000) 8.1%
+// and 4.5%. Earlier, at 3 s: bounce 1's shape 19.9% and 10.4%, uniform
+// 13.1% and 9.5%. After bounce 2, its own shape (Cornell 2.9%) beats half
+// its mean (3.1%) and the mean (4.6%).
+void shapeAsLaterBounces(IrradianceMeshCopy& mesh, int bounce, const std::vector<Rgb>& seenAlbedo = {});
+
+// Rays per vertex for the albedo bounce 1's vertices see
+// (IndirectEstimator::seenAlbedo).
+constexpr int kSeenAlbedoRays = 16;
+// IndirectEstimator::seenAlbedo at `mesh`'s vertices, each averaged with
+// its one ring (the rays are few, and the later bounces' shape is smooth);
+// nullopt where the estimator has no cheap rays.
+std::optional<std::vector<Rgb>> seenAlbedoOver(IndirectEstimator& estimator, const IrradianceMeshCopy& mesh,
+                                               uint32_t seed);
 
 class IndirectSolver {
 public:
@@ -290,6 +309,9 @@ private:
     std::vector<IrradianceMeshCopy> displayMeshesLocked() const;
     mutable std::mutex memoMutex_;
     mutable std::vector<BounceMemo> memo_;
+    // seenAlbedoOver bounce 1's base mesh, made as bounce 1 starts (empty:
+    // the estimator has no cheap rays); memoMutex_ held.
+    std::vector<Rgb> seenAlbedo_;
     uint64_t epoch_ = 0;
 };
 

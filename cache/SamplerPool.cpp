@@ -238,6 +238,24 @@ public:
     }
     double borderInset() const override { return pool_.own.indirect->borderInset(); }
     bool separatesSides() const override { return pool_.own.indirect->separatesSides(); }
+    // A share of the vertices on each thread (each builds its own lookup of
+    // the whole mesh, so no more parts than threads).
+    std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end, int rays,
+                                               uint32_t seed) override {
+        const size_t parts = std::max<size_t>(1, std::min(pool_.size(), (end - begin) / 256));
+        std::vector<std::optional<std::vector<Rgb>>> part(parts);
+        pool_.forEach(parts, [&](WorkerSamplers& s, size_t k) {
+            part[k] = s.indirect->seenAlbedo(mesh, begin + (end - begin) * k / parts,
+                                             begin + (end - begin) * (k + 1) / parts, rays, seed);
+        });
+        std::vector<Rgb> all;
+        all.reserve(end - begin);
+        for (const auto& p : part) {
+            if (!p) return std::nullopt;
+            all.insert(all.end(), p->begin(), p->end());
+        }
+        return all;
+    }
     void estimateBatch(size_t slot, const std::vector<SampleRequest>& requests,
                        std::vector<VertexSample>& results) override {
         results.resize(requests.size());

@@ -451,6 +451,11 @@ public:
     IndirectStats stats() const override { return inner_->stats(); }
     double borderInset() const override { return inner_->borderInset(); }
     bool separatesSides() const override { return inner_->separatesSides(); }
+    std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end, int rays,
+                                               uint32_t seed) override {
+        context_->use();
+        return inner_->seenAlbedo(mesh, begin, end, rays, seed);
+    }
 
 private:
     std::unique_ptr<GlContext> context_;

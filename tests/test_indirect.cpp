@@ -616,17 +616,24 @@ TEST(PassTwo, TheBounceWithTheLargestShareOfTheErrorGoesFirst) {
     EXPECT_GE(secondSources, 3u);  // the first pass's, pass 2's, and at least one rebuilt as bounce 1 grew
 }
 
+// Two triangles of areas 1 and 3 sharing an edge, lit 0, 6, 6 and
+// (12, 0, 12) at their vertices.
+IrradianceMeshCopy twoTriangles() {
+    IrradianceMeshCopy m;
+    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 2, 0), Vec3(3, 2, 0)};
+    m.normals.assign(4, Vec3(0, 0, 1));
+    m.triangles = {glm::uvec3(0, 1, 2), glm::uvec3(1, 3, 2)};
+    m.irradiance = {Rgb(0.0), Rgb(6.0), Rgb(6.0), Rgb(12.0, 0.0, 12.0)};
+    return m;
+}
+
 // The tail's shape (shapeAsLaterBounces): after bounce 1, half of each
 // vertex's light and half the area-weighted mean; after a later bounce,
 // unchanged. Two triangles of areas 1 and 3 sharing an edge: vertex areas
 // (a third of each face) 1/3, 4/3, 4/3, 1; the mean of 0, 6, 6, 12 so
 // weighted is (0 + 8 + 8 + 12) / 4 = 7. Exact arithmetic up to rounding.
 TEST(TailShape, AfterBounceOneHalfTheLightIsTheAreaMean) {
-    IrradianceMeshCopy m;
-    m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 2, 0), Vec3(3, 2, 0)};
-    m.normals.assign(4, Vec3(0, 0, 1));
-    m.triangles = {glm::uvec3(0, 1, 2), glm::uvec3(1, 3, 2)};
-    m.irradiance = {Rgb(0.0), Rgb(6.0), Rgb(6.0), Rgb(12.0, 0.0, 12.0)};
+    IrradianceMeshCopy m = twoTriangles();
     IrradianceMeshCopy later = m;
     shapeAsLaterBounces(later, 2);
     for (size_t v = 0; v < 4; ++v) EXPECT_EQ(later.irradiance[v], m.irradiance[v]);
@@ -636,6 +643,35 @@ TEST(TailShape, AfterBounceOneHalfTheLightIsTheAreaMean) {
     for (size_t v = 0; v < 4; ++v)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(m.irradiance[v][c], 0.5 * (before[v][c] + mean[c]), 1e-12);
     EXPECT_NEAR(mean.x, 7.0, 1e-12);
+}
+
+// With the albedo each vertex sees, the tail after bounce 1 is the
+// area-weighted mean (7, 0, 7 on the triangles above) times that albedo
+// over its own area-weighted mean, channel by channel. Seen albedos 0.2,
+// 0.4, 0.4, 0.8 (blue half of them) have area-weighted mean
+// (0.2/3 + 0.4 · 8/3 + 0.8) / 4 = 0.4833..., so vertex 3 gets 7 · 0.8 /
+// 0.4833 and the mean stays 7; a channel no vertex sees (green) is its
+// mean everywhere, (6 · 8/3) / 4 = 4. Exact arithmetic up to rounding.
+TEST(TailShape, AfterBounceOneTheAreaMeanGoesWhereTheAlbedoSeenIs) {
+    IrradianceMeshCopy m = twoTriangles();
+    const std::vector<Rgb> seen = {Rgb(0.2, 0, 0.1), Rgb(0.4, 0, 0.2), Rgb(0.4, 0, 0.2), Rgb(0.8, 0, 0.4)};
+    const std::vector<double> area = {1.0 / 3, 4.0 / 3, 4.0 / 3, 1.0};
+    shapeAsLaterBounces(m, 1, seen);
+    const double seenMean = (0.2 / 3 + 0.4 * 8 / 3 + 0.8) / 4;
+    Rgb mean(0.0);
+    for (size_t v = 0; v < 4; ++v) {
+        EXPECT_NEAR(m.irradiance[v].x, 7.0 * seen[v].x / seenMean, 1e-12) << v;
+        EXPECT_NEAR(m.irradiance[v].z, 7.0 * seen[v].z / (0.5 * seenMean), 1e-12) << v;
+        EXPECT_NEAR(m.irradiance[v].y, 4.0, 1e-12) << v;
+        mean += area[v] * m.irradiance[v] / 4.0;
+    }
+    EXPECT_NEAR(mean.x, 7.0, 1e-12);
+    EXPECT_NEAR(mean.y, 4.0, 1e-12);
+    EXPECT_NEAR(mean.z, 7.0, 1e-12);
+    // A seen albedo of another size (not this mesh's) is not used.
+    IrradianceMeshCopy other = twoTriangles();
+    shapeAsLaterBounces(other, 1, {Rgb(1.0)});
+    EXPECT_NEAR(other.irradiance[0].x, 3.5, 1e-12);
 }
 
 }  // namespace

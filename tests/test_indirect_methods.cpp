@@ -32,8 +32,10 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace ml;
@@ -394,6 +396,55 @@ TEST(IndirectConsistency, RayGatherMatchesThePathTracerInCornersAndContacts) {
         const double ratio = meanOf(gather, points[i].x, points[i].n, 32) / reference;
         EXPECT_NEAR(ratio, 1.0, 0.02 + 2 * se) << points[i].what;
         std::printf("%s: ray gather / path tracer %.4f (path tracer ±%.2f%%)\n", points[i].what, ratio, 100 * se);
+    }
+}
+
+// The albedo a vertex sees (RayGather::seenAlbedo) between two plates 1000h
+// wide, h apart: a grey floor (0.3) under a white ceiling (0.8). From the
+// floor's centre every ray meets the ceiling but those within cosθ < 0.002
+// of the horizon, a 4·10⁻⁶ share of a cosine-weighted hemisphere: 0.8 to
+// that share (the 16 rays asked, 4 × 4 strata, all meet it); from the
+// ceiling's centre, 0.3. Above the plates, facing up, nothing: 0. A range
+// of vertices gives what the whole mesh gives there, bit for bit, however
+// it is split (the cache's threads split it).
+TEST(IndirectConsistency, RayGatherSeesTheAlbedoOfWhatItsRaysMeet) {
+    using namespace test;
+    const double h = 0.02, w = 1000 * h;
+    const Scene scene = sceneOf("plates",
+                                {Material::diffuse("carpet", Rgb(0.3), Rgb(0.0)),
+                                 Material::diffuse("white", Rgb(0.8), Rgb(0.0))},
+                                {quadMesh("floor", 0, Vec3(-0.5 * w, 0, -0.5 * w), w * kZ, w * kX),
+                                 quadMesh("ceiling", 1, Vec3(-0.5 * w, h, -0.5 * w), w * kX, w * kZ)});
+    // Each plate as a fan of four triangles about its centre (vertex 0 and
+    // 5), and a vertex above the ceiling facing up (10).
+    IrradianceMeshCopy mesh;
+    for (int plate = 0; plate < 2; ++plate) {
+        const double y = plate * h;
+        const Vec3 n = plate ? -kY : kY;
+        const uint32_t c = uint32_t(mesh.positions.size());
+        mesh.positions.push_back(Vec3(0, y, 0));
+        for (const auto& [x, z] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
+            mesh.positions.push_back(Vec3(0.5 * w * x, y, 0.5 * w * z));
+        mesh.normals.insert(mesh.normals.end(), 5, n);
+        for (uint32_t k = 0; k < 4; ++k)
+            mesh.triangles.push_back(plate ? glm::uvec3(c, c + 1 + k, c + 1 + (k + 1) % 4)
+                                           : glm::uvec3(c, c + 1 + (k + 1) % 4, c + 1 + k));
+    }
+    mesh.positions.push_back(Vec3(0, 2 * h, 0));
+    mesh.normals.push_back(kY);
+    RayGather gather(scene, RayGatherSettings{});
+    const std::optional<std::vector<Rgb>> all = gather.seenAlbedo(mesh, 0, mesh.positions.size(), 16, 7);
+    ASSERT_TRUE(all.has_value());
+    ASSERT_EQ(all->size(), mesh.positions.size());
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR((*all)[0][c], 0.8, 0.8 * 1e-5);
+        EXPECT_NEAR((*all)[5][c], 0.3, 0.3 * 1e-5);
+        EXPECT_EQ((*all)[10][c], 0.0);
+    }
+    for (size_t split : {size_t(1), size_t(5), size_t(6)}) {
+        const auto head = gather.seenAlbedo(mesh, 0, split, 16, 7), rest = gather.seenAlbedo(mesh, split, 11, 16, 7);
+        ASSERT_TRUE(head && rest);
+        for (size_t v = 0; v < 11; ++v) EXPECT_EQ(v < split ? (*head)[v] : (*rest)[v - split], (*all)[v]) << v;
     }
 }
 

@@ -189,6 +189,27 @@ VertexSample RayGather::gather(size_t slot, const Vec3& x, const Vec3& n, const 
     return result;
 }
 
+std::optional<std::vector<Rgb>> RayGather::seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end,
+                                                      int rays, uint32_t seed) {
+    ML_ASSERT(begin <= end && end <= mesh.positions.size(), "seen albedo of vertices ", begin, "..", end, " of ",
+              mesh.positions.size());
+    IrradianceMeshCopy ones;
+    ones.positions = mesh.positions;
+    ones.normals = mesh.normals;
+    ones.triangles = mesh.triangles;
+    ones.irradiance.assign(mesh.positions.size(), Rgb(1.0));
+    const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
+    // Linear: a constant needs no curvature.
+    const MeshIrradianceLookup lookup(ones, diagonal / 64, 1e-5 * diagonal, MeshIrradianceLookup::Interpolation::Linear);
+    const std::vector<const MeshIrradianceLookup*> lookups{&lookup};
+    const int strata = std::max(2, int(std::lround(std::sqrt(double(std::max(rays, 1))))));
+    std::vector<Rgb> seen(end - begin, Rgb(0.0));
+    for (size_t v = begin; v < end; ++v)
+        seen[v - begin] = gatherCachedRadiance(scene_, *rays_, closed_, lookups, mesh.positions[v], mesh.normals[v],
+                                               strata, GatherDraw(seedFor(seed, 0x5eeda1bu, uint32_t(v))));
+    return seen;
+}
+
 IndirectStats RayGather::stats() const { return stats_; }
 
 }  // namespace ml

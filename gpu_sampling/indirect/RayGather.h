@@ -104,6 +104,10 @@ public:
     // bias growing), the 12-panel office at 16 s 2.11% against 2.17%.
     double borderInset() const override { return 0.05; }
     bool separatesSides() const override { return true; }
+    // A gather of `mesh` itself holding 1 everywhere, √rays × √rays strata
+    // per vertex (at least 2 × 2), on the calling thread.
+    std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end, int rays,
+                                               uint32_t seed) override;
 
 private:
     VertexSample gather(size_t slot, const Vec3& x, const Vec3& n, const GatherDraw& draw);
