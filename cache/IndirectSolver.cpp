@@ -307,7 +307,8 @@ bool IndirectSolver::tighten(IndirectEstimator& estimator) {
 
 std::optional<std::vector<Rgb>> seenAlbedoOver(IndirectEstimator& estimator, const IrradianceMeshCopy& mesh,
                                                uint32_t seed) {
-    std::optional<std::vector<Rgb>> seen = estimator.seenAlbedo(mesh, 0, mesh.positions.size(), kSeenAlbedoRays, seedFor(seed, 0xa1bed0u));
+    std::optional<std::vector<Rgb>> seen =
+        estimator.seenAlbedo(mesh, 0, mesh.positions.size(), kSeenAlbedoRays, seedFor(seed, 0xa1bed0u));
     if (!seen || seen->size() != mesh.positions.size()) return std::nullopt;
     // Each vertex with its one ring, the ring's vertices as often as they
     // are met (each face it is a corner of adds its other two).

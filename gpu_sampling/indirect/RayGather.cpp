@@ -200,7 +200,8 @@ std::optional<std::vector<Rgb>> RayGather::seenAlbedo(const IrradianceMeshCopy& 
     ones.irradiance.assign(mesh.positions.size(), Rgb(1.0));
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
     // Linear: a constant needs no curvature.
-    const MeshIrradianceLookup lookup(ones, diagonal / 64, 1e-5 * diagonal, MeshIrradianceLookup::Interpolation::Linear);
+    const MeshIrradianceLookup lookup(ones, diagonal / 64, 1e-5 * diagonal,
+                                      MeshIrradianceLookup::Interpolation::Linear);
     const std::vector<const MeshIrradianceLookup*> lookups{&lookup};
     const int strata = std::max(2, int(std::lround(std::sqrt(double(std::max(rays, 1))))));
     std::vector<Rgb> seen(end - begin, Rgb(0.0));
