@@ -4,9 +4,11 @@
 #include "RunCommand.h"
 #include "TempDirTest.h"
 #include "core/image/Image.h"
+#include "viewer/cli/UntilErrorSchedule.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -334,4 +336,29 @@ TEST_F(Cli, RenderLuxAtTheCornellFloorCentreAgreesWithProbe) {
     ASSERT_GT(exact, 50);  // about 76 lx
     ASSERT_LT(estimated, 0.05) << "the cache did not get near enough in 8 s:\n" << r.output;
     EXPECT_NEAR(rendered, exact, 3 * estimated * exact) << "estimated error " << estimated;
+}
+
+// When --until-error asks its estimate next (UntilErrorSchedule), on exact
+// power laws: after one estimate the error is taken to fall as 1/t (0.05 at
+// 0.4 s reaches 0.02 at 1.0 s); after two, through both (0.16 at 1 s and
+// 0.04 at 2 s: α = 2, so 0.01 at 4 s); a stalled error takes α = 0.25
+// (0.04 twice: 0.02 at 2 · 2⁴ = 32 s); at or below the target, now; before
+// any estimate, never. Exact up to rounding.
+TEST(UntilError, TheNextAskIsWhenTheEstimatesSayTheErrorReachesTheTarget) {
+    UntilErrorSchedule s;
+    EXPECT_EQ(s.crossing(0.02), kInf);
+    s.add(0.4, 0.05);
+    EXPECT_NEAR(s.crossing(0.02), 1.0, 1e-12);
+    UntilErrorSchedule fast;
+    fast.add(1, 0.16);
+    fast.add(2, 0.04);
+    EXPECT_NEAR(fast.crossing(0.01), 4.0, 1e-12);
+    EXPECT_NEAR(fast.crossing(0.04), 2.0, 1e-12);
+    UntilErrorSchedule stalled;
+    stalled.add(1, 0.04);
+    stalled.add(2, 0.04);
+    EXPECT_NEAR(stalled.crossing(0.02), 32.0, 1e-9);
+    // Only the last two count: a third estimate replaces the first.
+    stalled.add(4, 0.01);
+    EXPECT_NEAR(stalled.crossing(0.0025), 4 * std::pow(4.0, 1 / 2.0), 1e-12);
 }
