@@ -506,11 +506,12 @@ int runRender(const std::vector<std::string>& args) {
     // ask of the 512×512 Cornell box took 0.6-1.7 s while the worker ran:
     // its second came at 3.0-3.1 s and read 1.05-1.23% where 2% was asked,
     // refinement ending at 4.0-9.1 s; now at 1.5-1.8 s (1.12-1.19%), ending
-    // at 2.7-3.3 s (UntilErrorSchedule).
+    // at 2.7-3.5 s (UntilErrorSchedule).
     double lastAsked = -kInf, askCost = 0;
     UntilErrorSchedule schedule;
     ImageErrorEstimate lastEstimate;
     auto good = [&](size_t frame) {
+        schedule = UntilErrorSchedule();  // a new view's error starts afresh
         return [&, frame](const CacheSnapshot& s) {
             const double now = session.seconds();
             // Nothing to ask before a bounce is shown (the estimate is then
