@@ -165,7 +165,8 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         layout.surfaces = surfaces_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
         caches_.back()->setInterrupt(interrupt_);
-        if (bounce == 1) {
+        // Only a tail after bounce 1 reads it: none with one bounce.
+        if (bounce == 1 && settings_.bounces > 1) {
             std::optional<std::vector<Rgb>> seen = seenAlbedoOver(estimator, caches_.back()->copyMesh(0), seed);
             std::lock_guard<std::mutex> lock(memoMutex_);
             seenAlbedo_ = seen ? std::move(*seen) : std::vector<Rgb>();

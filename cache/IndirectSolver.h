@@ -309,8 +309,9 @@ private:
     std::vector<IrradianceMeshCopy> displayMeshesLocked() const;
     mutable std::mutex memoMutex_;
     mutable std::vector<BounceMemo> memo_;
-    // seenAlbedoOver bounce 1's base mesh, made as bounce 1 starts (empty:
-    // the estimator has no cheap rays); memoMutex_ held.
+    // seenAlbedoOver bounce 1's base mesh, made as bounce 1 starts when
+    // later bounces follow (empty: one bounce, or the estimator has no
+    // cheap rays); memoMutex_ held.
     std::vector<Rgb> seenAlbedo_;
     uint64_t epoch_ = 0;
 };
