@@ -362,3 +362,33 @@ TEST(UntilError, TheNextAskIsWhenTheEstimatesSayTheErrorReachesTheTarget) {
     stalled.add(4, 0.01);
     EXPECT_NEAR(stalled.crossing(0.0025), 4 * std::pow(4.0, 1 / 2.0), 1e-12);
 }
+
+// Which fresh snapshots --until-error asks about (UntilErrorSchedule::
+// shouldAsk): the first; then one due by the crossing (within half the
+// snapshots' spacing of it), or one a regular interval (0.5 s, or three
+// asks' cost) after the last ask began. Times exact in binary fractions.
+TEST(UntilError, ItAsksTheFirstSnapshotThoseNearTheCrossingAndRegularlyElse) {
+    UntilErrorSchedule s;
+    EXPECT_TRUE(s.shouldAsk(0.25, 0.25, 0.02));
+    s.asked(0.25, 0.375, 0.25, 0.05);  // 5% at 0.25 s, α = 1: 2% at 0.625 s
+    EXPECT_EQ(s.askCost, 0.125);
+    EXPECT_NEAR(s.crossing(0.02), 0.625, 1e-12);
+    // A snapshot at 0.3125 (spacing 0.0625): 0.34375 is short of 0.625, and
+    // 0.1875 s since the ask began; the next at 0.5625 (spacing 0.25):
+    // 0.6875 reaches it.
+    EXPECT_FALSE(s.shouldAsk(0.4375, 0.3125, 0.02));
+    UntilErrorSchedule due = s;
+    EXPECT_TRUE(due.shouldAsk(0.5625, 0.5625, 0.02));
+    // Far from the crossing only the regular interval asks: 2% is due at
+    // 0.625 s but 0.1% at 12.5 s.
+    UntilErrorSchedule far = s;
+    EXPECT_FALSE(far.shouldAsk(0.5625, 0.5625, 0.001));
+    EXPECT_FALSE(far.shouldAsk(0.6875, 0.6875, 0.001));  // 0.4375 s since the ask began
+    EXPECT_TRUE(far.shouldAsk(0.75, 0.75, 0.001));       // 0.5 s
+    // An ask that cost 0.25 s makes the regular interval 0.75 s.
+    UntilErrorSchedule slow;
+    EXPECT_TRUE(slow.shouldAsk(1, 1, 0.001));
+    slow.asked(1, 1.25, 1, 0.05);
+    EXPECT_FALSE(slow.shouldAsk(1.625, 1.625, 0.001));
+    EXPECT_TRUE(slow.shouldAsk(1.75, 1.75, 0.001));
+}

@@ -91,16 +91,18 @@ public:
     // yet: the image then lacks light by an amount nothing has measured.
     // `check`: for the stop rule, while the worker refines on the same
     // cores: an image of more than 128×128 pixels is estimated at half its
-    // size with one pass (an eighth of the compositing; the cache's error
-    // varies slowly over the image: 0.93% against 0.91% for the Cornell box
-    // at 512×512). Smaller images, cheap anyway, keep their settings: with
+    // size with one pass of one sample a pixel (the cache's error varies
+    // slowly over the image: 0.93% against 0.91% for the Cornell box at
+    // 512×512 with 4×4 samples a pixel; at 256×256 1.24% against 1.19% with
+    // one, and an ask took 0.06-0.17 s instead of 0.25-0.57 s while the
+    // worker ran). Smaller images, cheap anyway, keep their settings: with
     // one pass the dark side of each edge weighs more, and a 48×48 room
     // read 20% high.
     ImageErrorEstimate estimate(const CacheSnapshot& s, const Camera& camera, bool check = false) {
         CompositorSettings settings = settings_;
         if (check && settings.width * settings.height > 128 * 128)
             settings.width = std::max(1, settings.width / 2), settings.height = std::max(1, settings.height / 2),
-            settings.passes = 1, settings.outlinePasses = 0;
+            settings.passes = 1, settings.outlinePasses = 0, settings.supersample = 1;
         ImageErrorEstimate e = estimateImageError(compositor_, scene_, camera, s.direct, s.indirect, settings);
         if (expectIndirect && s.indirect.empty()) e.cache = 1;
         return e;
@@ -498,33 +500,38 @@ int runRender(const std::vector<std::string>& args) {
 
     // --until-error: a fresh snapshot is good enough once its image's
     // estimated error is at most E. The estimate composites the image (and
-    // its errors), on this thread while the worker samples on its own: it
-    // is asked at most once per 0.5 s and, as a rule, at most a third of
-    // the time, so that asking does not slow refinement down much. But
-    // where the last two estimates (the first with error ∝ 1/t) say the
-    // error crosses E sooner, it is asked then, up to half the time. Each
-    // ask of the 512×512 Cornell box took 0.6-1.7 s while the worker ran:
-    // its second came at 3.0-3.1 s and read 1.05-1.23% where 2% was asked,
-    // refinement ending at 4.0-9.1 s; now at 1.5-1.8 s (1.12-1.19%), ending
-    // at 2.7-3.5 s (UntilErrorSchedule).
-    double lastAsked = -kInf, askCost = 0;
+    // its errors), on this thread while the worker samples on its own, at
+    // half size and one sample a pixel (ImageOutput::estimate): 0.06-0.17 s
+    // for the 256×256 Cornell box. It is asked at most a third of the time,
+    // and at each snapshot near where the last two estimates (a power law)
+    // say the error crosses E (UntilErrorSchedule). Asked every 0.5 s at
+    // most, and composited with 4×4 samples a pixel (0.25-0.57 s), that box
+    // asked every other snapshot and, until 2%, stopped at 1.7-2.3 s with
+    // 1.04-1.12% measured (ten runs until 1-5%: 0.82-1.43%); now at 1.0-1.1
+    // s with 1.16%, and until 1% at 1.3-1.6 s with 1.04-1.05%.
+    // The image written is the snapshot the rule found good (`judged`; the
+    // reader keeps it until its next acquire), not the one the worker
+    // publishes as it stops: that is later by the ask and the end of a
+    // round, cut short by the stop between two batches, whose new vertices
+    // are shown filled from their neighbours. The 256×256 Cornell box asked
+    // until 1% stopped at 0.91% by its last ask and wrote an image whose
+    // estimate read 2.07% (measured 0.91%).
     UntilErrorSchedule schedule;
-    ImageErrorEstimate lastEstimate;
+    const CacheSnapshot* judged = nullptr;
     auto good = [&](size_t frame) {
         schedule = UntilErrorSchedule();  // a new view's error starts afresh
+        judged = nullptr;
         return [&, frame](const CacheSnapshot& s) {
-            const double now = session.seconds();
             // Nothing to ask before a bounce is shown (the estimate is then
             // unknown: ImageOutput::estimate).
             if (output.expectIndirect && s.indirect.empty()) return false;
-            const double due = schedule.crossing(*stop.error) - lastAsked;
-            const double wait = std::max({0.5, askCost, std::min(2 * askCost, due)});
-            if (now - lastAsked < wait) return false;
-            lastEstimate = output.estimate(s, cameras[frame], true);
-            lastAsked = session.seconds();
-            askCost = lastAsked - now;
-            schedule.add(now, lastEstimate.cache);
-            return lastEstimate.cache <= *stop.error;
+            const double now = session.seconds();
+            if (!schedule.shouldAsk(now, s.seconds, *stop.error)) return false;
+            const double estimate = output.estimate(s, cameras[frame], true).cache;
+            schedule.asked(now, session.seconds(), s.seconds, estimate);
+            if (estimate > *stop.error) return false;
+            judged = &s;
+            return true;
         };
     };
 
@@ -542,7 +549,7 @@ int runRender(const std::vector<std::string>& args) {
         if (interrupted) {
             lastFrame = frame;
         } else if (frame + 1 < cameras.size()) {
-            const CacheSnapshot* s = reader.acquire();
+            const CacheSnapshot* s = judged ? judged : reader.acquire();
             output.write(framePath(out, frame), *s, cameras[frame]);
             std::printf("frame %zu: %.2f s, %zu vertices; wrote %s\n", frame, secondsSince(frameStart), s->vertices,
                         framePath(out, frame).c_str());
@@ -553,7 +560,7 @@ int runRender(const std::vector<std::string>& args) {
     if (interrupted) std::fprintf(stderr, "\nmeshlight: %s: ending the worker's round\n", interrupt.signalName());
     session.stop();
     session.rethrowIfFailed();
-    const CacheSnapshot* final = reader.acquire();
+    const CacheSnapshot* final = judged && !interrupted ? judged : reader.acquire();
     ML_ASSERT(final, "the worker published no snapshot");
     const double refineSeconds = session.seconds();
     const std::string lastPath = walkthrough ? framePath(out, lastFrame) : out;
