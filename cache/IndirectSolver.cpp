@@ -507,9 +507,6 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
         ratio = meanRatio(rawCopy(complete), rawCopy(complete + 1));
         if (ratio) ++shown;
     }
-    // Otherwise the last two bounces shown, both gathered whole, measure it
-    // (rather than the albedo's guess, BounceCount::bounceRatio).
-    if (!ratio && shown >= 2) ratio = meanRatio(rawCopy(shown - 1), rawCopy(shown));
     std::vector<IrradianceMeshCopy> v;
     for (int b = 1; b <= shown; ++b) v.push_back(filledCopy(b));
     complete = shown;
