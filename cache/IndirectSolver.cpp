@@ -324,21 +324,27 @@ std::optional<std::vector<Rgb>> seenAlbedoOver(IndirectEstimator& estimator, con
     return sum;
 }
 
-void shapeAsLaterBounces(IrradianceMeshCopy& mesh, int bounce, const std::vector<Rgb>& seenAlbedo) {
-    if (bounce != 1) return;
-    // A vertex's area: a third of each face it is a corner of.
+// A copy's vertex areas: a third of each face a vertex is a corner of.
+static std::vector<double> vertexAreas(const IrradianceMeshCopy& mesh) {
     std::vector<double> area(mesh.positions.size(), 0.0);
     for (const glm::uvec3& t : mesh.triangles) {
         const Vec3 a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
         const double third = glm::length(glm::cross(b - a, c - a)) / 6;
         for (int k = 0; k < 3; ++k) area[t[k]] += third;
     }
+    return area;
+}
+
+void shapeAsLaterBounces(IrradianceMeshCopy& mesh, int bounce, const std::vector<Rgb>& seenAlbedo) {
+    const bool seen = seenAlbedo.size() == mesh.irradiance.size();
+    if (bounce != 1 && !(bounce == 2 && seen)) return;
+    const std::vector<double> area = vertexAreas(mesh);
     Rgb sum(0.0);
     double total = 0;
     for (size_t v = 0; v < area.size(); ++v) sum += area[v] * mesh.irradiance[v], total += area[v];
     if (!(total > 0)) return;
     const Rgb mean = sum / total;
-    if (seenAlbedo.size() == mesh.irradiance.size()) {
+    if (seen) {
         Rgb seenMean(0.0);
         for (size_t v = 0; v < area.size(); ++v) seenMean += area[v] * seenAlbedo[v];
         seenMean /= total;
@@ -457,8 +463,10 @@ constexpr double kTailRatioError = 0.05;
 constexpr double kTailShapeError = 0.3;
 
 // Bounce k + 1's mean irradiance over its gathered vertices against bounce
-// k's over all of its (the same base mesh; copies as the caches hold them),
-// channel by channel: light off coloured walls changes hue bounce after
+// k's over all of its (copies as the caches hold them), each weighed by its
+// area: bounce k may be refined already, its new vertices dense where light
+// falls into corners and contacts, and a mean over vertices then reads it
+// dark and the ratio high. Channel by channel: light off coloured walls changes hue bounce after
 // bounce. In the Cornell box's image bounce 2 holds 0.51, 0.47 and 0.38 of
 // bounce 1's red, green and blue, and bounces 3 to 8 together 1.03, 0.91
 // and 0.62 of bounce 2's (render cornell --bounces 1, 2, 3, 8, their
@@ -467,13 +475,14 @@ constexpr double kTailShapeError = 0.3;
 // 15% too dark and blue 42% too bright. A channel bounce k lacks takes
 // the luminance's ratio; nullopt where either has no light.
 static std::optional<Rgb> meanRatio(const IrradianceMeshCopy& k, const IrradianceMeshCopy& n) {
+    const std::vector<double> areaK = vertexAreas(k), areaN = vertexAreas(n);
     Rgb sumK(0.0), sumN(0.0);
-    for (const Rgb& e : k.irradiance) sumK += e;
-    size_t count = 0;
+    double totalK = 0, totalN = 0;
+    for (size_t v = 0; v < k.irradiance.size(); ++v) sumK += areaK[v] * k.irradiance[v], totalK += areaK[v];
     for (size_t v = 0; v < n.irradiance.size(); ++v)
-        if (v < n.samples.size() && n.samples[v] > 0) sumN += n.irradiance[v], ++count;
-    if (luminance(sumK) <= 0 || count == 0) return std::nullopt;
-    const Rgb meanK = sumK / double(k.irradiance.size()), meanN = sumN / double(count);
+        if (v < n.samples.size() && n.samples[v] > 0) sumN += areaN[v] * n.irradiance[v], totalN += areaN[v];
+    if (!(totalK > 0) || !(totalN > 0) || luminance(sumK) <= 0) return std::nullopt;
+    const Rgb meanK = sumK / totalK, meanN = sumN / totalN;
     const double whole = luminance(meanN) / luminance(meanK);
     Rgb r;
     for (int c = 0; c < 3; ++c) r[c] = meanK[c] > 0 ? meanN[c] / meanK[c] : whole;
@@ -528,7 +537,7 @@ std::vector<IrradianceMeshCopy> IndirectSolver::displayMeshesLocked() const {
     for (Rgb& e : rest.irradiance) e *= tail;
     // The tail is a model, not a measurement: its error is assumed to be
     // how far its shape may be off, kTailShapeError of the distance between
-    // the shape shown and bounce k's own (none after bounce 2), and
+    // the shape shown and bounce k's own (none after bounce 3), and
     // kTailRatioError of it for its ratio r. With the tail shaped by the
     // albedo its vertices see, measured (the estimate against the path
     // tracer's error, net of the reference's noise), before bounce 2 is

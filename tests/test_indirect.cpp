@@ -672,6 +672,20 @@ TEST(TailShape, AfterBounceOneTheAreaMeanGoesWhereTheAlbedoSeenIs) {
     IrradianceMeshCopy other = twoTriangles();
     shapeAsLaterBounces(other, 1, {Rgb(1.0)});
     EXPECT_NEAR(other.irradiance[0].x, 3.5, 1e-12);
+    // After bounce 2 the same, with the albedo seen; without it (or of
+    // another size), and after bounce 3, the light's own shape.
+    IrradianceMeshCopy second = twoTriangles();
+    shapeAsLaterBounces(second, 2, seen);
+    for (size_t v = 0; v < 4; ++v) EXPECT_EQ(second.irradiance[v], m.irradiance[v]) << v;
+    const IrradianceMeshCopy own = twoTriangles();
+    for (const std::vector<Rgb>& albedo : {std::vector<Rgb>{}, std::vector<Rgb>{Rgb(1.0)}}) {
+        IrradianceMeshCopy kept = twoTriangles();
+        shapeAsLaterBounces(kept, 2, albedo);
+        for (size_t v = 0; v < 4; ++v) EXPECT_EQ(kept.irradiance[v], own.irradiance[v]) << v;
+    }
+    IrradianceMeshCopy third = twoTriangles();
+    shapeAsLaterBounces(third, 3, seen);
+    for (size_t v = 0; v < 4; ++v) EXPECT_EQ(third.irradiance[v], own.irradiance[v]) << v;
 }
 
 }  // namespace

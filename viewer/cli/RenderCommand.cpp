@@ -508,7 +508,7 @@ int runRender(const std::vector<std::string>& args) {
     // most, and composited with 4×4 samples a pixel (0.25-0.57 s), that box
     // asked every other snapshot and, until 2%, stopped at 1.7-2.3 s with
     // 1.04-1.12% measured (ten runs until 1-5%: 0.82-1.43%); now at 1.0-1.1
-    // s with 1.13-1.40%, and until 1% at 1.3 s with 1.04-1.05%.
+    // s with 1.15-1.37%, and until 1% at 1.6-1.7 s with 1.04%.
     // The image written is the snapshot the rule found good (`judged`; the
     // reader keeps it until its next acquire), not the one the worker
     // publishes as it stops: that is later by the ask and the end of a
