@@ -466,7 +466,9 @@ constexpr double kTailShapeError = 0.3;
 // k's over all of its (copies as the caches hold them), each weighed by its
 // area: bounce k may be refined already, its new vertices dense where light
 // falls into corners and contacts, and a mean over vertices then reads it
-// dark and the ratio high. Channel by channel: light off coloured walls changes hue bounce after
+// dark and the ratio high (the Cornell box, 256x256, bounce 2 shown and
+// bounce 3 not: 2.75% and 2.70% by vertices, 2.63% and 2.49% by area).
+// Channel by channel: light off coloured walls changes hue bounce after
 // bounce. In the Cornell box's image bounce 2 holds 0.51, 0.47 and 0.38 of
 // bounce 1's red, green and blue, and bounces 3 to 8 together 1.03, 0.91
 // and 0.62 of bounce 2's (render cornell --bounces 1, 2, 3, 8, their

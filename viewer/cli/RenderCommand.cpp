@@ -555,8 +555,9 @@ int runRender(const std::vector<std::string>& args) {
                         framePath(out, frame).c_str());
         }
     }
-    // The last image is made from everything the worker did, so it stops
-    // first (at the end of its round).
+    // The last image is made from everything the worker did (or, stopped by
+    // --until-error, from the snapshot judged), so it stops first (at the end
+    // of its round).
     if (interrupted) std::fprintf(stderr, "\nmeshlight: %s: ending the worker's round\n", interrupt.signalName());
     session.stop();
     session.rethrowIfFailed();
