@@ -124,7 +124,9 @@ TEST(ImageErrorEstimate, CornellBoxWithinOneAndAHalfOfThePathTracer) {
     // vertex sees (4.2% measured, 4.1% estimated; half bounce 1's shape and
     // half its mean 8.0% and 6.1%; bounce 1's own shape 9.9% and 4.8%);
     // bounce 2 half gathered, shown with the later bounces as a tail of
-    // the ratio bounce 2 measures (12,000: 2.5% both); and the bounces'
+    // the ratio bounce 2 measures, shaped again by the albedo seen (12,000:
+    // 2.0% measured, 2.4% estimated; 2.5% both with bounce 2's own shape
+    // and one ratio for the three channels); and the bounces'
     // first passes further on (24,000: under 1%, within the reference's
     // noise).
     expectWithinFactor(compare(makeCornellBox(), 64, 64, 2048, {10000, 12000, 24000}), 1.5);
