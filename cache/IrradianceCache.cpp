@@ -928,9 +928,10 @@ size_t IrradianceCache::sampleUnsampled(VertexSampler& sampler, uint32_t seed,
     const size_t todo = detail::unsampledCount(impl_->state);
     const FirstSamples first(sampler);
     // In batches, so that progress is told now and then.
-    for (size_t done = 0; done < todo;) {
-        done += detail::sampleUnsampled(impl_->state, sampler, seed, 4096);
-        if (progress) progress(done, todo);
+    for (size_t left = todo; left > 0;) {
+        detail::sampleUnsampled(impl_->state, sampler, seed, 4096);
+        left = detail::unsampledCount(impl_->state);
+        if (progress) progress(todo - left, todo);
     }
     return todo;
 }
@@ -1035,7 +1036,18 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
         const LightMesh& lm = s.meshes[p.mesh];
         if ((p.grid ? lm.gridStats[p.index] : lm.stats[p.index]).count == 0) pending.push_back(p);
     }
-    return cheap + takeSamples(s, sampler, seed, pending, interrupt);
+    const size_t taken = takeSamples(s, sampler, seed, pending, interrupt);
+    // Noise probes (IrradianceCache::setNoiseProbes): a second sample for
+    // the picked vertices among those just sampled, drawn as a resample is
+    // (its own index in the vertex's stream).
+    std::vector<PendingSample> probes;
+    if (s.noiseProbeEvery > 0)
+        for (size_t i = 0; i < taken; ++i) {
+            const PendingSample& p = pending[i];
+            const uint32_t key = p.grid ? kGridSeedBase + p.index : p.index;
+            if (hash32(key ^ 0x9e3779b9u) % s.noiseProbeEvery == 0) probes.push_back(p);
+        }
+    return cheap + taken + takeSamples(s, sampler, seed, probes, interrupt);
 }
 
 void addVertexSample(CacheState& s, size_t l, size_t v, const VertexSample& sample) {

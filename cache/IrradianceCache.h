@@ -286,6 +286,14 @@ public:
     // stop for tens of seconds; never under a sample budget, whose rounds no
     // clock may decide. Empty: every round whole, in one batch.
     void setInterrupt(std::function<bool()> interrupted);
+    // While vertices have no sample, every `every`-th of them (a hash of its
+    // index picks it: spread over the scene like the first pass's order)
+    // takes a second sample right after its first, so that the cache's
+    // noise (sampleNoise(), noiseModel) is measured from the first pass on,
+    // not assumed: for a noisy sampler's cheap first pass (IndirectSolver:
+    // a large base gathered with a fraction of the rays), whose noise the
+    // assumed level for a full sample misjudges. 0: none (the default).
+    void setNoiseProbes(size_t every);
 
     // The error the cache itself predicts, relative to the displayed level:
     // the RMS (area-weighted over every mesh) of the interpolation error

@@ -407,6 +407,8 @@ double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& vi
 
 void IrradianceCache::setInterrupt(std::function<bool()> interrupted) { impl_->interrupt = std::move(interrupted); }
 
+void IrradianceCache::setNoiseProbes(size_t every) { impl_->state.noiseProbeEvery = every; }
+
 RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint32_t seed,
                                      const std::optional<RefinementCamera>& view) {
     ML_ASSERT(budget > 0, "refinement budget 0");
@@ -420,7 +422,8 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
         report.estimatedError = 1;
         const FirstSamples first(sampler);
         report.estimates = detail::sampleUnsampled(s, sampler, seed, budget, impl_->interrupt);
-        report.candidates = unsampled - report.estimates + 1;  // at least the scoring is still to come
+        // At least the scoring is still to come (estimates also count noise probes).
+        report.candidates = detail::unsampledCount(s) + 1;
         ++s.rounds;
         return report;
     }

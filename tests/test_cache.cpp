@@ -411,6 +411,35 @@ TEST(CacheRefinement, OneSamplesNoiseIsMeasuredOnceVerticesAreResampled) {
     EXPECT_EQ(direct.sampleNoise(), 0.0);
 }
 
+// Noise probes (IrradianceCache::setNoiseProbes) measure a first pass's
+// noise before any vertex is resampled: every 2nd vertex (by a hash of its
+// index) of the bench's 356 takes a second sample of the same spread as
+// above (0.2). Tolerance 15%: the probes give about 178 degrees of
+// freedom, over which the spread of a uniform distribution's pooled
+// standard deviation is about 3.4%; four of those.
+TEST(CacheRefinement, NoiseProbesMeasureTheFirstPasssNoise) {
+    constexpr double kSpread = 0.2;
+    auto noisy = samplerOf([](size_t, const Vec3&, const Vec3&, uint32_t seed) {
+        const double u = hash32(seed) * (1.0 / 4294967296.0);
+        return VertexSample{Rgb(1 + kSpread * std::sqrt(3.0) * (2 * u - 1)), 1.0, false};
+    });
+    IrradianceCache cache(bench(), resampledUnsplit(4));
+    cache.setNoiseProbes(2);
+    const RefineReport first = cache.refine(noisy, 1 << 20, 1);
+    size_t vertices = 0, probed = 0;
+    for (const IrradianceMeshCopy& m : cache.copyMeshes())
+        for (uint32_t n : m.samples) {
+            ASSERT_TRUE(n == 1 || n == 2) << n;
+            vertices += 1, probed += n == 2;
+        }
+    EXPECT_EQ(first.estimates, vertices + probed);
+    EXPECT_GT(probed, vertices * 35 / 100);
+    EXPECT_LT(probed, vertices * 65 / 100);
+    std::printf("first pass: %zu of %zu vertices probed, noise of one sample %.4f\n", probed, vertices,
+                cache.sampleNoise());
+    EXPECT_NEAR(cache.sampleNoise(), kSpread, 0.15 * kSpread);
+}
+
 // A vertex's samples weigh by their work (VertexSample::work: a ray
 // gather's rays), their variance going as its inverse: a first pass's
 // cheap gather counts for less in the mean and for more in the noise.

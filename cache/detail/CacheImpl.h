@@ -46,7 +46,9 @@ void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sa
 size_t unsampledCount(const CacheState& s);
 // Samples up to `budget` of them, in an order that scatters them over the
 // scene and takes every mesh's sample at a vertex together (a partial first
-// pass then covers every object and every light evenly). Returns how many.
+// pass then covers every object and every light evenly), and the noise
+// probes among them (IrradianceCache::setNoiseProbes). Returns how many
+// samples it took.
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
                        const std::function<bool()>& interrupt = {});
 // The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:

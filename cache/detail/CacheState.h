@@ -126,6 +126,8 @@ struct CacheState {
     // which CacheSettings::sampleNoise and its measure speak of. Found
     // again from the sums when loaded.
     double fullWork = 0;
+    // IrradianceCache::setNoiseProbes (not saved: a run's choice).
+    size_t noiseProbeEvery = 0;
 };
 
 // What the cache's resampled vertices measure of its samples' noise,
