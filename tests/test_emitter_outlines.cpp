@@ -42,14 +42,23 @@ TEST(EmitterOutlines, RebuildsAPixelFromCoverageEmissionAndTheRest) {
     // the odd one, 1 in the even one. c = 4/8, E = 10·c, R = 0.5, B = 2:
     // 5 + 0.25 + 1 = 6.25. Each half alone: c = 3/4 gives 8.375, c = 1/4
     // gives 4.125, so the spread is 2.125.
-    EmitterOutlines o(1, 1, 2, {Rgb(10.0)});
-    o.addFullPass(grey({10.5f, 1.0f, 10.5f, 3.0f}), seen({2, 1, 2, 1}));
-    o.addSurfacePass(seen({2, 2, 2, 1}), true);
-    o.addSurfacePass(seen({2, 1, 0, 1}), false);
-    ImageRgb image(1, 1, Rgb(99.0)), spread(1, 1);
-    EXPECT_EQ(o.apply(image, &spread), 1u);
-    EXPECT_NEAR(image.at(0, 0).r, 6.25, 1e-12);
-    EXPECT_NEAR(spread.at(0, 0).g, 2.125, 1e-12);
+    // Surface passes added before and cleared (clearSurfacePasses) are
+    // forgotten: the same pixel, bit for bit.
+    for (bool cleared : {false, true}) {
+        EmitterOutlines o(1, 1, 2, {Rgb(10.0)});
+        o.addFullPass(grey({10.5f, 1.0f, 10.5f, 3.0f}), seen({2, 1, 2, 1}));
+        if (cleared) {
+            o.addSurfacePass(seen({0, 0, 0, 0}), true);
+            o.addSurfacePass(seen({2, 2, 2, 2}), false);
+            o.clearSurfacePasses();
+        }
+        o.addSurfacePass(seen({2, 2, 2, 1}), true);
+        o.addSurfacePass(seen({2, 1, 0, 1}), false);
+        ImageRgb image(1, 1, Rgb(99.0)), spread(1, 1);
+        EXPECT_EQ(o.apply(image, &spread), 1u);
+        EXPECT_NEAR(image.at(0, 0).r, 6.25, 1e-12);
+        EXPECT_NEAR(spread.at(0, 0).g, 2.125, 1e-12);
+    }
 }
 
 TEST(EmitterOutlines, PixelsThatSeeNoEmitterKeepTheFullPassesMean) {
@@ -63,6 +72,15 @@ TEST(EmitterOutlines, PixelsThatSeeNoEmitterKeepTheFullPassesMean) {
     EXPECT_EQ(image.at(0, 0).r, 7.0f);
     // c = 2/4, E = 8·c, R = 0, B = 1.
     EXPECT_NEAR(image.at(1, 0).r, 4.5, 1e-12);
+}
+
+TEST(EmitterOutlines, PassesWithinABudgetAreAllOrTheMostPowerOfTwoThatFits) {
+    EXPECT_EQ(outlinePassesWithin(16, 0.01, 0.5), 16);  // 0.16 s: all
+    EXPECT_EQ(outlinePassesWithin(16, 0.16, 0.52), 2);  // the back rooms' at 5 s: 0.32 s
+    EXPECT_EQ(outlinePassesWithin(16, 0.1, 0.8), 8);
+    EXPECT_EQ(outlinePassesWithin(16, 0.75, 0.5), 1);  // at least one
+    EXPECT_EQ(outlinePassesWithin(12, 0.1, 1.25), 12);  // all fit: any count
+    EXPECT_EQ(outlinePassesWithin(12, 0.1, 1.0), 8);   // else a power of two
 }
 
 TEST(EmitterOutlines, APixelTheFullPassesSawOnlyOnTheLightTakesItsNeighboursRest) {
@@ -107,15 +125,29 @@ std::vector<IrradianceMeshCopy> smoothCache(const Scene& scene, double edgeFract
     return cache.copyMeshes();
 }
 
-// The light and the floor around it seen from above and to the side.
-Camera obliqueView() {
+// A cache of E = 2 at every vertex, base edges 1/8 of the scene.
+std::vector<IrradianceMeshCopy> uniformCache(const Scene& scene) {
+    CacheSettings cs;
+    cs.maxEdgeFraction = 1.0 / 8.0;
+    IrradianceCache cache(scene, cs);
+    test::sampleEveryVertex(cache, [](size_t, const Vec3&, const Vec3&, uint32_t) { return Rgb(2.0); }, 1, 1);
+    return cache.copyMeshes();
+}
+
+// A camera at `position` looking at the light's centre, z down the image.
+Camera towardsTheLight(const Vec3& position, double fovYDegrees) {
     Camera camera;
-    camera.position = Vec3(0.3, 1.5, 0.2);
+    camera.position = position;
     camera.target = Vec3(0, 0.001, 0);
     camera.up = Vec3(0, 0, -1);
-    camera.fovYDegrees = 70;
+    camera.fovYDegrees = fovYDegrees;
     return camera;
 }
+// Looking straight down from 1.001 above the light (90° view: the plane
+// y = 0.001 spans [−1, 1]², x right, z down).
+Camera straightDown() { return towardsTheLight(Vec3(0, 1.001, 0), 90); }
+// The light and the floor around it seen from above and to the side.
+Camera obliqueView() { return towardsTheLight(Vec3(0.3, 1.5, 0.2), 70); }
 
 // A width × height composite of 4×4 sub-pixels, 2 sub-pixel passes and 8
 // outline passes: both halves of the passes, and the outlines' own.
@@ -147,16 +179,8 @@ TEST(EmitterOutlines, CompositeGivesEachPixelItsExactShareOfTheLight) {
     // worst outline pixel is asked within 1% of kLe; pixels off the outline
     // must equal the plain composite's exactly.
     const Scene scene = lightOnFloor();
-    CacheSettings cs;
-    cs.maxEdgeFraction = 1.0 / 8.0;
-    IrradianceCache cache(scene, cs);
-    test::sampleEveryVertex(cache, [](size_t, const Vec3&, const Vec3&, uint32_t) { return Rgb(2.0); }, 1, 1);
-    const std::vector<IrradianceMeshCopy> meshes = cache.copyMeshes();
-    Camera camera;
-    camera.position = Vec3(0, 1.001, 0);
-    camera.target = Vec3(0, 0.001, 0);
-    camera.up = Vec3(0, 0, -1);
-    camera.fovYDegrees = 90;
+    const std::vector<IrradianceMeshCopy> meshes = uniformCache(scene);
+    const Camera camera = straightDown();
     const int size = 64;
     Compositor compositor(test::glContext(), scene);
     CompositorSettings s;
@@ -187,6 +211,46 @@ TEST(EmitterOutlines, CompositeGivesEachPixelItsExactShareOfTheLight) {
     EXPECT_LT(worstOutlined, 0.01);
     // What the outline passes are for: one full pass is several times off.
     EXPECT_GT(worstPlain, 4 * worstOutlined);
+}
+
+// CompositorSettings::outlineSeconds, on the light seen from above as in
+// the test before (E = 2 on the floor: a pixel is c·kLe + (1 − c)/π, c
+// the coverage its sub-pixels find). A budget all 64 passes fit in changes
+// nothing: the timed first pass is the pattern's own, bit for bit. One
+// that fits none leaves the timed pass alone: one grid of 4×4 sub-pixels,
+// so every outline pixel's c is a whole number of sixteenths (tolerance
+// 1e-3 of one: float rounding), where the 64 passes' is not, in most.
+TEST(EmitterOutlines, TimedOutlinePassesKeepThePatternOrOnePass) {
+    const Scene scene = lightOnFloor();
+    const std::vector<IrradianceMeshCopy> meshes = uniformCache(scene);
+    const Camera camera = straightDown();
+    Compositor compositor(test::glContext(), scene);
+    CompositorSettings s;
+    s.width = s.height = 64;
+    s.supersample = 4;
+    s.outlinePasses = 64;
+    const ImageRgb all = compositor.render(camera, meshes, s);
+    s.outlineSeconds = 1e9;
+    const ImageRgb fitting = compositor.render(camera, meshes, s);
+    ASSERT_EQ(fitting.data.size(), all.data.size());
+    for (size_t i = 0; i < all.data.size(); ++i) ASSERT_EQ(fitting.data[i], all.data[i]) << "value " << i;
+    s.outlineSeconds = 1e-12;
+    const ImageRgb one = compositor.render(camera, meshes, s);
+    const auto offSixteenths = [](const ImageRgb& im, int px, int py) {
+        const double c = 16.0 * (im.at(px, py).g - 1 / kPi) / (kLe - 1 / kPi);
+        return std::abs(c - std::round(c));
+    };
+    int outline = 0, finer = 0;
+    for (int py = 0; py < 64; ++py)
+        for (int px = 0; px < 64; ++px) {
+            const double c = (all.at(px, py).g - 1 / kPi) / (kLe - 1 / kPi);
+            if (c < 1e-3 || c > 1 - 1e-3) continue;
+            ++outline;
+            EXPECT_LT(offSixteenths(one, px, py), 1e-3) << "pixel " << px << "," << py;
+            finer += offSixteenths(all, px, py) > 0.05;
+        }
+    EXPECT_GT(outline, 60);
+    EXPECT_GT(finer, outline / 2);
 }
 
 TEST(EmitterOutlines, PartsCompositedTogetherEqualEachCompositedAlone) {

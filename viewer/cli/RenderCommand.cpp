@@ -44,6 +44,12 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// --outline-passes auto: what every image's outline passes may take
+// (CompositorSettings::outlineSeconds). The Cornell box's light at 512×512
+// takes its 16 in a few hundredths of a second, the office's panels in about
+// 0.1 s (Compositor.h); the back rooms' glowing walls, which span the view,
+// 0.75 s each at 320×180.
+constexpr double kAutoOutlineSeconds = 0.5;
 
 // "frames/view_####.png" → "frames/view_0007.png".
 std::string framePath(const std::string& pattern, size_t frame) {
@@ -126,6 +132,10 @@ public:
     }
     int passes() const { return settings_.passes; }
     void setPasses(int passes) { settings_.passes = passes; }
+    // CompositorSettings::outlineSeconds: kept at 0 (every pass) where it is.
+    void allowOutlineSeconds(double seconds) {
+        if (settings_.outlineSeconds > 0) settings_.outlineSeconds = std::max(settings_.outlineSeconds, seconds);
+    }
     // Composites `s` from `camera` and writes it to `path`; returns the
     // radiance image written (empty for lux).
     // `made`: the radiance image of `s` from `camera`, when already made;
@@ -325,10 +335,13 @@ int runRender(const std::vector<std::string>& args) {
             "the most (a power of two up to 64) whose composite takes at most a tenth of the refinement's time; with "
             "--samples, 4 (the image, like the cache, the same on any machine)",
             std::string("auto"));
-    o.value("outline-passes", "M", "passes of the surfaces alone (no cache mesh: cheap) that resolve the emitters' "
-                                   "outlines: a pixel an emitter covers in part takes the emission and coverage from "
-                                   "M·S² sub-pixels (0: from the sub-pixel passes alone)",
-            std::to_string(kRenderOutlinePasses));
+    o.value("outline-passes", "M|auto",
+            concat("passes of the surfaces alone (no cache mesh: cheap) that resolve the emitters' outlines: a pixel "
+                   "an emitter covers in part takes the emission and coverage from M·S² sub-pixels (0: from the "
+                   "sub-pixel passes alone); auto: ", kRenderOutlinePasses, ", or fewer (a power of two) where they "
+                   "would take over ", kAutoOutlineSeconds, " s, or for the last image over a tenth of the "
+                   "refinement's time if more (emitters that span the view); with --samples, ", kRenderOutlinePasses),
+            std::string("auto"));
     o.value("exposure", "EV", "exposure in stops, on top of auto exposure (a walkthrough's is metered once, "
                               "from its first frame)",
             std::string("0"));
@@ -349,7 +362,8 @@ int runRender(const std::vector<std::string>& args) {
     comp.supersample = o.integer("supersample", 1, 16);
     const bool autoPasses = o.str("subpixel-passes") == "auto";
     comp.passes = autoPasses ? 4 : o.integer("subpixel-passes", 1, 64);
-    comp.outlinePasses = o.integer("outline-passes", 0, 1024);
+    const bool autoOutlines = o.str("outline-passes") == "auto";
+    comp.outlinePasses = autoOutlines ? kRenderOutlinePasses : o.integer("outline-passes", 0, 1024);
     comp.photometry = readPhotometryOption(o);
     comp.validate();
     const OutputQuantity quantity = parseOutputQuantity(o.str("quantity"));
@@ -380,6 +394,9 @@ int runRender(const std::vector<std::string>& args) {
     if (o.has("until-error")) stop.error = o.number("until-error", 1e-9, 1);
     if (o.has("samples")) stop.samples = uint64_t(o.number("samples", 1, 1e15));
     if (!stop.seconds && !stop.error && !stop.samples) stop.error = 0.02;
+    // Timed outline passes, unless the image must not depend on the
+    // machine's speed (a sample budget).
+    if (autoOutlines && !stop.samples) comp.outlineSeconds = kAutoOutlineSeconds;
     const double every = o.number("every", 0.01, 1e6);
     const std::string snapshotsDir = o.has("snapshots") ? o.str("snapshots") : "";
     if (!snapshotsDir.empty()) makeOutputDirectory(snapshotsDir);
@@ -606,6 +623,9 @@ int runRender(const std::vector<std::string>& args) {
                     "a tenth of %.1f s refined)\n",
                     k, pass, composites, perPass / pass, refineSeconds);
     }
+    // The last image's outline passes may take a tenth of the refinement's
+    // time, as its sub-pixel passes do.
+    output.allowOutlineSeconds(0.1 * refineSeconds);
     ImageErrorEstimate finalEstimate;
     if (radianceOut || !logPath.empty()) {
         finalEstimate = output.estimate(*final, cameras[lastFrame]);

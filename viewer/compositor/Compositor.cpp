@@ -32,6 +32,13 @@ int subpixelPassesWithin(double onePassSeconds, double refineSeconds) {
     return k;
 }
 
+int outlinePassesWithin(int passes, double onePassSeconds, double budget) {
+    if (passes * onePassSeconds <= budget) return passes;
+    int k = 1;
+    while (2 * k < passes && 2 * k * onePassSeconds <= budget) k *= 2;
+    return k;
+}
+
 void CompositorSettings::validate() const {
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError(concat("image size ", width, "x", height, " is not within 1..16384"));
@@ -43,6 +50,8 @@ void CompositorSettings::validate() const {
     if (passes < 1 || passes > 64) throw InputError(concat("sub-pixel passes ", passes, " is not within 1..64"));
     if (outlinePasses < 0 || outlinePasses > 1024)
         throw InputError(concat("outline passes ", outlinePasses, " is not within 0..1024"));
+    if (!(outlineSeconds >= 0) || !std::isfinite(outlineSeconds))
+        throw InputError(concat("outline seconds ", outlineSeconds, " is not a finite number of seconds >= 0"));
     photometry.validate();
 }
 
@@ -1393,12 +1402,27 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
         if (same) {
             edges->copySurfacePasses(*same);
         } else {
-            const RookPattern fine(settings.outlinePasses);
             const EmitterOutlines::Rect bounds = edges->emitterBounds();
-            for (int k = 0; k < settings.outlinePasses && !bounds.empty(); ++k) {
+            int count = settings.outlinePasses, from = 0;
+            const auto surfacePass = [&](const RookPattern& fine, int k) {
                 impl_->drawSurfacesOnly(camera, fine.shifted(settings, k), bounds);
                 edges->addSurfacePass(impl_->readSurfaceSubPixels(bounds), fine.odd(k));
+            };
+            if (settings.outlineSeconds > 0 && count > 1 && !bounds.empty()) {
+                // The first pass timed. Fewer passes are a pattern of their
+                // own (a prefix of the rook pattern would cover one side of
+                // the sub-pixel): the timed pass is dropped, unless one is
+                // all that fits (any one shift is as good a grid).
+                const auto start = std::chrono::steady_clock::now();
+                surfacePass(RookPattern(count), 0);
+                const double one = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                const int fit = outlinePassesWithin(count, one, settings.outlineSeconds);
+                from = 1;
+                if (fit < count && fit > 1) edges->clearSurfacePasses(), from = 0;
+                count = fit;
             }
+            const RookPattern fine(count);
+            for (int k = from; k < count && !bounds.empty(); ++k) surfacePass(fine, k);
         }
         edges->apply(sum, spread);
         // Kept for the parts after this one (moved: this part is done with

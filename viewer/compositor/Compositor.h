@@ -73,6 +73,14 @@ struct CompositorSettings {
     // the rest from the full passes (EmitterOutlines.h). 0: none, the
     // viewer's; render's images take them (--outline-passes).
     int outlinePasses = 0;
+    // > 0: the outline passes take about this many seconds at most: the
+    // first is timed, and where all of them would take longer the count
+    // becomes the most (a power of two, at least one) that fits
+    // (outlinePassesWithin). Where emitters span the whole view (the back
+    // rooms' glowing walls, 320×180) a pass costs as much as a full one,
+    // 0.75 s, and 16 took 12 s after 5 s of refinement. 0: all of them
+    // (an image that must not depend on the machine's speed).
+    double outlineSeconds = 0;
     // The image shifted by this many output pixels (x right, y up); set per
     // pass by composite(), 0 otherwise.
     double shiftX = 0, shiftY = 0;
@@ -122,6 +130,10 @@ int subpixelPassesWithin(double onePassSeconds, double refineSeconds);
 // 16 outline passes, 4.5% with 64, and the 64 cost ~0.1 s more per
 // composite there, up to seconds where emitters span the whole view.
 constexpr int kRenderOutlinePasses = 16;
+// The outline passes of `passes` (CompositorSettings::outlineSeconds) that
+// fit in `budget` seconds at `onePassSeconds` each: all of them, or the
+// most, a power of two, whose time fits; at least one.
+int outlinePassesWithin(int passes, double onePassSeconds, double budget);
 
 // Per-mesh RGB factors. A light's factor scales its direct mesh and the
 // radiance its emitting faces show; indirect meshes (one per bounce, not

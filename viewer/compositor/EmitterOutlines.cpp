@@ -100,6 +100,15 @@ void EmitterOutlines::copySurfacePasses(const EmitterOutlines& other) {
     surfacePasses_[0] = other.surfacePasses_[0], surfacePasses_[1] = other.surfacePasses_[1];
 }
 
+void EmitterOutlines::clearSurfacePasses() {
+    for (Pixel& p : pixels_)
+        for (int h = 0; h < 2; ++h) {
+            for (int c = 0; c < 3; ++c) p.emitted[h][c] = 0;
+            p.covered[h] = 0;
+        }
+    surfacePasses_[0] = surfacePasses_[1] = 0;
+}
+
 size_t EmitterOutlines::apply(ImageRgb& image, ImageRgb* spread) const {
     ML_ASSERT(image.width == width_ && image.height == height_, "outlines of ", width_, "x", height_, " on a ",
               image.width, "x", image.height, " image");

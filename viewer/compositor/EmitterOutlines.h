@@ -76,6 +76,8 @@ public:
     // several parts); replaces any this one had. sharesSurfacePasses must
     // hold.
     void copySurfacePasses(const EmitterOutlines& other);
+    // Forgets the surface passes added so far.
+    void clearSurfacePasses();
 
     // `image`: the full passes' mean. Every pixel where some pass saw an
     // emitter is rebuilt as the file's comment says; with surface passes in
