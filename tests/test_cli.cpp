@@ -339,16 +339,16 @@ TEST_F(Cli, RenderLuxAtTheCornellFloorCentreAgreesWithProbe) {
 }
 
 // When --until-error asks its estimate next (UntilErrorSchedule), on exact
-// power laws: after one estimate the error is taken to fall as 1/t (0.05 at
-// 0.4 s reaches 0.02 at 1.0 s); after two, through both (0.16 at 1 s and
+// power laws: after one estimate the error is taken to fall as 1/t² (0.08
+// at 0.4 s reaches 0.02 at 0.8 s); after two, through both (0.16 at 1 s and
 // 0.04 at 2 s: α = 2, so 0.01 at 4 s); a stalled error takes α = 0.25
 // (0.04 twice: 0.02 at 2 · 2⁴ = 32 s); at or below the target, now; before
 // any estimate, never. Exact up to rounding.
 TEST(UntilError, TheNextAskIsWhenTheEstimatesSayTheErrorReachesTheTarget) {
     UntilErrorSchedule s;
     EXPECT_EQ(s.crossing(0.02), kInf);
-    s.add(0.4, 0.05);
-    EXPECT_NEAR(s.crossing(0.02), 1.0, 1e-12);
+    s.add(0.4, 0.08);
+    EXPECT_NEAR(s.crossing(0.02), 0.8, 1e-12);
     UntilErrorSchedule fast;
     fast.add(1, 0.16);
     fast.add(2, 0.04);
@@ -370,17 +370,17 @@ TEST(UntilError, TheNextAskIsWhenTheEstimatesSayTheErrorReachesTheTarget) {
 TEST(UntilError, ItAsksTheFirstSnapshotThoseNearTheCrossingAndRegularlyElse) {
     UntilErrorSchedule s;
     EXPECT_TRUE(s.shouldAsk(0.25, 0.25, 0.02));
-    s.asked(0.25, 0.375, 0.25, 0.05);  // 5% at 0.25 s, α = 1: 2% at 0.625 s
+    s.asked(0.25, 0.375, 0.25, 0.08);  // 8% at 0.25 s, α = 2: 2% at 0.5 s
     EXPECT_EQ(s.askCost, 0.125);
-    EXPECT_NEAR(s.crossing(0.02), 0.625, 1e-12);
-    // A snapshot at 0.3125 (spacing 0.0625): 0.34375 is short of 0.625, and
+    EXPECT_NEAR(s.crossing(0.02), 0.5, 1e-12);
+    // A snapshot at 0.3125 (spacing 0.0625): 0.34375 is short of 0.5, and
     // 0.1875 s since the ask began; the next at 0.5625 (spacing 0.25):
     // 0.6875 reaches it.
     EXPECT_FALSE(s.shouldAsk(0.4375, 0.3125, 0.02));
     UntilErrorSchedule due = s;
     EXPECT_TRUE(due.shouldAsk(0.5625, 0.5625, 0.02));
     // Far from the crossing only the regular interval asks: 2% is due at
-    // 0.625 s but 0.1% at 12.5 s.
+    // 0.5 s but 0.1% at 0.25·√80 = 2.24 s.
     UntilErrorSchedule far = s;
     EXPECT_FALSE(far.shouldAsk(0.5625, 0.5625, 0.001));
     EXPECT_FALSE(far.shouldAsk(0.6875, 0.6875, 0.001));  // 0.4375 s since the ask began

@@ -51,12 +51,17 @@ struct UntilErrorSchedule {
     // The time at which the error reaches `target`, on a power law
     // e ∝ t^-α through the last two estimates (α within 0.25..2: a run that
     // stalls still asks now and then, one that falls fast is not trusted to
-    // fall faster); from the first alone, α = 1. The last one's time once it
-    // is at or below `target`; infinite before any estimate.
+    // fall faster); from the first alone, α = 2: as fast as it may, so that
+    // the crossing is not missed while nothing has measured the fall (an ask
+    // a snapshot at most, until the second). With α = 1 the 256×256 Cornell
+    // box asked until 2% read 5.2% at 0.3 s, put 2% at 0.78 s, skipped the
+    // snapshot at 0.56 s (2.15% measured, 1.5% estimated) and stopped at
+    // 1.1 s on 1.16%. The last one's time once it is at or below `target`;
+    // infinite before any estimate.
     double crossing(double target) const {
         if (count == 0 || !(t1 > 0) || !(e1 > 0) || !(target > 0)) return kInf;
         if (e1 <= target) return t1;
-        double alpha = 1;
+        double alpha = 2;
         if (count >= 2 && t0 > 0 && e0 > 0 && t1 > t0) alpha = std::log(e0 / e1) / std::log(t1 / t0);
         alpha = std::clamp(std::isfinite(alpha) ? alpha : 0.25, 0.25, 2.0);
         return t1 * std::pow(e1 / target, 1 / alpha);
