@@ -77,8 +77,7 @@ struct CompositorSettings {
     // first is timed, and where all of them would take longer the count
     // becomes the most (a power of two, at least one) that fits
     // (outlinePassesWithin). Where emitters span the whole view (the back
-    // rooms' glowing walls, 320×180) a pass costs as much as a full one,
-    // 0.75 s, and 16 took 12 s after 5 s of refinement. 0: all of them
+    // rooms' glowing walls, 320×180) a pass takes 0.15 s. 0: all of them
     // (an image that must not depend on the machine's speed).
     double outlineSeconds = 0;
     // The image shifted by this many output pixels (x right, y up); set per
