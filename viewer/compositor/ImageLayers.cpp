@@ -75,7 +75,11 @@ RenderLayers renderLayers(Compositor& compositor, const Scene& scene, const Came
         const GpuCacheMeshes noiseMeshes = compositor.upload(errors(direct), errors(indirect));
         LightWeights w = LightWeights::unit(lights);
         w.emission.assign(lights, Rgb(0.0));
-        out.noise = compositor.composite(camera, noiseMeshes, w, radiance);
+        // No emission: no outline to resolve (as the estimate's error
+        // images, ImageErrorEstimate.cpp).
+        CompositorSettings noOutlines = radiance;
+        noOutlines.outlinePasses = 0;
+        out.noise = compositor.composite(camera, noiseMeshes, w, noOutlines);
     }
     // The parts, composited together: the emitters' outline passes are
     // drawn once for all the parts without emission, and each light's
