@@ -16,6 +16,7 @@
 #include "IrradianceCache.h"
 #include "SnapshotExchange.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <condition_variable>
@@ -66,6 +67,8 @@ struct CacheSnapshot {
     // same way, vertex for vertex.
     CacheLayout bounceLayout = bounceCacheLayout();
     size_t causticMeshes = 0;         // the last of `indirect` that are caustics (0 or 1)
+    // The bounces `indirect` shows: its meshes but the caustics'.
+    size_t shownBounces() const { return indirect.size() - std::min(causticMeshes, indirect.size()); }
     uint64_t causticPhotons = 0;      // photons emitted so far
     double causticError = 0;          // CausticCache::estimatedError
     int bounces = 0;                  // indirect bounces planned

@@ -1418,7 +1418,10 @@ ImageRgb Compositor::composite(const Camera& camera, const GpuCacheMeshes& meshe
                 const double one = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
                 const int fit = outlinePassesWithin(count, one, settings.outlineSeconds);
                 from = 1;
-                if (fit < count && fit > 1) edges->clearSurfacePasses(), from = 0;
+                if (fit < count && fit > 1) {
+                    edges->clearSurfacePasses();
+                    from = 0;
+                }
                 count = fit;
             }
             const RookPattern fine(count);
