@@ -13,6 +13,9 @@ namespace {
 // is π times its unoccluded irradiance on a surface facing it: its intensity
 // toward p over the squared distance (in metres), or a directional light's
 // irradiance, the same everywhere.
+// w_l rises from 0 at s_l = kRampStart·τ to 1 at τ (LightCoverage.h).
+constexpr double kRampStart = 0.8;
+
 double largest(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
 
 double bound(const Light& light, const Vec3& p) {
@@ -83,7 +86,8 @@ LightCoverage::LightCoverage(const Scene& scene, double share, const std::vector
                     // No light at all (no power anywhere): every light keeps
                     // its own, zero.
                     const double s = total > 0 ? bound(scene.lights[l], p) / total : 1.0;
-                    const double w = share_ > 0 ? std::clamp((s - 0.5 * share_) / (0.5 * share_), 0.0, 1.0) : 1.0;
+                    const double w =
+                        share_ > 0 ? std::clamp((s - kRampStart * share_) / ((1 - kRampStart) * share_), 0.0, 1.0) : 1.0;
                     if (w <= 0) {
                         sharing_ = true;
                         continue;
