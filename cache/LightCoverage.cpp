@@ -9,13 +9,13 @@ namespace ml {
 
 namespace {
 
+// w_l rises from 0 at s_l = kRampStart·τ to 1 at τ (LightCoverage.h).
+constexpr double kRampStart = 0.8;
+
 // B_l(p) of LightCoverage.h, up to the common factor 1/π. A punctual light's
 // is π times its unoccluded irradiance on a surface facing it: its intensity
 // toward p over the squared distance (in metres), or a directional light's
 // irradiance, the same everywhere.
-// w_l rises from 0 at s_l = kRampStart·τ to 1 at τ (LightCoverage.h).
-constexpr double kRampStart = 0.8;
-
 double largest(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
 
 double bound(const Light& light, const Vec3& p) {
