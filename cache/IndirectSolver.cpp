@@ -9,6 +9,17 @@
 
 namespace ml {
 
+namespace {
+
+// A bounce's first pass spends at most `firstPassGathers` full gathers: a
+// base of `base` vertices larger than that is gathered at this share of a
+// gather's effort each (1: full gathers).
+double firstPassEffort(double base, double firstPassGathers, bool firstPass) {
+    return firstPass && base > firstPassGathers ? firstPassGathers / base : 1.0;
+}
+
+}  // namespace
+
 CacheSettings IndirectSettings::defaultCache() {
     CacheSettings c;
     c.maxEdgeFraction = 1.0 / 8;    // indirect light varies slowly...
@@ -131,7 +142,7 @@ void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
     if (sourceForFirstPass_.size() <= slot) sourceForFirstPass_.resize(slot + 1, false);
     if (sourceBuilt_[slot] && (firstPass || !sourceForFirstPass_[slot])) return;
     const double base = double(caches_.at(slot)->totalVertices());
-    const double effort = firstPass && base > settings_.firstPassGathers ? settings_.firstPassGathers / base : 1.0;
+    const double effort = firstPassEffort(base, settings_.firstPassGathers, firstPass);
     if (bounce == 1)
         estimator.setSource(0, direct(), effort);
     else
@@ -204,7 +215,8 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // /scene.gltf --width 320 --height 180 --time 11). Every 64th vertex:
     // 1.6% more gathers, at least 78 probes (kMeasuredNoiseFreedom is 64).
     constexpr size_t kNoiseProbeEvery = 64;
-    const bool cheapPass = first && double(caches_[slot]->totalVertices()) > settings_.firstPassGathers;
+    const double base = double(caches_[slot]->totalVertices());
+    const bool cheapPass = firstPassEffort(base, settings_.firstPassGathers, first) < 1;
     caches_[slot]->setNoiseProbes(cheapPass ? kNoiseProbeEvery : 0);
     // The bounce's one mesh is filled by gathers from its source slot.
     struct Gather : VertexSampler {
