@@ -37,32 +37,13 @@
 // part, where the camera sees into the gap, read their indirect light 2.8%
 // too bright (6.5% on the 192-panel office at 6 s). So a face of the
 // hanging surface beside such an edge and parallel to the receiver gets
-// lines 2h, 4h and 8h inside the edge, and the receiver lines 4h and 8h in
-// under it (besides the 2h either side above): where the profile is at
-// 0.1, 0.03 and 0.008 of the open value, so that each bounce's light in
-// the gap, which falls off as steeply, is read within a fraction of itself.
-// Lines deeper than half the face's width (measured across the triangle
-// beside the edge) are left to the opposite edge's. Measured at 20 s with
-// lines 2h and 6h on the face alone (render --time 20, 320×180): the
-// 48-panel office's indirect light 1.12/1.11% → 0.91/0.73% (two seeds; the
-// image 2.57/2.80% → 2.50/2.60%), the 192-panel one's 2.27% → 1.74% (the
-// image 3.28% → 2.89%); a line 6h in under the face on the receiver too
-// then added twice the vertices for no change beyond the runs' spread.
-// That left the gap's light growing bounce after bounce, each reading the
-// last one's linear interpolation of a convex fall-off (too bright between
-// lines): on the 192-panel office at 28 s, `probe` against the path tracer
-// (262,144 paths a point) put the ceiling over a panel's centre at 4.3
-// times its light, 10 cm in at 3.2 times, the panel's back at its centre
-// at 4.1 times; each bounce's increment there, against its own path-traced
-// depth, grew from 2 times (bounce 1) to 3 times (bounces 3 and 4). With
-// the deeper lines on both sides: 2.2, 1.7 and 2.1 times. The images
-// (render --time 28, against bench lights' references, two seeds): the
-// 192-panel office's indirect light 2.23/2.27% → 2.11/2.05% and its mean
-// +0.2% → 0, direct light 1.61/1.59% → 1.67/1.72% (more bounce vertices
-// share the worker: the plan's cuts add 34,630 vertices to a bounce's base
-// where they added 14,287), the image 2.79/2.80%
-// → 2.72/2.71%; the 48-panel office's indirect light 1.38% → 1.31%, its
-// image 1.93% → 1.87%. A line 1h under the face too: no better (2.05%).
+// lines 2h and 6h inside the edge (where the profile is at 0.1 and 0.014 of
+// the open value).
+// Measured at 20 s (render --time 20, 320×180): the 48-panel office's
+// indirect light 1.12/1.11% → 0.91/0.73% (two seeds; the image 2.57/2.80%
+// → 2.50/2.60%), the 192-panel one's 2.27% → 1.74% (the image 3.28% →
+// 2.89%). A line 6h in under the face on the receiver too added twice the
+// vertices for no change beyond the runs' spread.
 //
 // Not cut: touching contacts (a block on a floor, h = 0) and gaps under a
 // thousandth of the scene. There the cache's rule for hidden vertices
