@@ -142,10 +142,7 @@ void CacheWorker::publish(double seconds, bool converged, const std::optional<Re
         snap->indirectComplete = indirect_->firstPassDone() && !indirect_->showingStale();
         snap->oldIndirectKept = indirect_->keepingStale();
         snap->indirectStale = indirect_->showingStale();
-        if (!snap->indirectComplete) {
-            snap->bounceMeshes = indirect_->copyMeshes();
-            snap->bounceDeferred = indirect_->deferredCounts();
-        }
+        if (!snap->indirectComplete) snap->bounceMeshes = indirect_->copyMeshes();
         snap->indirectVertices = indirect_->totalVertices();
         snap->indirectSamples = indirect_->totalSamples();
         snap->vertices += snap->indirectVertices;

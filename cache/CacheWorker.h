@@ -53,10 +53,6 @@ struct CacheSnapshot {
     // direct light only.
     bool indirectComplete = true;
     std::vector<IrradianceMeshCopy> bounceMeshes;
-    // Per bounce of `bounceMeshes`: its deferred vertices without a sample
-    // (CacheLayout::deferLate), which its first pass leaves: that pass is
-    // complete when they are its only vertices with samples 0.
-    std::vector<size_t> bounceDeferred;
     // `indirect` is the light from before a scene change that moved little
     // light, kept until every bounce is gathered again
     // (IndirectSolver::keepingStale, kKeepOldLightShare): no stand-in

@@ -14,7 +14,6 @@
 #include <cmath>
 #include <map>
 #include <memory>
-#include <optional>
 #include <set>
 #include <tuple>
 
@@ -47,30 +46,17 @@ constexpr double kThinnest = 1e-6;
 constexpr double kParallel = 0.999;
 constexpr double kCoplanar = 1e-7;
 
-// The lines inside a hanging face parallel to the receiver, at depths (in
-// units of the gap h) where the light through the gap, 1/2 · h²/(h² + d²)
-// of the open value, is 0.1, 0.03, 0.014 and 0.008: each bounce's light in
-// the gap falls off as steeply, and is read linearly between two lines
-// within a fraction of itself (the header says what was measured). A
-// panel's back has no vertices of its own but its corners; the receiver's
-// base mesh is as coarse under the face, and it gets lines beyond its
-// penumbra line at 2h too (kUnder). Late lines (ContactCuts.h) wait for
-// the cache's first pass: the early ones are those that were cut before
-// the late ones were added (2h and 6h on the face, the receiver's none), so
-// that a first pass, whose copies fill the late vertices from their sampled
-// neighbours, reads the gap as it did then.
-struct GapLine {
-    double depth;
-    bool late;
-};
-constexpr GapLine kInside[] = {{2, false}, {4, true}, {6, false}, {8, true}};
-constexpr GapLine kUnder[] = {{4, true}, {8, true}};
+// The depths (in units of the gap h) of the lines inside a hanging face
+// parallel to the receiver: where the light through the gap, 1/2 · h²/(h² +
+// d²) of the open value, is 0.1 and 0.014, read linearly in between within
+// 0.015 of the open value. The receiver has vertices of its own under the
+// face (its base mesh's); a panel's back, none but its corners.
+constexpr double kInside[] = {2, 6};
 
 // An edge of some surface, welded by position, with the triangles beside it.
 struct SceneEdge {
     Vec3 a, b;
     std::vector<std::pair<uint32_t, uint32_t>> faces;  // (mesh, triangle)
-    bool late = false;  // a hanging face's own late line (kInside)
 };
 
 using PositionPair = std::array<double, 6>;
@@ -179,33 +165,21 @@ bool clip(std::pair<double, double>& a, std::pair<double, double>& b) {
     return true;
 }
 
-// A cut on a receiver triangle: its ends, and whether it is a late line.
-struct Segment {
-    CutPoint a, b;
-    bool late = false;
-};
-
 struct CutMesh {
     std::vector<Vec3> positions, normals;
     std::vector<Vec2> texcoords;
-    std::vector<char> late;  // per added vertex: put there by late lines alone
     // Points put on an edge (v0 < v1, the mesh's vertex indices): its
     // parameter from v0 and the vertex index it got.
     std::map<std::pair<uint32_t, uint32_t>, std::vector<std::pair<double, uint32_t>>> onEdges;
-    std::vector<std::vector<Segment>> segments;  // per triangle
+    std::vector<std::vector<std::pair<CutPoint, CutPoint>>> segments;  // per triangle
 };
 
 }  // namespace
 
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
-                                   const ContactCutSettings& settings, ContactCutReport* report,
-                                   std::vector<std::vector<char>>* late) {
+                                   const ContactCutSettings& settings, ContactCutReport* report) {
     ContactCutReport rep;
     std::vector<Mesh> out = scene.meshes;
-    if (late) {
-        late->assign(scene.meshes.size(), {});
-        for (size_t mi = 0; mi < scene.meshes.size(); ++mi) (*late)[mi].assign(scene.meshes[mi].positions.size(), 0);
-    }
     const double diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     const double touch = 1e-7 * diagonal;
 
@@ -242,7 +216,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     std::vector<CutMesh> cuts(scene.meshes.size());
     std::vector<uint32_t> near, lines;  // scratch: the edges and the hanging faces' lines near a receiver
     // Registers an end on the receiver's edge, once: a new vertex there.
-    const auto registerOnEdge = [&](CutMesh& cm, const Mesh& m, const glm::uvec3& tri, CutPoint& p, bool lateLine) {
+    const auto registerOnEdge = [&](CutMesh& cm, const Mesh& m, const glm::uvec3& tri, CutPoint& p) {
         const uint32_t va = tri[kEdgeCorners[p.index][0]], vb = tri[kEdgeCorners[p.index][1]];
         const bool flip = vb < va;
         const std::pair<uint32_t, uint32_t> key = flip ? std::make_pair(vb, va) : std::make_pair(va, vb);
@@ -251,14 +225,8 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
         const double length = glm::length(m.positions[key.second] - m.positions[key.first]);
         const double tol = length > 0 ? touch / length : 1e-12;
         for (const auto& [s, v] : list)
-            if (std::abs(s - t) <= tol) {
-                // An early line's point is early whatever else put it there.
-                char& l = cm.late[v - m.positions.size()];
-                l = l && lateLine;
-                return;
-            }
+            if (std::abs(s - t) <= tol) return;
         const uint32_t v = uint32_t(m.positions.size() + cm.positions.size());
-        cm.late.push_back(lateLine);
         cm.positions.push_back((1.0 - t) * m.positions[key.first] + t * m.positions[key.second]);
         const Vec3 n = (1.0 - t) * m.normals[key.first] + t * m.normals[key.second];
         cm.normals.push_back(glm::length(n) > 1e-12 ? glm::normalize(n) : m.normals[key.first]);
@@ -273,28 +241,6 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     // kInside·h inside the edge, each kept as an edge with that face as its
     // one entry, so that the edges' grid finds it near every triangle of that mesh
     // it may cross (a quad's line crosses both halves). The second cuts.
-    // A face of a hanging surface beside `edge`, parallel to the receiver
-    // (normal rn) and not skipped: the unit vector from the edge into it,
-    // within its plane, and how far it reaches from the edge.
-    struct Inward {
-        Vec3 direction;
-        double width;
-    };
-    const auto inwardOf = [&](const SceneEdge& edge, const std::pair<uint32_t, uint32_t>& f,
-                              const Vec3& rn) -> std::optional<Inward> {
-        if (f.first < skip.size() && skip[f.first]) return std::nullopt;
-        const Mesh& hanging = scene.meshes[f.first];
-        if (std::abs(glm::dot(unitNormal(hanging, f.second), rn)) < kParallel) return std::nullopt;
-        const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
-        const auto away = [&](const Vec3& c) { return glm::length(glm::cross(c - edge.a, edgeDir)); };
-        const Triangle3 q = hanging.triangle(f.second);
-        Vec3 off = q[0];
-        for (const Vec3& c : q)
-            if (away(c) > away(off)) off = c;
-        const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
-        if (!(glm::length(in) > touch)) return std::nullopt;
-        return Inward{glm::normalize(in), glm::length(in)};
-    };
     std::vector<SceneEdge> inner;
     std::set<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> innerDone;
     std::unique_ptr<BoundsGrid> innerGrid;
@@ -323,7 +269,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 grid.query(b, near);
                 // Adds the part of segment (a3, b3) that crosses R, projected,
                 // unless it misses R or runs along R's boundary.
-                const auto addSegment = [&](const Vec3& a3, const Vec3& b3, bool lateLine) {
+                const auto addSegment = [&](const Vec3& a3, const Vec3& b3) {
                     auto a = r.local(a3), bb = r.local(b3);
                     if (!clip(a, bb)) return;
                     CutPoint ca = classify(a.first, a.second, tol), cb = classify(bb.first, bb.second, tol);
@@ -331,8 +277,8 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     const Vec3 d = (bb.first - a.first) * r.e1 + (bb.second - a.second) * r.e2;
                     if (glm::length(d) <= touch) return;
                     for (CutPoint* c : {&ca, &cb})
-                        if (c->kind == CutPoint::OnEdge) registerOnEdge(cm, m, m.triangles[t], *c, lateLine);
-                    cm.segments[t].push_back({ca, cb, lateLine});
+                        if (c->kind == CutPoint::OnEdge) registerOnEdge(cm, m, m.triangles[t], *c);
+                    cm.segments[t].emplace_back(ca, cb);
                     ++rep.segments;
                 };
                 if (pass == 1 && innerGrid) {
@@ -343,7 +289,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         if (line.faces.front().first != mi) continue;
                         const double da = glm::dot(line.a - r.p0, r.n), db = glm::dot(line.b - r.p0, r.n);
                         if (std::abs(da) <= kCoplanar * diagonal && std::abs(db) <= kCoplanar * diagonal)
-                            addSegment(line.a, line.b, line.late);
+                            addSegment(line.a, line.b);
                     }
                 }
                 for (uint32_t e : near) {
@@ -361,7 +307,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     // ones are not.
                     const double h = 0.5 * (da + db);
                     if (!(h > kLeastGap * diagonal)) continue;
-                    if (pass == 1) addSegment(edge.a, edge.b, false);
+                    if (pass == 1) addSegment(edge.a, edge.b);
                     if (!(2 * h < 0.5 * settings.spacing)) continue;
                     if (pass == 0) {
                         // The hanging surface's faces beside the edge that
@@ -371,13 +317,23 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         // the edge's ends (as the receiver's below).
                         const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
                         for (const auto& f : edge.faces) {
-                            const std::optional<Inward> in = inwardOf(edge, f, r.n);
-                            if (!in || !innerDone.insert({e, f}).second) continue;
-                            for (const GapLine& line : kInside)
-                                if (line.depth * h < 0.5 * in->width)
-                                    inner.push_back({edge.a + line.depth * h * in->direction - 3 * h * edgeDir,
-                                                     edge.b + line.depth * h * in->direction + 3 * h * edgeDir, {f},
-                                                     line.late});
+                            if (f.first < skip.size() && skip[f.first]) continue;
+                            const Mesh& hanging = scene.meshes[f.first];
+                            if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
+                            if (!innerDone.insert({e, f}).second) continue;
+                            const auto away = [&](const Vec3& c) {
+                                return glm::length(glm::cross(c - edge.a, edgeDir));
+                            };
+                            const Triangle3 q = hanging.triangle(f.second);
+                            Vec3 off = q[0];
+                            for (const Vec3& c : q)
+                                if (away(c) > away(off)) off = c;
+                            const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
+                            if (!(glm::length(in) > touch)) continue;
+                            const Vec3 inward = glm::normalize(in);
+                            for (const double depth : kInside)
+                                inner.push_back({edge.a + depth * h * inward - 3 * h * edgeDir,
+                                                 edge.b + depth * h * inward + 3 * h * edgeDir, {f}});
                         }
                         continue;
                     }
@@ -391,17 +347,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     const Vec3 dir = glm::normalize(along);
                     const Vec3 side = glm::cross(r.n, dir);
                     for (double sign : {1.0, -1.0})
-                        addSegment(a + 2 * sign * h * side - 3 * h * dir, bp + 2 * sign * h * side + 3 * h * dir,
-                                   false);
-                    // Under the hanging face, lines deeper in, as on its own side.
-                    for (const auto& f : edge.faces) {
-                        const std::optional<Inward> in = inwardOf(edge, f, r.n);
-                        if (!in) continue;
-                        for (const GapLine& line : kUnder)
-                            if (line.depth * h < 0.5 * in->width)
-                                addSegment(a + line.depth * h * in->direction - 3 * h * dir,
-                                           bp + line.depth * h * in->direction + 3 * h * dir, line.late);
-                    }
+                        addSegment(a + 2 * sign * h * side - 3 * h * dir, bp + 2 * sign * h * side + 3 * h * dir);
                 }
             }
         }
@@ -500,34 +446,10 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 inside.push_back(cdt.insert(q));
                 return inside.back();
             };
-            for (const Segment& seg : cm.segments[t]) {
-                const Cdt::Vertex_handle ha = handleOf(seg.a), hb = handleOf(seg.b);
+            for (const auto& [a, b] : cm.segments[t]) {
+                const Cdt::Vertex_handle ha = handleOf(a), hb = handleOf(b);
                 if (ha != hb) cdt.insert_constraint(ha, hb);
             }
-            // A vertex the triangulation made (a cut's end inside, two
-            // cuts' crossing) is late when the late lines made it: it lies
-            // on one, and is neither an early cut's end nor the crossing
-            // of two early cuts (those are there without the late lines).
-            const auto lateInside = [&](const Cdt::Point& q) {
-                bool onLate = false;
-                int early = 0;
-                for (const Segment& seg : cm.segments[t]) {
-                    const Cdt::Point a = toPlane(seg.a.x, seg.a.y), b = toPlane(seg.b.x, seg.b.y);
-                    const double dx = b.x() - a.x(), dy = b.y() - a.y(), len2 = dx * dx + dy * dy;
-                    const double u = len2 > 0 ? std::clamp(((q.x() - a.x()) * dx + (q.y() - a.y()) * dy) / len2, 0.0, 1.0)
-                                              : 0.0;
-                    const double near = 16 * touch;
-                    if (std::hypot(a.x() + u * dx - q.x(), a.y() + u * dy - q.y()) > near) continue;
-                    if (seg.late) {
-                        onLate = true;
-                        continue;
-                    }
-                    const bool end = std::hypot(a.x() - q.x(), a.y() - q.y()) <= near ||
-                                     std::hypot(b.x() - q.x(), b.y() - q.y()) <= near;
-                    early += end ? 2 : 1;
-                }
-                return onLate && early < 2;
-            };
             std::map<const void*, int> onEdges;
             for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
                 const auto it = known.find(&*v);
@@ -539,7 +461,6 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 const auto [x, y] = toBarycentric(v->point());
                 const double w = 1.0 - x - y;
                 v->info() = uint32_t(m.positions.size() + cm.positions.size());
-                cm.late.push_back(lateInside(v->point()));
                 cm.positions.push_back(w * p[0] + x * p[1] + y * p[2]);
                 const Vec3 n = w * m.normals[tri.x] + x * m.normals[tri.y] + y * m.normals[tri.z];
                 cm.normals.push_back(glm::length(n) > 1e-12 ? glm::normalize(n) : unitNormal(m, t));
@@ -595,7 +516,6 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
             o.positions.push_back(cm.positions[v]);
             o.normals.push_back(cm.normals[v]);
             if (!cm.texcoords.empty()) o.texcoords.push_back(cm.texcoords[v]);
-            if (late) (*late)[mi].push_back(cm.late[v]);
         }
         for (glm::uvec3& tri : o.triangles)
             for (int k = 0; k < 3; ++k)

@@ -37,33 +37,13 @@
 // part, where the camera sees into the gap, read their indirect light 2.8%
 // too bright (6.5% on the 192-panel office at 6 s). So a face of the
 // hanging surface beside such an edge and parallel to the receiver gets
-// lines 2h, 4h, 6h and 8h inside the edge, and the receiver lines 4h and 8h
-// in under it (besides the 2h either side above): where the profile is at
-// 0.1, 0.03, 0.014 and 0.008 of the open value, so that each bounce's light in
-// the gap, which falls off as steeply, is read within a fraction of itself.
-// Lines deeper than half the face's width (measured across the triangle
-// beside the edge) are left to the opposite edge's. Measured at 20 s with
-// lines 2h and 6h on the face alone (render --time 20, 320×180): the
-// 48-panel office's indirect light 1.12/1.11% → 0.91/0.73% (two seeds; the
-// image 2.57/2.80% → 2.50/2.60%), the 192-panel one's 2.27% → 1.74% (the
-// image 3.28% → 2.89%). That left the gap's light growing bounce after
-// bounce, each reading the last one's linear interpolation of a convex
-// fall-off (too bright between lines): on the 192-panel office at 28 s,
-// `probe` against the path tracer (262,144 paths a point) put the ceiling
-// over a panel's centre at 4.3 times its light, 10 cm in at 3.2 times, the
-// panel's back at its centre at 4.1 times. With lines 2h, 4h and 8h on the
-// face and 4h and 8h under it: 2.2, 1.7 and 2.1 times.
-//
-// The lines at 4h and 8h are late: `late` marks the vertices they made
-// (on them, and not where two early cuts cross), and a cache's first pass
-// leaves those to its sampled neighbours (CacheLayout::deferLate),
-// gathering them before its refinement starts. Gathered in the first pass
-// they cost each bounce's first images: they add about 20,000 vertices to
-// the 192-panel office's bounce bases, and a first pass spreads a fixed
-// number of rays over its base, so each gather got fewer (`bench lights`
-// put that office's 10% at 2.4 times the 12-panel office's time, 1.9
-// before). The lines 2h and 6h on the face, which were cut before, stay
-// early: the first pass reads the gap as it did then.
+// lines 2h and 6h inside the edge (where the profile is at 0.1 and 0.014 of
+// the open value).
+// Measured at 20 s (render --time 20, 320×180): the 48-panel office's
+// indirect light 1.12/1.11% → 0.91/0.73% (two seeds; the image 2.57/2.80%
+// → 2.50/2.60%), the 192-panel one's 2.27% → 1.74% (the image 3.28% →
+// 2.89%). A line 6h in under the face on the receiver too added twice the
+// vertices for no change beyond the runs' spread.
 //
 // Not cut: touching contacts (a block on a floor, h = 0) and gaps under a
 // thousandth of the scene. There the cache's rule for hidden vertices
@@ -113,10 +93,7 @@ struct ContactCutReport {
 // front of it; skip[i] leaves mesh i as it is (it still cuts others).
 // Deterministic: the same scene gives the same meshes to the bit. Cost: a
 // uniform grid of the scene's edges, then per receiver the edges near it.
-// `late`, when given, gets per mesh and vertex 1 where only late lines put
-// the vertex (the mesh's own vertices: 0).
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
-                                   const ContactCutSettings& settings, ContactCutReport* report = nullptr,
-                                   std::vector<std::vector<char>>* late = nullptr);
+                                   const ContactCutSettings& settings, ContactCutReport* report = nullptr);
 
 }  // namespace ml

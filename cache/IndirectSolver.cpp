@@ -18,10 +18,6 @@ double firstPassEffort(double base, double firstPassGathers, bool firstPass) {
     return firstPass && base > firstPassGathers ? firstPassGathers / base : 1.0;
 }
 
-// The part of a bounce's base its first pass gathers: deferred vertices
-// (CacheLayout::deferLate) wait for pass 2.
-size_t firstPassBase(const IrradianceCache& c) { return c.totalVertices() - c.deferredCount(); }
-
 }  // namespace
 
 CacheSettings IndirectSettings::defaultCache() {
@@ -145,7 +141,7 @@ void IndirectSolver::prepareSource(IndirectEstimator& estimator, int bounce,
     if (sourceBuilt_.size() <= slot) sourceBuilt_.resize(slot + 1, false);
     if (sourceForFirstPass_.size() <= slot) sourceForFirstPass_.resize(slot + 1, false);
     if (sourceBuilt_[slot] && (firstPass || !sourceForFirstPass_[slot])) return;
-    const double base = double(firstPassBase(*caches_.at(slot)));
+    const double base = double(caches_.at(slot)->totalVertices());
     const double effort = firstPassEffort(base, settings_.firstPassGathers, firstPass);
     if (bounce == 1)
         estimator.setSource(0, direct(), effort);
@@ -176,13 +172,8 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         // Every bounce lays the same surfaces (bounceCacheSettings changes
         // only tolerances and the smallest edges): cut along contacts once.
         CacheLayout layout = bounceCacheLayout(estimator);
-        if (!surfaces_) {
-            auto late = std::make_shared<std::vector<std::vector<char>>>();
-            surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1), nullptr, late.get()));
-            late_ = std::move(late);
-        }
+        if (!surfaces_) surfaces_ = std::make_shared<const std::vector<Mesh>>(cacheSurfaces(scene_, settingsFor(1)));
         layout.surfaces = surfaces_;
-        layout.late = late_;
         caches_.push_back(std::make_unique<IrradianceCache>(scene_, settingsFor(bounce), layout));
         caches_.back()->setInterrupt(interrupt_);
         // Only a tail after bounce 1 reads it: none with one bounce.
@@ -196,13 +187,6 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     const bool first = !firstPassDone();
     const int bounce = first ? firstPassBounce() : allFinished() ? 1 : nextBounce();
     const size_t slot = size_t(bounce - 1);
-    // Pass 2's first round on a bounce gathers its deferred vertices
-    // (CacheLayout::deferLate) before refinement is scored: with the first
-    // pass's effort a gather, as they would have been gathered in it (on
-    // the 192-panel office, 39,000 of a bounce's 71,000 vertices: at full
-    // effort, seven bounces' would have taken pass 2's first 15 s).
-    const bool deferredRound = !first && caches_[slot]->deferredCount() > 0;
-    const bool cheap = first || deferredRound;
     // A first pass gathered again (restart): only the source it gathers from is kept.
     if (first)
         for (size_t s = 0; s < sourceBuilt_.size(); ++s)
@@ -221,7 +205,7 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     if (!first && bounce >= 2 && slot < sourceBuilt_.size() && sourceBuilt_[slot] && !sourceForFirstPass_[slot] &&
         caches_[slot - 1]->totalSamples() >= 2 * std::max<uint64_t>(sourceSamples_[slot], 1))
         releaseSource(estimator, slot);
-    prepareSource(estimator, bounce, direct, cheap);
+    prepareSource(estimator, bounce, direct, first);
     // A first pass of cheap gathers (a base larger than firstPassGathers)
     // measures its noise with probes (IrradianceCache::setNoiseProbes):
     // the level assumed for a full gather (sampleNoise, 3%) read the back
@@ -231,8 +215,8 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
     // /scene.gltf --width 320 --height 180 --time 11). Every 64th vertex:
     // 1.6% more gathers, at least 78 probes (kMeasuredNoiseFreedom is 64).
     constexpr size_t kNoiseProbeEvery = 64;
-    const double base = double(firstPassBase(*caches_[slot]));
-    const bool cheapPass = firstPassEffort(base, settings_.firstPassGathers, cheap) < 1;
+    const double base = double(caches_[slot]->totalVertices());
+    const bool cheapPass = firstPassEffort(base, settings_.firstPassGathers, first) < 1;
     caches_[slot]->setNoiseProbes(cheapPass ? kNoiseProbeEvery : 0);
     // The bounce's one mesh is filled by gathers from its source slot.
     struct Gather : VertexSampler {
@@ -327,7 +311,6 @@ void IndirectSolver::sceneChanged(bool keepOld) {
     }
     ++epoch_;
     surfaces_.reset();
-    late_.reset();
     resetPass2();
     directRefreshed_ = false;
     regathering_ = false;
@@ -467,12 +450,6 @@ IrradianceMeshCopy IndirectSolver::copyMesh(int bounce) const {
     return filledCopy(bounce);
 }
 
-std::vector<size_t> IndirectSolver::deferredCounts() const {
-    std::vector<size_t> v;
-    for (const auto& c : caches_) v.push_back(c->deferredCount());
-    return v;
-}
-
 std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
     std::lock_guard<std::mutex> lock(memoMutex_);
     std::vector<IrradianceMeshCopy> v;
@@ -490,15 +467,12 @@ std::vector<IrradianceMeshCopy> IndirectSolver::copyMeshes() const {
 // from bounce 1 puts bounce 1's distribution, too much on the ceiling, into
 // every later bounce). A thirty-second gave 14.5%: too few vertices to fill
 // from and to measure the bounces' ratio on.
-static bool shownOnceGathered(const IrradianceCache& c) {
-    const size_t base = firstPassBase(c);
-    return 16 * (base - std::min(base, c.unsampledCount())) >= base;
-}
+static bool shownOnceGathered(size_t gathered, size_t total) { return 16 * gathered >= total; }
 
 bool IndirectSolver::firstBounceShown() const {
     if (caches_.empty()) return false;
     const IrradianceCache& c = *caches_.front();
-    return regathering_ || shownOnceGathered(c);
+    return regathering_ || shownOnceGathered(c.totalVertices() - c.unsampledCount(), c.totalVertices());
 }
 
 bool IndirectSolver::firstBounceGathered() const {
@@ -613,7 +587,8 @@ bool IndirectSolver::gatheredEnoughToShow(int bounce) const {
     if (bounce < 1 || bounce >= started()) return false;
     const IrradianceCache& last = *caches_[size_t(bounce - 1)];
     const IrradianceCache& next = *caches_[size_t(bounce)];
-    return last.level() == 0 && shownOnceGathered(next) && last.totalVertices() > 0;
+    const size_t gathered = next.totalVertices() - next.unsampledCount();
+    return last.level() == 0 && shownOnceGathered(gathered, next.totalVertices()) && last.totalVertices() > 0;
 }
 
 

@@ -218,9 +218,6 @@ public:
     // One mesh per started bounce, bounce 1 first, hidden vertices filled
     // (fillHiddenVertices): what is shown and what the next bounce reflects.
     std::vector<IrradianceMeshCopy> copyMeshes() const;
-    // Per started bounce, its deferred vertices without a sample yet
-    // (IrradianceCache::deferredCount).
-    std::vector<size_t> deferredCounts() const;
     // What the image shows while bounces are missing: the bounces whose
     // first pass is complete and, for the ones still to come, one more mesh,
     // the last complete bounce k times Σ_{j=1..N−k} r^j (each bounce carries
@@ -276,7 +273,6 @@ private:
     IndirectSettings settings_;
     std::vector<std::unique_ptr<IrradianceCache>> caches_;
     std::shared_ptr<const std::vector<Mesh>> surfaces_;  // what every bounce's cache lays (CacheLayout::surfaces)
-    std::shared_ptr<const std::vector<std::vector<char>>> late_;  // and its deferred vertices (CacheLayout::late)
     // Pass 2, by slot (bounce − 1): converged at the level in hand; the
     // share of the image's error the bounce's last round began with (its
     // estimated error × ā^(n−1); infinite until it has had a round), which

@@ -153,18 +153,8 @@ bool sceneBehind(const Scene& scene, const Mesh& m, size_t t) {
     return false;
 }
 
-// `late` (per mesh and vertex, may be empty) marks the vertices to defer;
-// `deferred` gets the base vertices they became (reversed copies too).
 size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const std::vector<bool>& skip,
-                     CacheLayout::BackFaces rule, CacheTriMesh& mesh, size_t& backFaces,
-                     const std::vector<std::vector<char>>& late, std::vector<char>& deferred) {
-    deferred.clear();
-    const auto defer = [&](size_t mi, uint32_t v, CacheTriMesh::VertexHandle h) {
-        if (mi < late.size() && v < late[mi].size() && late[mi][v]) {
-            if (deferred.size() <= size_t(h.idx())) deferred.resize(size_t(h.idx()) + 1, 0);
-            deferred[size_t(h.idx())] = 1;
-        }
-    };
+                     CacheLayout::BackFaces rule, CacheTriMesh& mesh, size_t& backFaces) {
     // Rays only for the faces the cheap tests leave undecided, from a
     // scene built for the first of them.
     std::unique_ptr<EmbreeScene> rays;
@@ -195,7 +185,6 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
                     if (it == back.end()) {
                         it = back.emplace(v, mesh.add_vertex(toOm(m.positions[v]))).first;
                         mesh.set_normal(it->second, toOm(-m.normals[v]));
-                        defer(mi, v, it->second);
                     }
                     h[k] = it->second;
                 }
@@ -207,7 +196,6 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
                     const uint32_t v = m.triangles[t][k];
                     h[k] = mesh.add_vertex(toOm(m.positions[v]));
                     mesh.set_normal(h[k], toOm(-m.normals[v]));
-                    defer(mi, v, h[k]);
                 }
                 mesh.add_face(h[0], h[2], h[1]);
                 ++backFaces;
@@ -218,7 +206,6 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
         for (size_t v = 0; v < m.positions.size(); ++v) {
             handles[v] = mesh.add_vertex(toOm(m.positions[v]));
             mesh.set_normal(handles[v], toOm(m.normals[v]));
-            defer(mi, uint32_t(v), handles[v]);
         }
         for (const glm::uvec3& t : m.triangles) {
             const CacheTriMesh::FaceHandle f = mesh.add_face(handles[t.x], handles[t.y], handles[t.z]);
@@ -227,7 +214,6 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
             for (int k = 0; k < 3; ++k) {
                 own[k] = mesh.add_vertex(toOm(m.positions[t[k]]));
                 mesh.set_normal(own[k], toOm(m.normals[t[k]]));
-                defer(mi, t[k], own[k]);
             }
             mesh.add_face(own[0], own[1], own[2]);
             ++detached;
@@ -239,13 +225,12 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
 // The scene's meshes cut along contacts (ContactCuts.h), or as they are;
 // `gridded` meshes are left as they are.
 std::vector<Mesh> cutMeshes(const Scene& scene, const std::vector<bool>& gridded, const CacheSettings& settings,
-                            ContactCutReport* report = nullptr, std::vector<std::vector<char>>* late = nullptr) {
-    if (late) late->clear();
+                            ContactCutReport* report = nullptr) {
     if (!(settings.contactCloseness > 0)) return scene.meshes;
     ContactCutSettings cut;
     cut.closeness = settings.contactCloseness;
     cut.spacing = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
-    return cutAlongContacts(scene, gridded, cut, report, late);
+    return cutAlongContacts(scene, gridded, cut, report);
 }
 
 // Longest-edge bisection until no edge exceeds maxLength. Edges are split
@@ -324,15 +309,11 @@ bool keptFaces(const CacheTriMesh& base, const std::vector<char>& keepFace, Cach
 
 // Mesh `l` laid on `base` as the layout asks (a light's own mesh keeps the
 // faces where it has weight when lights share), with no sample.
-// `deferred`: the base's deferred vertices (buildBaseMesh), kept where the
-// mesh is the whole base (no light's share of it: those are not cut).
-void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& scene, const CacheTriMesh& base,
-             const std::vector<char>& deferred) {
+void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& scene, const CacheTriMesh& base) {
     detail::LightMesh& lm = s.meshes[l];
     lm.provisional.clear();
     lm.needsGpu.clear();
     lm.gridNeedsGpu.clear();
-    lm.deferred.clear();
     // A light's own mesh keeps the faces where it has weight; a gathered
     // light's keeps none (LightCoverage::gathered).
     const bool gathered =
@@ -353,7 +334,6 @@ void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& sc
         }
     } else {
         lm.mesh = base;
-        lm.deferred = deferred;
     }
     lm.stats.assign(lm.mesh.n_vertices(), {});
     lm.gridStats.assign(s.gridSamples, {});
@@ -361,12 +341,11 @@ void layMesh(CacheState& s, const CacheLayout& layout, size_t l, const Scene& sc
 
 }  // namespace
 
-std::vector<Mesh> cacheSurfaces(const Scene& scene, const CacheSettings& settings, ContactCutReport* report,
-                                std::vector<std::vector<char>>* late) {
+std::vector<Mesh> cacheSurfaces(const Scene& scene, const CacheSettings& settings, ContactCutReport* report) {
     const double maxEdge = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
     std::vector<bool> gridded;
     for (const Mesh& m : scene.meshes) gridded.push_back(decideGridCache(m, maxEdge).useGrid);
-    return cutMeshes(scene, gridded, settings, report, late);
+    return cutMeshes(scene, gridded, settings, report);
 }
 
 IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settings, const CacheLayout& layout)
@@ -404,22 +383,16 @@ IrradianceCache::IrradianceCache(const Scene& scene, const CacheSettings& settin
         s.grids.push_back(std::move(g));
     }
     CacheTriMesh base;
-    std::vector<std::vector<char>> cutLate;
-    const std::vector<Mesh> cut =
-        layout.surfaces ? std::vector<Mesh>() : cutMeshes(scene, gridded, settings, nullptr, &cutLate);
+    const std::vector<Mesh> cut = layout.surfaces ? std::vector<Mesh>() : cutMeshes(scene, gridded, settings);
     const std::vector<Mesh>& surfaces = layout.surfaces ? *layout.surfaces : cut;
-    const std::vector<std::vector<char>>& late =
-        layout.surfaces ? (layout.late ? *layout.late : std::vector<std::vector<char>>()) : cutLate;
     ML_ASSERT(surfaces.size() == scene.meshes.size(), "the cache's surfaces are the scene's meshes");
-    std::vector<char> deferred;
-    s.detachedFaces = buildBaseMesh(scene, surfaces, gridded, layout.backFaces, base, s.backFaces,
-                                    layout.deferLate ? late : std::vector<std::vector<char>>(), deferred);
+    s.detachedFaces = buildBaseMesh(scene, surfaces, gridded, layout.backFaces, base, s.backFaces);
     bisectLongEdges(base, maxEdge);
     const bool share = layout.coverage && layout.coverage->sharing() && layout.meshes == 0;
     s.sharedMesh = share;
     s.meshes.resize(share ? scene.lights.size() + 1 : layout.meshes ? layout.meshes : scene.lights.size());
     impl_->layout = layout;
-    for (size_t l = 0; l < s.meshes.size(); ++l) layMesh(s, layout, l, scene, base, deferred);
+    for (size_t l = 0; l < s.meshes.size(); ++l) layMesh(s, layout, l, scene, base);
 }
 
 size_t IrradianceCache::rebuildKeepingBase(size_t l, const Scene& scene) {
@@ -457,13 +430,9 @@ size_t IrradianceCache::rebuildMesh(size_t l, const Scene& scene) {
     for (const detail::GridObject& g : s.grids) gridded[g.mesh] = true;
     CacheTriMesh base;
     size_t backFaces = 0;
-    std::vector<std::vector<char>> late;
-    const std::vector<Mesh> cut = cutMeshes(scene, gridded, s.settings, nullptr, &late);
-    if (!impl_->layout.deferLate) late.clear();
-    std::vector<char> deferred;
-    buildBaseMesh(scene, cut, gridded, impl_->layout.backFaces, base, backFaces, late, deferred);
+    buildBaseMesh(scene, cutMeshes(scene, gridded, s.settings), gridded, impl_->layout.backFaces, base, backFaces);
     bisectLongEdges(base, s.settings.maxEdgeFraction * s.diagonal);
-    layMesh(s, impl_->layout, l, scene, base, deferred);
+    layMesh(s, impl_->layout, l, scene, base);
     return before;
 }
 
@@ -584,7 +553,6 @@ size_t IrradianceCache::meshCount() const { return impl_->state.meshes.size(); }
 size_t IrradianceCache::lightCount() const { return impl_->state.meshes.size() - (impl_->state.sharedMesh ? 1 : 0); }
 bool IrradianceCache::hasSharedMesh() const { return impl_->state.sharedMesh; }
 size_t IrradianceCache::unsampledCount() const { return detail::unsampledCount(impl_->state); }
-size_t IrradianceCache::deferredCount() const { return detail::deferredCount(impl_->state); }
 size_t IrradianceCache::vertexCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_vertices(); }
 size_t IrradianceCache::triangleCount(size_t l) const { return impl_->state.meshes.at(l).mesh.n_faces(); }
 uint64_t IrradianceCache::totalSamples() const { return impl_->state.samples; }
@@ -957,15 +925,13 @@ size_t takeSamples(CacheState& s, VertexSampler& sampler, uint32_t seed, const s
 
 size_t IrradianceCache::sampleUnsampled(VertexSampler& sampler, uint32_t seed,
                                         const std::function<void(size_t, size_t)>& progress) {
-    // Deferred vertices too, after the others.
-    const auto left = [&] { return detail::unsampledCount(impl_->state) + detail::deferredCount(impl_->state); };
-    const size_t todo = left();
+    const size_t todo = detail::unsampledCount(impl_->state);
     const FirstSamples first(sampler);
     // In batches, so that progress is told now and then.
-    for (size_t n = todo; n > 0;) {
-        detail::sampleUnsampled(impl_->state, sampler, seed, 4096, {}, detail::unsampledCount(impl_->state) == 0);
-        n = left();
-        if (progress) progress(todo - n, todo);
+    for (size_t left = todo; left > 0;) {
+        detail::sampleUnsampled(impl_->state, sampler, seed, 4096);
+        left = detail::unsampledCount(impl_->state);
+        if (progress) progress(todo - left, todo);
     }
     return todo;
 }
@@ -975,17 +941,9 @@ namespace detail {
 size_t unsampledCount(const CacheState& s) {
     size_t n = 0;
     for (const LightMesh& lm : s.meshes) {
-        for (size_t v = 0; v < lm.stats.size(); ++v) n += lm.stats[v].count == 0 && !lm.isDeferred(v);
+        for (const VertexStats& st : lm.stats) n += st.count == 0;
         for (const VertexStats& st : lm.gridStats) n += st.count == 0;
     }
-    return n;
-}
-
-size_t deferredCount(const CacheState& s) {
-    size_t n = 0;
-    for (const LightMesh& lm : s.meshes)
-        for (size_t v = 0; v < lm.deferred.size() && v < lm.stats.size(); ++v)
-            n += lm.deferred[v] && lm.stats[v].count == 0;
     return n;
 }
 
@@ -1041,7 +999,7 @@ size_t takeSamplesWithoutGpu(CacheState& s, VertexSampler& sampler, uint32_t see
 }  // namespace
 
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
-                       const std::function<bool()>& interrupt, bool deferred) {
+                       const std::function<bool()>& interrupt) {
     // Every mesh's first vertices before any mesh's later ones: base
     // vertices (numbered first) of every light before the vertices that
     // refinement added, so that all the light is in the image early; grid
@@ -1057,9 +1015,9 @@ size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, siz
     for (size_t l = 0; l < s.meshes.size(); ++l) {
         const LightMesh& lm = s.meshes[l];
         for (size_t i = 0; i < lm.stats.size(); ++i)
-            if (lm.stats[i].count == 0 && lm.isDeferred(i) == deferred)
+            if (lm.stats[i].count == 0)
                 ranked.push_back({(uint64_t(hash32(uint32_t(i))) << 32) | (uint64_t(l) << 1), {uint32_t(l), uint32_t(i), false}});
-        for (size_t g = 0; g < lm.gridStats.size() && !deferred; ++g)
+        for (size_t g = 0; g < lm.gridStats.size(); ++g)
             if (lm.gridStats[g].count == 0)
                 ranked.push_back({(uint64_t(hash32(kGridSeedBase + uint32_t(g))) << 32) | (uint64_t(l) << 1) | 1u,
                                   {uint32_t(l), uint32_t(g), true}});

@@ -151,10 +151,9 @@ struct RefineReport {
 // The scene's meshes as a cache with `settings` lays its base meshes over
 // them: cut along the surfaces hanging close in front of them where
 // settings.contactCloseness asks (ContactCuts.h), objects with a grid cache
-// (decideGridCache) left as they are; `report`, when given, says what was cut,
-// and `late` which vertices the cuts' late lines put there (ContactCuts.h).
+// (decideGridCache) left as they are; `report`, when given, says what was cut.
 std::vector<Mesh> cacheSurfaces(const Scene& scene, const CacheSettings& settings,
-                                ContactCutReport* report = nullptr, std::vector<std::vector<char>>* late = nullptr);
+                                ContactCutReport* report = nullptr);
 
 // Which meshes a cache holds, and which faces of open objects get a reversed
 // copy so that each side keeps its own irradiance.
@@ -191,20 +190,6 @@ struct CacheLayout {
     // caches (the indirect solver's bounces: cutting along contacts takes a
     // few hundredths of a second each time). Null: made here.
     std::shared_ptr<const std::vector<Mesh>> surfaces;
-    // With `surfaces`: which of their vertices the contact cuts' late lines
-    // put there (cacheSurfaces' `late`; null: none).
-    std::shared_ptr<const std::vector<std::vector<char>>> late;
-    // Defer those vertices (not the midpoints the base mesh puts on long
-    // edges: between two late vertices, those filled whole walls with
-    // deferred vertices where a wall was cut along its length): the first pass (the rounds while unsampledCount() > 0)
-    // leaves them to their sampled neighbours, as copies show any vertex
-    // without a sample, and the next round samples them before refinement
-    // is scored (deferredCount()). The first pass then costs what it cost
-    // without those lines: a bounce's first pass spreads a fixed number of
-    // rays over its base (IndirectSettings::firstPassGathers), and the
-    // 192-panel office's 20,000 late vertices, gathered then, made every
-    // gather noisier and the first complete images later.
-    bool deferLate = true;
 };
 
 class IrradianceCache {
@@ -255,8 +240,7 @@ public:
     std::array<uint64_t, 4> changeKey() const {
         return {rounds(), uint64_t(level()), totalSamples(), uint64_t(totalVertices())};
     }
-    size_t unsampledCount() const;  // vertices (and grid samples) without a sample yet, deferred ones aside
-    size_t deferredCount() const;   // deferred vertices (CacheLayout::deferLate) without a sample yet
+    size_t unsampledCount() const;  // vertices (and grid samples) without a sample yet
     // The shading point of a vertex: where and facing where it is sampled
     // (on an object's border in the plane of a surface meeting it there,
     // EdgeOnSurfaces, a thousandth of its shortest edge inside its faces:
@@ -276,7 +260,7 @@ public:
     IrradianceMeshCopy copyMesh(size_t mesh) const;
     std::vector<IrradianceMeshCopy> copyMeshes() const;
 
-    // Samples every vertex that has none yet (deferred ones last), in (light, vertex) order, with
+    // Samples every vertex that has none yet, in (light, vertex) order, with
     // seeds from (seed, vertex, light, sample index): a run repeats bit for
     // bit. Returns the number of estimates. Errors are rethrown with the
     // light, vertex and point where they happened.
@@ -284,8 +268,7 @@ public:
                            const std::function<void(size_t, size_t)>& progress = {});
 
     // One refinement round. While vertices have no sample yet, a round
-    // samples up to `budget` of them (deferred ones once every other has
-    // one: CacheLayout::deferLate). After that, every mesh's edges and
+    // samples up to `budget` of them. After that, every mesh's edges and
     // vertices are scored, the best-scoring splits and resamples up to
     // `budget` estimates are done, and every new vertex is sampled. Deterministic: the same cache state,
     // budget, seed and view give the same result whatever happened before

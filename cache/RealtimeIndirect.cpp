@@ -40,16 +40,9 @@ bool sameVertices(const IrradianceMeshCopy& a, const IrradianceMeshCopy& b) {
 }
 
 // A quarter or more of a bounce's vertices are gathered (have a sample).
-// Of the vertices a first pass gathers: `deferred` of them wait for pass 2
-// (CacheSnapshot::bounceDeferred).
-bool quarterGathered(const std::vector<uint32_t>& samples, size_t deferred) {
+bool quarterGathered(const std::vector<uint32_t>& samples) {
     const size_t gathered = samples.size() - size_t(std::count(samples.begin(), samples.end(), 0u));
-    const size_t base = samples.size() - std::min(deferred, samples.size());
-    return base > 0 && 4 * gathered >= base;
-}
-
-size_t deferredOf(const CacheSnapshot& s, size_t bounce) {
-    return bounce < s.bounceDeferred.size() ? s.bounceDeferred[bounce] : 0;
+    return !samples.empty() && 4 * gathered >= samples.size();
 }
 
 double luminanceSum(const IrradianceMeshCopy& m) {
@@ -276,9 +269,7 @@ int gatheredBounces(const CacheSnapshot& s) {
     if (s.indirectComplete) return 0;
     int k = 0;
     for (const IrradianceMeshCopy& m : s.bounceMeshes) {
-        // Every vertex sampled but the deferred ones.
-        if (m.samples.empty() || size_t(std::count(m.samples.begin(), m.samples.end(), 0u)) > deferredOf(s, size_t(k)))
-            break;
+        if (m.samples.empty() || std::find(m.samples.begin(), m.samples.end(), 0u) != m.samples.end()) break;
         ++k;
     }
     return k;
@@ -293,7 +284,7 @@ int chainLevel(const CacheSnapshot& s) {
     const int k = gatheredBounces(s);
     if (k == 0 && s.indirectComplete) return 0;
     if (size_t(k) >= s.bounceMeshes.size()) return 2 * k;
-    return 2 * k + (quarterGathered(s.bounceMeshes[size_t(k)].samples, deferredOf(s, size_t(k))) ? 1 : 0);
+    return 2 * k + (quarterGathered(s.bounceMeshes[size_t(k)].samples) ? 1 : 0);
 }
 
 }  // namespace
@@ -340,7 +331,7 @@ IndirectShown blendIndirect(const CacheSnapshot& s, uint64_t sceneVersion, const
             // per vertex (the stand-in's value where not gathered) 2.6-3.7%
             // from the converged image in two runs, the copy from a quarter
             // on 2.5-2.8% in one.
-            if (quarterGathered(c.samples, deferredOf(s, b))) {
+            if (quarterGathered(c.samples)) {
                 total += luminanceSum(c);
                 out.meshes.push_back(c);
                 continue;

@@ -178,9 +178,8 @@ double correctByChange(std::vector<IrradianceMeshCopy>& estimate, const std::vec
                        const std::vector<IrradianceMeshCopy>& before);
 
 // How many of the snapshot's bounces, from bounce 1, the cache has gathered
-// since the scene last changed: each of their vertices has a sample but the
-// deferred ones (CacheSnapshot::bounceDeferred; a first pass visits every
-// other base vertex before any refines). 0 once the cache's
+// since the scene last changed: each of their vertices has a sample (a first
+// pass visits every base vertex before any refines). 0 once the cache's
 // indirect light is complete (nothing stands in then).
 int gatheredBounces(const CacheSnapshot& s);
 

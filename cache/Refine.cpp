@@ -401,8 +401,7 @@ double IrradianceCache::integratedLuminance() const {
 }
 
 double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& view) const {
-    // Not every vertex sampled yet: unknown.
-    if (detail::unsampledCount(impl_->state) > 0 || detail::deferredCount(impl_->state) > 0) return 1;
+    if (detail::unsampledCount(impl_->state) > 0) return 1;  // not every vertex sampled yet: unknown
     return score(impl_->state, view, false).error;
 }
 
@@ -425,15 +424,6 @@ RefineReport IrradianceCache::refine(VertexSampler& sampler, size_t budget, uint
         report.estimates = detail::sampleUnsampled(s, sampler, seed, budget, impl_->interrupt);
         // At least the scoring is still to come (estimates also count noise probes).
         report.candidates = detail::unsampledCount(s) + 1;
-        ++s.rounds;
-        return report;
-    }
-    // Then the deferred vertices (CacheLayout::deferLate), the same way.
-    if (detail::deferredCount(s) > 0) {
-        report.estimatedError = 1;
-        const FirstSamples first(sampler);
-        report.estimates = detail::sampleUnsampled(s, sampler, seed, budget, impl_->interrupt, true);
-        report.candidates = detail::deferredCount(s) + 1;
         ++s.rounds;
         return report;
     }

@@ -263,32 +263,6 @@ TEST(IndirectBlend, TheSceneChoosesHowManyBouncesTheMethodEstimates) {
         EXPECT_THROW(RealtimeChoice::parseBounces(bad), InputError) << bad;
 }
 
-TEST(IndirectBlend, DeferredVerticesDoNotHoldABouncesFirstPassOpen) {
-    // Bounce 1 gathered but for one vertex its first pass defers
-    // (CacheLayout::deferLate); bounce 2 with one vertex of six gathered.
-    CacheSnapshot s;
-    s.indirectComplete = false;
-    IrradianceMeshCopy first = meshOf(kBase, 10, 1);
-    first.samples[5] = 0;
-    IrradianceMeshCopy second = meshOf(kBase, 20, 0);
-    second.samples[0] = 1;
-    s.bounceMeshes = {first, second};
-    s.indirect = s.bounceMeshes;
-    EXPECT_EQ(gatheredBounces(s), 0) << "a vertex without a sample, not known to be deferred";
-    s.bounceDeferred = {1, 0};
-    EXPECT_EQ(gatheredBounces(s), 1);
-    // Bounce 2: one of six gathered is under a quarter, and the estimate
-    // stands in where it is not gathered...
-    const RealtimeEstimate e = estimateOf(3, 2);
-    const IndirectShown some = blendIndirect(s, 2, &e);
-    EXPECT_EQ(some.meshes[1].irradiance[1], e.bounces[1].irradiance[1]);
-    // ...but with two of them deferred it is a quarter of its first pass's
-    // four: the cache's copy whole.
-    s.bounceDeferred = {1, 2};
-    const IndirectShown quarter = blendIndirect(s, 2, &e);
-    EXPECT_EQ(quarter.meshes[1].irradiance, second.irradiance);
-}
-
 TEST(IndirectBlend, TheOldLightKeptAfterASmallChangeIsShownOverAnyEstimate) {
     CacheSnapshot s;
     s.indirectComplete = false;

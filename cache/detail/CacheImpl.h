@@ -42,18 +42,15 @@ constexpr double kInterruptBatchSeconds = 0.05;
 const GridObject& gridOf(const CacheState& s, size_t g);  // the object grid sample g belongs to
 void addVertexSample(CacheState& s, size_t light, size_t v, const VertexSample& sample);
 void addGridSample(CacheState& s, size_t light, size_t g, const VertexSample& sample);
-// Vertices and grid samples without a sample yet, over all lights, but
-// for deferred vertices (LightMesh::deferred), which deferredCount counts.
+// Vertices and grid samples without a sample yet, over all lights.
 size_t unsampledCount(const CacheState& s);
-size_t deferredCount(const CacheState& s);
 // Samples up to `budget` of them, in an order that scatters them over the
 // scene and takes every mesh's sample at a vertex together (a partial first
 // pass then covers every object and every light evenly), and the noise
 // probes among them (IrradianceCache::setNoiseProbes). Returns how many
 // samples it took.
-// `deferred`: the deferred vertices without a sample instead.
 size_t sampleUnsampled(CacheState& s, VertexSampler& sampler, uint32_t seed, size_t budget,
-                       const std::function<bool()>& interrupt = {}, bool deferred = false);
+                       const std::function<bool()>& interrupt = {});
 // The standard error of a vertex's (or grid sample's) mean luminance, W·m⁻²:
 // - where its samples measured their own variance (a ray gather's), `own`
 //   (a unit of work's: VertexStats::ownUnitVariance, or ringOwnVariances')

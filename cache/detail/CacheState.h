@@ -79,11 +79,6 @@ struct LightMesh {
     // estimate without the GPU, and it needs the GPU (past the end: not
     // asked yet). Not saved: a loaded cache asks again.
     std::vector<char> needsGpu, gridNeedsGpu;
-    // By vertex: the first pass leaves it to its sampled neighbours, and
-    // refinement samples it before anything else (CacheLayout::late);
-    // past the end: not. Not saved: a loaded cache's first pass samples it.
-    std::vector<char> deferred;
-    bool isDeferred(size_t v) const { return v < deferred.size() && deferred[v]; }
 };
 
 // An object too finely tessellated for a cache mesh: its irradiance is

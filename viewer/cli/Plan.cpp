@@ -66,18 +66,14 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
         return;
     }
     ContactCutReport r;
-    std::vector<std::vector<char>> late;
-    cacheSurfaces(scene, bounces, &r, &late);
-    size_t deferred = 0;
-    for (const auto& m : late) deferred += size_t(std::count(m.begin(), m.end(), 1));
+    cacheSurfaces(scene, bounces, &r);
     if (r.receivers)
         std::printf("  contact cuts: the bounces' meshes are cut where a surface hangs within %.3g x its edge's "
                     "length in front of another (indirect light darkens there within the gap's length, and "
                     "the gathers' noise hides it from refinement): %zu triangles cut along %zu segments (outlines, "
-                    "penumbra lines and lines deeper in the gap) into %zu, %zu vertices added, of which %zu on the "
-                    "deeper lines alone wait for each bounce's first pass to end; %zu faces thinner than 1e-6 of "
-                    "the scene left out (cache/ContactCuts.h)\n",
-                    bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices, deferred, r.dropped);
+                    "and penumbra lines) into %zu, %zu vertices added, %zu faces thinner than 1e-6 of the scene left "
+                    "out (cache/ContactCuts.h)\n",
+                    bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices, r.dropped);
     else
         std::printf("  contact cuts: none (no surface hangs close in front of another)\n");
 }
