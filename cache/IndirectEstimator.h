@@ -86,10 +86,6 @@ public:
     // room behind (the two rooms of test_indirect: 3.7% of the lit floor's
     // light on the dark one, against 0.5%).
     virtual bool separatesSides() const { return false; }
-    // Whether a gather of source s also reads sources s − 1 down to 0 where
-    // every one of them is held (the ray gather's near hits, NearHitPaths in
-    // RayGather.h): IndirectSolver then keeps them while it refines.
-    virtual bool readsSourcesBelow() const { return false; }
     // The cosine-weighted albedo each vertex of `mesh` sees on its normal's
     // side: what a gather of a source holding 1 W·m⁻² on every surface
     // returns, 1/N Σ Kd over the surfaces N rays land on (0 where they leave

@@ -206,11 +206,6 @@ RefineReport IndirectSolver::step(IndirectEstimator& estimator,
         caches_[slot - 1]->totalSamples() >= 2 * std::max<uint64_t>(sourceSamples_[slot], 1))
         releaseSource(estimator, slot);
     prepareSource(estimator, bounce, direct, first);
-    // Pass 2's gathers follow near hits down through the sources below
-    // (NearHitPaths, RayGather.h): those are kept, and built again where
-    // released. The first pass reads its source alone.
-    if (!first && estimator.readsSourcesBelow())
-        for (int below = 1; below < bounce; ++below) prepareSource(estimator, below, direct, false);
     // A first pass of cheap gathers (a base larger than firstPassGathers)
     // measures its noise with probes (IrradianceCache::setNoiseProbes):
     // the level assumed for a full gather (sampleNoise, 3%) read the back

@@ -238,7 +238,6 @@ public:
     }
     double borderInset() const override { return pool_.own.indirect->borderInset(); }
     bool separatesSides() const override { return pool_.own.indirect->separatesSides(); }
-    bool readsSourcesBelow() const override { return pool_.own.indirect->readsSourcesBelow(); }
     // A share of the vertices on each thread (each builds its own lookup of
     // the whole mesh, so no more parts than threads).
     std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end, int rays,

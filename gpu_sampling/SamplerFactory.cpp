@@ -27,7 +27,6 @@ RayGatherSettings rayGatherSettings(const IndirectChoice& choice) {
     RayGatherSettings r;
     r.rays = std::max(4, choice.gather.imageSize * choice.gather.imageSize / 4);
     r.gatheredLights = choice.solver.gatheredLights;
-    r.nearHits = choice.nearHits;
     return r;
 }
 
@@ -155,10 +154,7 @@ std::string IndirectChoice::describe() const {
     if (method == "raytrace")
         return concat("raytrace: ", rayGatherSettings(*this).rays,
                       " stratified cosine-weighted rays (Embree) per gather, reading the cache meshes' radiance where "
-                      "they land (consistent: no proxy)",
-                      nearHits > 0 ? concat("; refining, a ray landing nearer than ", nearHits,
-                                            " of the edge of the face it reads goes on through the bounces before")
-                                   : std::string());
+                      "they land (consistent: no proxy)");
     if (method == "volume")
         return concat("volume: order-2 SH probes, ", volume.probes, " along the scene's longest side, each from ",
                       6 * volume.faceSize * volume.faceSize, " cube-map rays (Embree) reading the cache; 8 probes "

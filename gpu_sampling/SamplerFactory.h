@@ -24,7 +24,6 @@
 #include "gpu_sampling/indirect/GatherSettings.h"
 #include "gpu_sampling/indirect/IrradianceVolume.h"
 #include "gpu_sampling/indirect/PropagationVolume.h"
-#include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/VirtualPointLights.h"
 
 #include <memory>
@@ -69,8 +68,6 @@ struct IndirectChoice {
     // are gathered by bounce 1 rather than sampled (GatheredLights.h), with
     // the ray gather only; 0: none (--glow-ratio).
     double glowRatio = 0.02;
-    // The ray gather's near hits (RayGatherSettings::nearHits, --near-hits).
-    double nearHits = RayGatherSettings().nearHits;
     // The bounce meshes' base edges, at most this fraction of the scene's
     // diagonal; 0: chosen by decide() (the ray gather: the mean free path
     // over kFreePathsPerBase; the voxel gathers: 1/8) (--indirect-edge).

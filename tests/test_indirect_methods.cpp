@@ -10,13 +10,11 @@
 #include "cache/IrradianceCache.h"
 #include "IndirectReference.h"
 #include "TestSamplers.h"
-#include "core/Error.h"
 #include "core/ScrambledSobol.h"
 #include "core/raytrace/EmbreeScene.h"
 #include "core/reference/Lambert.h"
 #include "core/reference/ExactIrradiance.h"
 #include "core/scenes/CornellBox.h"
-#include "gpu_sampling/indirect/RadianceProxy.h"
 #include "gpu_sampling/indirect/RayGather.h"
 #include "gpu_sampling/indirect/SliceGather.h"
 #include "gpu_sampling/indirect/TriangleGather.h"
@@ -511,86 +509,6 @@ TEST(IndirectConsistency, RayGatherReportsItsRaysScatter) {
         }
         EXPECT_NEAR(variance, kPi * kPi * f * (1 - f) / (n - 1), 1e-9) << (half ? "half lit" : "lit");
     }
-}
-
-// Near hits (NearHitPaths, RayGather.h). Between two plates h apart and
-// 1000h wide, each the fan of four triangles of the test above (edges of
-// about 700h), every ray lands about h away, far nearer than half an edge,
-// so with sources below every ray goes on until it reads the last, source 0:
-// a gather of source m with m sources below, holding c_m ... c_0 uniformly
-// on both plates of albedo ρ, returns ρ^(m+1)·c_0 instead of ρ·c_m. Each ray
-// returns exactly that (the rays past the plates' border, a 4·10⁻⁶ share at
-// most at every step, aside), so 1e-4 is allowed.
-// - A furnace's sources (c_j = ρ^j·c_0, each bounce the last times ρ): the
-//   same answer both ways, ρ^(m+1)·c_0: following near hits changes no
-//   consistent light.
-// - c_m = c_0 = 1 and the rest 0: ρ^(m+1) with the sources below, ρ
-//   without them, and ρ when hits must be nearer than 10⁻⁹ of an edge.
-// - RayGather follows them only while it holds every source down to 0
-//   and nearHits > 0.
-TEST(IndirectConsistency, NearHitsGoOnThroughTheSourcesBelow) {
-    using namespace test;
-    const double h = 0.02, w = 1000 * h, rho = 0.5;
-    const Scene scene = sceneOf("plates", {Material::diffuse("grey", Rgb(rho), Rgb(0.0))},
-                                {quadMesh("floor", 0, Vec3(-0.5 * w, 0, -0.5 * w), w * kZ, w * kX),
-                                 quadMesh("ceiling", 0, Vec3(-0.5 * w, h, -0.5 * w), w * kX, w * kZ)});
-    const auto plates = [&](double value) {
-        IrradianceMeshCopy mesh;
-        for (int plate = 0; plate < 2; ++plate) {
-            const double y = plate * h;
-            const Vec3 n = plate ? -kY : kY;
-            const uint32_t c = uint32_t(mesh.positions.size());
-            mesh.positions.push_back(Vec3(0, y, 0));
-            for (const auto& [x, z] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
-                mesh.positions.push_back(Vec3(0.5 * w * x, y, 0.5 * w * z));
-            mesh.normals.insert(mesh.normals.end(), 5, n);
-            for (uint32_t k = 0; k < 4; ++k)
-                mesh.triangles.push_back(plate ? glm::uvec3(c, c + 1 + k, c + 1 + (k + 1) % 4)
-                                               : glm::uvec3(c, c + 1 + (k + 1) % 4, c + 1 + k));
-        }
-        mesh.irradiance.assign(mesh.positions.size(), Rgb(value));
-        return mesh;
-    };
-    const EmbreeScene rays(scene);
-    const std::vector<char> closed = closedMeshesOf(scene);
-    constexpr int kLevels = 3;  // sources 3 (gathered), 2, 1 and 0
-    const auto gatherOf = [&](const std::array<double, kLevels + 1>& c, double within) {
-        std::vector<IrradianceMeshCopy> meshes;
-        for (double value : c) meshes.push_back(plates(value));
-        std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
-        for (const IrradianceMeshCopy& m : meshes) lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, w / 8, 1e-5 * w));
-        std::vector<std::vector<const MeshIrradianceLookup*>> sources;
-        for (const auto& l : lookups) sources.push_back({l.get()});
-        NearHitPaths near;
-        for (size_t j = kLevels; j-- > 0;) near.below.push_back(&sources[j]);
-        near.within = within;
-        return luminance(gatherCachedRadiance(scene, rays, closed, sources[kLevels], Vec3(0.0), kY, 16, 7, nullptr,
-                                              nullptr, nullptr, within > 0 ? &near : nullptr));
-    };
-    const double all = std::pow(rho, kLevels + 1);
-    const std::array<double, kLevels + 1> furnace{1, rho, rho * rho, rho * rho * rho};
-    EXPECT_NEAR(gatherOf(furnace, 0.5), all, 1e-4 * all);
-    EXPECT_NEAR(gatherOf(furnace, 0.0), all, 1e-4 * all);
-    const std::array<double, kLevels + 1> ends{1, 0, 0, 1};
-    EXPECT_NEAR(gatherOf(ends, 0.5), all, 1e-4 * all);
-    EXPECT_NEAR(gatherOf(ends, 0.0), rho, 1e-4 * rho);
-    EXPECT_NEAR(gatherOf(ends, 1e-9), rho, 1e-4 * rho);
-
-    RayGatherSettings settings;
-    ASSERT_GT(settings.nearHits, 0.0);
-    RayGather gather(scene, settings);
-    EXPECT_TRUE(gather.readsSourcesBelow());
-    for (size_t slot = 0; slot <= kLevels; ++slot) gather.setSource(slot, {plates(ends[slot])});
-    EXPECT_NEAR(luminance(gather.estimate(kLevels, Vec3(0.0), kY, 7)), all, 1e-4 * all);
-    gather.releaseSource(0);
-    EXPECT_NEAR(luminance(gather.estimate(kLevels, Vec3(0.0), kY, 7)), rho, 1e-4 * rho);
-    settings.nearHits = 0;
-    RayGather off(scene, settings);
-    EXPECT_FALSE(off.readsSourcesBelow());
-    for (size_t slot = 0; slot <= kLevels; ++slot) off.setSource(slot, {plates(ends[slot])});
-    EXPECT_NEAR(luminance(off.estimate(kLevels, Vec3(0.0), kY, 7)), rho, 1e-4 * rho);
-    settings.nearHits = -1;
-    EXPECT_THROW(settings.validate(), InputError);
 }
 
 // ScrambledSobol2D: every aligned block of 2^m points is a (0,m,2)-net,

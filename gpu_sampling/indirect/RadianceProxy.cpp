@@ -139,8 +139,7 @@ MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, doubl
     }
 }
 
-Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n, double* faceEdge) const {
-    if (faceEdge) *faceEdge = 0;
+Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
     if (faces_.empty()) return Rgb(0.0);
     std::array<int, 3> c{};
     for (int a = 0; a < 3; ++a) {
@@ -153,7 +152,6 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n, double* faceEdge) con
     // about 1e-7 of a bin, so nothing else is nearer by more than that.
     const double onFace = std::min(1e-4 * best, 1e-10 * cell_ * cell_);
     Rgb result(0.0);
-    const Face* read = nullptr;
     const size_t bin = (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
     const auto dot = [](const float* f, const Vec3& v) { return double(f[0]) * v.x + double(f[1]) * v.y + double(f[2]) * v.z; };
     for (uint32_t k = binStart_[bin]; k < binStart_[bin + 1]; ++k) {
@@ -171,7 +169,6 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n, double* faceEdge) con
         if (bv >= -kSlack && bw >= -kSlack && bv + bw <= 1 + kSlack) {
             best = plane * plane;
             result = interpolate(i, Vec3(1 - bv - bw, bv, bw));
-            read = &f;
             if (best <= onFace) break;
             continue;
         }
@@ -189,12 +186,6 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n, double* faceEdge) con
         if (d2 > best) continue;
         best = d2;
         result = interpolate(i, w);
-        read = &f;
-    }
-    if (faceEdge && read) {
-        const Vec3 &a = mesh_.positions[read->corners[0]], &b = mesh_.positions[read->corners[1]],
-                   &c = mesh_.positions[read->corners[2]];
-        *faceEdge = std::sqrt(std::max({glm::dot(b - a, b - a), glm::dot(c - b, c - b), glm::dot(a - c, a - c)}));
     }
     return result;
 }

@@ -90,9 +90,7 @@ public:
     enum class Interpolation { Linear, CurvatureCorrected };
     MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance,
                          Interpolation interpolation = Interpolation::Linear);
-    // `faceEdge`, when not null, gets the longest edge of the face read (0
-    // where none): how finely the mesh resolves the light there.
-    Rgb at(const Vec3& p, const Vec3& n, double* faceEdge = nullptr) const;
+    Rgb at(const Vec3& p, const Vec3& n) const;
     // The records and bins (not the mesh, which the caller keeps).
     size_t memoryBytes() const {
         return faces_.size() * sizeof(Face) + (binStart_.size() + binFaces_.size()) * sizeof(uint32_t) +

@@ -12,15 +12,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <limits>
 
 namespace ml {
 
 void RayGatherSettings::validate() const {
     if (rays < 4 || rays > 65536) throw InputError(concat("ray gather: ", rays, " rays is not within 4..65536"));
-    if (!(nearHits >= 0 && nearHits <= 4))
-        throw InputError(concat("ray gather: near hits within ", nearHits, " of a face's edge is not within 0..4"));
 }
 
 RayGather::RayGather(const Scene& scene, const RayGatherSettings& settings)
@@ -91,76 +88,11 @@ void RayGather::releaseSource(size_t slot) {
     if (slot < sources_.size()) sources_[slot].reset();
 }
 
-namespace {
-
-// What rays read where they land, in a gather's units (π × the radiance met:
-// Kd × E, plus π Le on a gathered light's emitting side). Level 0 reads the
-// source gathered, level k ≥ 1 near->below[k − 1].
-struct RayReader {
-    const Scene& scene;
-    const EmbreeScene& rays;
-    const std::vector<char>& closed;
-    const std::vector<const MeshIrradianceLookup*>& lookups;
-    const EmittingFaces* emitting;  // read with level 0
-    const NearHitPaths* near;
-    const std::function<double()>& random;
-    double eps;
-    double* inverseDistances;  // Σ 1/t over level 0's first hits
-    SpecularChainSettings chain{};
-
-    size_t levels() const { return near ? near->below.size() : 0; }
-    const std::vector<const MeshIrradianceLookup*>& source(size_t level) const {
-        return level == 0 ? lookups : *near->below[level - 1];
-    }
-
-    // Along one ray from `origin`, through mirrors and glass to the diffuse
-    // surface behind, each surface on the way read on the side the ray
-    // arrives on (a closed object's inside is black); a smooth layer's own
-    // Kd too.
-    Rgb read(const Vec3& origin, const Vec3& w, size_t level) const {
-        const EmittingFaces* glow = level == 0 ? emitting : level == levels() ? near->emitting : nullptr;
-        Rgb ray(0.0);
-        followSpecularChain(rays, closed, origin, w, chain, random, [&](const ChainVertex& v) {
-            // The first surface met, whatever it is: a mirror's reflection
-            // changes with x at its distance too. Not nearer than the
-            // origin's nudge, which bounds 1/t.
-            if (level == 0 && v.layers == 0) *inverseDistances += 1 / std::max(v.hit.t, eps);
-            const bool mayGoOn = level < levels() && v.layers == 0;
-            double edge = 0;
-            Rgb e(0.0);
-            for (const MeshIrradianceLookup* lookup : source(level)) {
-                double faceEdge = 0;
-                e += lookup->at(v.surface.position, v.side, mayGoOn ? &faceEdge : nullptr);
-                edge = std::max(edge, faceEdge);
-            }
-            if (mayGoOn && v.hit.t < near->within * edge) e = irradianceBelow(v.surface.position, v.side, level + 1);
-            ray += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
-            // A gathered light's face seen from its emitting side: π Le.
-            if (glow && !glow->empty() && (*glow)[v.hit.mesh][v.hit.triangle] &&
-                glm::dot(v.side, v.surface.geometricNormal) > 0)
-                ray += v.weight * (kPi * v.surface.ke(scene));
-        });
-        return ray;
-    }
-
-    // One ray's estimate of the irradiance at y (unit normal n) that the
-    // source above `level` holds: its gather of source `level`.
-    Rgb irradianceBelow(const Vec3& y, const Vec3& n, size_t level) const {
-        Vec3 t, b;
-        orthonormalBasis(n, t, b);
-        const double u1 = random(), u2 = random();
-        return read(rays.spawnPoint(y, n, n), cosineDirection(n, t, b, u1, u2), level);
-    }
-};
-
-}  // namespace
-
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& nIn,
                          int strata, const GatherDraw& draw, const EmittingFaces* emitting, double* reach,
-                         double* variance, const NearHitPaths* near) {
+                         double* variance) {
     if (emitting && emitting->empty()) emitting = nullptr;
-    if (near && near->below.empty()) near = nullptr;
     const Vec3 n = glm::normalize(nIn);
     Vec3 t, b;
     orthonormalBasis(n, t, b);
@@ -178,15 +110,15 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
         if (rays.intersect(start - eps * d, d, 0.0, 2 * eps, probe, facing)) origin -= eps * d;
     }
     const int s = strata;
+    const SpecularChainSettings chain;
     Rgb sum(0.0);
     double lumSum = 0, lumSquares = 0;  // Σ and Σ² of the rays' luminance, for *variance
     double inverseDistances = 0;  // Σ 1/t over first hits (a miss: 0)
     uint32_t state = hash32(draw.seed ^ 0x2545f491u);
-    const std::function<double()> next = [&state] {
+    const auto next = [&state] {
         state = hash32(state + 0x9e3779b9u);
         return (state >> 8) * (1.0 / 16777216.0);
     };
-    const RayReader reader{scene, rays, closedMeshes, lookups, emitting, near, next, eps, &inverseDistances};
     // A stream per ray count: a vertex's first-pass gathers (fewer rays)
     // and later ones each number their own blocks.
     const ScrambledSobol2D sequence(hash32(draw.stream + 0x9e3779b9u * uint32_t(s)));
@@ -196,7 +128,25 @@ Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std:
     for (int k = 0; k < s * s; ++k) {
         // Cosine-weighted by Malley's method.
         const std::array<double, 2> u = sequence(first + uint32_t(k));
-        const Rgb ray = reader.read(origin, cosineDirection(n, t, b, u[0], u[1]), 0);
+        const Vec3 w = cosineDirection(n, t, b, u[0], u[1]);
+        Rgb ray(0.0);
+        // Through mirrors and glass to the diffuse surface behind, each
+        // surface on the way read on the side the ray arrives on (a
+        // closed object's inside is black); a smooth layer's own Kd too.
+        followSpecularChain(rays, closedMeshes, origin, w, chain, next, [&](const ChainVertex& v) {
+            // The first surface met, whatever it is: a mirror's
+            // reflection changes with x at its distance too. Not nearer
+            // than the origin's nudge, which bounds 1/t.
+            if (v.layers == 0) inverseDistances += 1 / std::max(v.hit.t, eps);
+            Rgb e(0.0);
+            for (const MeshIrradianceLookup* lookup : lookups) e += lookup->at(v.surface.position, v.side);
+            ray += v.weight * (v.surface.kd(scene) * e);  // the texture's Kd at the hit, as the path tracer takes it
+            // A gathered light's face seen from its emitting side: π Le
+            // in this sum's units (π/N Σ L).
+            if (emitting && (*emitting)[v.hit.mesh][v.hit.triangle] &&
+                glm::dot(v.side, v.surface.geometricNormal) > 0)
+                ray += v.weight * (kPi * v.surface.ke(scene));
+        });
         sum += ray;
         const double y = luminance(ray);
         lumSum += y, lumSquares += y * y;
@@ -229,22 +179,8 @@ VertexSample RayGather::gather(size_t slot, const Vec3& x, const Vec3& n, const 
     const Source& source = *sources_[slot];
     // Bounce 1 (source 0, direct light) also reads the gathered lights.
     VertexSample result;
-    // Near hits go on through the sources below, where every one down to
-    // direct light is held (IndirectSolver's pass 2).
-    NearHitPaths near;
-    if (settings_.nearHits > 0)
-        for (size_t j = slot; j-- > 0;) {
-            if (j >= sources_.size() || !sources_[j]) {
-                near.below.clear();
-                break;
-            }
-            near.below.push_back(&sources_[j]->pointers);
-        }
-    near.emitting = &emitting_;
-    near.within = settings_.nearHits;
     result.irradiance = gatherCachedRadiance(scene_, *rays_, closed_, source.pointers, x, n, source.strata, draw,
-                                             slot == 0 ? &emitting_ : nullptr, &result.reach, &result.ownVariance,
-                                             &near);
+                                             slot == 0 ? &emitting_ : nullptr, &result.reach, &result.ownVariance);
     // Its rays: a first pass's cheaper gather (fewer rays) weighs less in a
     // vertex's mean and counts as noisier (VertexStats).
     result.work = double(source.strata) * source.strata;

@@ -41,14 +41,7 @@ struct RayGatherSettings {
     // (GatheredLights.h: the direct meshes leave such a light out); empty:
     // none.
     std::vector<char> gatheredLights;
-    // A ray landing nearer than this × the longest edge of the source face
-    // it reads goes on through the sources below (NearHitPaths), where the
-    // gatherer holds every one down to direct light; 0: never (--near-hits).
-    // Measured (cache/README.md, "Near hits go on"): at 0.5 the 192-panel
-    // office at 60 s 2.37% against 2.54%; at 1 it paid more rays than it
-    // gained by 20 s.
-    double nearHits = 0.5;
-    void validate() const;  // InputError unless 4 <= rays <= 65536 and 0 <= nearHits <= 4
+    void validate() const;  // InputError unless 4 <= rays <= 65536
 };
 
 // Per scene mesh, per triangle: 1 where a gather adds the face's emitted
@@ -68,28 +61,6 @@ struct GatherDraw {
     uint32_t seed = 0, stream = 0, block = 0;
 };
 
-// Where a gather's ray lands nearer than the source mesh resolves the light
-// (closer than a share of the longest edge of the face it reads there: a panel's back
-// 2 cm under a ceiling, a wall beside a corner), the mesh's interpolation is
-// what the gather reads, not an average of it; a steep profile read that way
-// (light falling off within centimetres of a gap's mouth, across a face of
-// 16 cm) is passed on, bounce after bounce. There the ray's path goes on
-// instead: one more cosine-distributed ray from the hit, reading the source
-// below (the bounce before), and so on while the hits stay near, down to
-// direct light. Unbiased for the same light (a cosine-weighted ray from y
-// reading Kd/π × E of the bounce before is a one-ray estimate of the
-// bounce's irradiance at y), only noisier where it happens; each gather's
-// own variance reports it.
-struct NearHitPaths {
-    // The sources below the one gathered, the nearest first: the bounce
-    // before its own, down to direct light (source 0).
-    std::vector<const std::vector<const MeshIrradianceLookup*>*> below;
-    // Read with source 0, as its own gathers read them (may be null).
-    const EmittingFaces* emitting = nullptr;
-    // A hit goes on when nearer than this × the face's longest edge.
-    double within = 0.5;
-};
-
 // One gather: strata × strata cosine-weighted rays from x (unit
 // normal n), their directions drawn as `draw` says, each taking Kd/π × Σ lookups' irradiance where it lands, on the
 // side it arrives from (black inside a closed mesh: closedMeshes[mesh] != 0),
@@ -99,13 +70,12 @@ struct NearHitPaths {
 // harmonic mean of the rays' distances to their first hit (VertexSample::
 // reach), and in `variance` (when not null) the variance of the result's
 // luminance with the rays taken as independent (VertexSample::ownVariance).
-// With `near` (not null, its `below` not empty), rays landing nearer than
-// the source resolves go on as NearHitPaths says. RayGather::estimate's
-// work, and bench indirect's "exact gather of the source".
+// RayGather::estimate's work, and bench indirect's "exact gather of the
+// source".
 Rgb gatherCachedRadiance(const Scene& scene, const EmbreeScene& rays, const std::vector<char>& closedMeshes,
                          const std::vector<const MeshIrradianceLookup*>& lookups, const Vec3& x, const Vec3& n,
                          int strata, const GatherDraw& draw, const EmittingFaces* emitting = nullptr,
-                         double* reach = nullptr, double* variance = nullptr, const NearHitPaths* near = nullptr);
+                         double* reach = nullptr, double* variance = nullptr);
 // closedMeshes for gatherCachedRadiance: isClosedMesh of every scene mesh.
 std::vector<char> closedMeshesOf(const Scene& scene);
 
@@ -134,7 +104,6 @@ public:
     // bias growing), the 12-panel office at 16 s 2.11% against 2.17%.
     double borderInset() const override { return 0.05; }
     bool separatesSides() const override { return true; }
-    bool readsSourcesBelow() const override { return settings_.nearHits > 0; }
     // A gather of `mesh` itself holding 1 everywhere, √rays × √rays strata
     // per vertex (at least 2 × 2), on the calling thread.
     std::optional<std::vector<Rgb>> seenAlbedo(const IrradianceMeshCopy& mesh, size_t begin, size_t end, int rays,

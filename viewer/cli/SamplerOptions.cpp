@@ -71,10 +71,6 @@ void declareIndirectOptions(Options& o) {
             "area lights dimmer than F x the brightest light's radiance (glowing walls) reach the scene through "
             "bounce 1's ray gather instead of being sampled as lights; 0: sample every light",
             concat(IndirectChoice().glowRatio));
-    o.value("near-hits", "F",
-            "raytrace: refining, a ray landing nearer than F x the edge of the cache face it reads goes on through "
-            "the bounces before it, down to direct light (RayGather.h); 0: never",
-            concat(IndirectChoice().nearHits));
     const IrradianceVolumeSettings v;
     o.value("probes", "N", "volume: N probes along the scene's longest side (4..16 typical)", concat(v.probes));
     o.value("probe-face", "N", "volume: each probe's cube map N x N rays per face", concat(v.faceSize));
@@ -109,7 +105,6 @@ IndirectChoice readIndirectOptions(const Options& o) {
     c.vpl.lights = o.integer("vpls", 1, 65536);
     c.vpl.validate();
     c.glowRatio = o.number("glow-ratio", 0, 0.999);
-    c.nearHits = o.number("near-hits", 0, 4);
     if (o.has("indirect-edge")) c.baseEdge = o.number("indirect-edge", 1e-4, 1.0);
     c.solver.cache.contactCloseness = o.number("contact-cuts", 0, 1);
     c.bounces.missingFraction = o.number("indirect-tolerance", 1e-9, 0.999);
