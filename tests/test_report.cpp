@@ -14,6 +14,7 @@
 #include "viewer/bench/BenchStatistics.h"
 #include "viewer/bench/BenchTable.h"
 #include "viewer/bench/CyclesRunner.h"
+#include "viewer/bench/EstimateAgreement.h"
 #include "viewer/bench/NoisyReference.h"
 #include "viewer/bench/OfficeWalkthrough.h"
 #include "viewer/bench/WalkthroughViews.h"
@@ -136,6 +137,28 @@ TEST(BenchTable, NumberFormats) {
     EXPECT_EQ(benchMs(2.5), "2500");
     EXPECT_EQ(benchYesNo(true), "yes");
     EXPECT_EQ(benchYesNo(false), "no");
+}
+
+// The image's estimate against the measured error: only images measured
+// within the range count, and only those with an estimate (not made, or 1
+// while no bounce is shown); the worst factor either way decides.
+TEST(EstimateAgreement, TheWorstFactorEitherWayOverTheRange) {
+    const std::vector<EstimatePoint> points = {
+        {0.5, 0.20, 0.05},   // measured above the range: left out
+        {1.0, 0.08, 1.0},    // no estimate yet: left out
+        {2.0, 0.05, 0.06},   // 1.2
+        {3.0, 0.02, 0.012},  // 1/0.6 = 1.667 (under-estimated)
+        {4.0, 0.01, 0.013},  // 1.3, on the range's edge: counted
+        {5.0, 0.005, 0.05},  // measured below the range: left out
+        {6.0, 0.03, -1},     // not made: left out
+    };
+    const EstimateAgreement a = estimateAgreement(points, 0.10, 0.01);
+    EXPECT_EQ(a.images, 3);
+    EXPECT_NEAR(a.worst, 0.02 / 0.012, 1e-12);
+    EXPECT_EQ(a.worstAt, 3.0);
+    EXPECT_EQ(estimateTarget("t", a, 1.5).status, "not met");
+    EXPECT_EQ(estimateTarget("t", a, 1.7).status, "met");
+    EXPECT_EQ(estimateTarget("t", estimateAgreement(points, 0.10, 0.09), 1.5).status, "not measured");
 }
 
 TEST(BenchStatistics, MedianAndSpread) {

@@ -5,6 +5,7 @@
 #include "CornellWalkthrough.h"
 #include "WalkthroughViews.h"
 #include "CyclesRunner.h"
+#include "EstimateAgreement.h"
 #include "Gnuplot.h"
 #include "NoisyReference.h"
 #include "RenderLikeSession.h"
@@ -21,6 +22,7 @@
 #include "gpu_sampling/SamplerFactory.h"
 #include "gpu_sampling/gl/GlContext.h"
 #include "viewer/compositor/Compositor.h"
+#include "viewer/compositor/ImageErrorEstimate.h"
 
 #include <algorithm>
 #include <chrono>
@@ -116,7 +118,11 @@ struct CurvePoint {
     ImageError error;
     int spp = 0;  // path tracer and Cycles
     // Meshlight
-    double estimatedError = 0;  // the cache's own (CacheSnapshot::estimatedError)
+    double estimatedError = 0;  // the cache's own (CacheSnapshot::estimatedError): what the worker schedules by
+    // The image's (viewer/compositor/ImageErrorEstimate.h): what `render
+    // --until-error` stops on; 1 while no bounce is shown (as render reads
+    // it), < 0 where not made.
+    double imageEstimate = -1;
     double compositeSeconds = 0;
     size_t vertices = 0, indirectVertices = 0;
     uint64_t samples = 0;
@@ -230,6 +236,7 @@ ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scen
     struct Taken {
         CurvePoint point;
         std::vector<IrradianceMeshCopy> direct, indirect;
+        bool lacksBounces = false;  // no bounce shown yet: the image's estimate reads 1
     };
     std::vector<Taken> taken;
     run.progress("meshlight: %g s (load %s)\n", work.meshlightSeconds, loadAverage().c_str());
@@ -253,6 +260,7 @@ ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scen
             t.point.bounces = s->bounces;
             t.direct = s->direct;
             t.indirect = s->indirect;
+            t.lacksBounces = how.indirect.active() && s->shownBounces() == 0;
             taken.push_back(std::move(t));
         }
         session.stop();
@@ -267,13 +275,17 @@ ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scen
         p.compositeSeconds = secondsSince(c);
         p.seconds += p.compositeSeconds;
         p.error = errorAgainst(image, r.reference);
+        // Not timed: a user's render makes it only where asked to stop on it.
+        p.imageEstimate =
+            t.lacksBounces ? 1.0 : estimateImageError(compositor, scene, camera, t.direct, t.indirect, comp).cache;
         t.direct = {};
         t.indirect = {};
         r.meshlight.points.push_back(p);
-        std::printf("  meshlight   %7.2f s: relative RMSE %6.3f%% (raw %6.3f%%), estimated %6.3f%%, %zu vertices "
-                    "(%zu indirect), bounces %d/%d; composite %.2f s\n",
-                    p.seconds, 100 * p.error.corrected, 100 * p.error.raw, 100 * p.estimatedError, p.vertices,
-                    p.indirectVertices, p.bouncesFinished, p.bounces, p.compositeSeconds);
+        std::printf("  meshlight   %7.2f s: relative RMSE %6.3f%% (raw %6.3f%%), image's estimate %6.3f%%, cache's "
+                    "%6.3f%%, %zu vertices (%zu indirect), bounces %d/%d; composite %.2f s\n",
+                    p.seconds, 100 * p.error.corrected, 100 * p.error.raw, 100 * p.imageEstimate,
+                    100 * p.estimatedError, p.vertices, p.indirectVertices, p.bouncesFinished, p.bounces,
+                    p.compositeSeconds);
     }
     return image;
 }
@@ -574,7 +586,8 @@ WalkResult runWalkthrough(const BenchRun& run, const Workload& work, const Scene
 
 BenchTable curvesTable(const StillResult& r) {
     BenchTable t({"method", "seconds", "spp", "relative_rmse_pct", "raw_relative_rmse_pct", "estimated_error_pct",
-                  "vertices", "indirect_vertices", "samples", "bounces_done", "composite_ms", "cpu_s"});
+                  "vertices", "indirect_vertices", "samples", "bounces_done", "composite_ms", "cpu_s",
+                  "image_estimated_error_pct"});
     for (const Curve* c : {&r.meshlight, &r.path, &r.cycles})
         for (const CurvePoint& p : c->points) {
             const bool ml = c->method == "meshlight";
@@ -583,7 +596,8 @@ BenchTable curvesTable(const StillResult& r) {
                       c->method == "cycles" ? "" : benchPct(p.estimatedError), ml ? std::to_string(p.vertices) : "",
                       ml ? std::to_string(p.indirectVertices) : "", ml ? std::to_string(p.samples) : "",
                       ml ? concat(p.bouncesFinished, "/", p.bounces) : "", ml ? benchMs(p.compositeSeconds) : "",
-                      c->method == "cycles" ? benchNumber(p.cpuSeconds) : ""});
+                      c->method == "cycles" ? benchNumber(p.cpuSeconds) : "",
+                      ml && p.imageEstimate >= 0 ? benchPct(p.imageEstimate) : ""});
         }
     return t;
 }
@@ -669,6 +683,16 @@ std::vector<BenchTarget> targetRows(const StillResult& r, const WalkResult& w, c
                                          slope),
                             status("not met")});
     }
+    {
+        std::vector<EstimatePoint> points;
+        for (const CurvePoint& p : r.meshlight.points) points.push_back({p.seconds, p.error.corrected, p.imageEstimate});
+        BenchTarget row = estimateTarget(
+            concat("the image's error estimate within ", kEstimateFactor, "x of the measured from ",
+                   benchPct(kEstimateRange[0]), "% down to ", benchPct(kEstimateRange[1]), "%"),
+            estimateAgreement(points, kEstimateRange[0], kEstimateRange[1]), kEstimateFactor);
+        row.status = status(row.status);
+        rows.push_back(row);
+    }
     const std::string views = concat(w.views.size(), " views ", w.size, "x", w.size);
     rows.push_back({concat("walkthrough (", views, "): each within ", benchPct(kViewTarget), "%"),
                     concat("worst ", benchPct(w.maxError()), "%", w.allReached() ? "" : " (some views hit the limit)"),
@@ -718,6 +742,10 @@ std::string gnuplotScript(const StillResult& r, const WalkResult& w, const Workl
                << "\n";
         gp << "EOD\n";
     }
+    gp << "# meshlight: seconds, the image's estimated error %\n$mlest << EOD\n";
+    for (const CurvePoint& p : r.meshlight.points)
+        if (p.imageEstimate > 0 && p.imageEstimate < 1) gp << benchNumber(p.seconds) << "," << benchPct(p.imageEstimate) << "\n";
+    gp << "EOD\n";
     gp << "# the issue's targets: seconds, level %\n$targets << EOD\n";
     for (const TimeTarget& t : kTimeTargets) gp << t.seconds << "," << benchPct(t.level) << "\n";
     gp << "EOD\n\n";
@@ -730,6 +758,8 @@ std::string gnuplotScript(const StillResult& r, const WalkResult& w, const Workl
           "set ylabel 'relative RMSE (%)'\n"
           "set key inside right top box opaque\n"
           "plot $ml using 1:2 with linespoints lc rgb '#1f5fa8' pt 7 ps 1.1 title 'Meshlight (render)', \\\n"
+          "     $mlest using 1:2 with linespoints dt 3 lc rgb '#1f5fa8' pt 6 ps 1.0 title 'Meshlight: its own estimate "
+          "of that error', \\\n"
           "     $pt using 1:2 with linespoints dt 2 lc rgb '#c0392b' pt 5 ps 1.0 title 'Meshlight path tracer', \\\n"
           "     $pt using 1:2:(sprintf('%d', $3)) with labels offset 0,-1 font ',8' tc rgb '#c0392b' notitle";
     if (!r.cycles.points.empty())
@@ -806,7 +836,9 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
     for (size_t i = 0; i < work.checkpoints.size(); ++i) md << (i ? ", " : "") << work.checkpoints[i];
     md << " s copied and composited as `render` composites (" << kSupersample << "×" << kSupersample
        << " sub-pixels, " << kSubpixelPasses << " shifted passes) once the worker has stopped; an image's time is "
-          "its checkpoint plus its composite\n";
+          "its checkpoint plus its composite; then, untimed, the image's own estimate of its error "
+          "(viewer/compositor/ImageErrorEstimate.h, what `render --until-error` stops on; image_estimated_error_pct "
+          "in gi_curves.csv, dotted on the plot)\n";
     if (work.renderCheckSeconds > 0)
         md << "- check: `meshlight " << r.renderCheckCommand << "` as typed: " << benchPct(r.renderCheckError.corrected)
            << "% after " << benchNumber(r.renderCheckWall) << " s of process wall time (start-up, scene, GL, "
@@ -847,7 +879,8 @@ std::string summaryMarkdown(const BenchRun& run, double wallSeconds, const Workl
           "composited as `render` composites, again at each new snapshot, until the view's measured error is "
           "within " << benchPct(kViewTarget) << "% (or " << work.viewSecondsLimit
        << " s): the bench stops on the measured error, which a user does not have (`render --until-error` stops "
-          "on the cache's estimate, shown per view for comparison). A view's time counts every composite made "
+          "on the image's estimate, ImageErrorEstimate.h; the column estimated_error_pct is the cache's own, "
+          "surface-weighted, what the worker schedules by). A view's time counts every composite made "
           "for it. Total: **" << benchNumber(w.meshlightTotal()) << " s**, worst view " << benchPct(w.maxError())
        << "%\n";
     if (w.cyclesMeasured())
