@@ -685,7 +685,8 @@ std::vector<BenchTarget> targetRows(const StillResult& r, const WalkResult& w, c
     }
     {
         std::vector<EstimatePoint> points;
-        for (const CurvePoint& p : r.meshlight.points) points.push_back({p.seconds, p.error.corrected, p.imageEstimate});
+        for (const CurvePoint& p : r.meshlight.points)
+            points.push_back({p.seconds, p.error.corrected, p.imageEstimate});
         BenchTarget row = estimateTarget(
             concat("the image's error estimate within ", kEstimateFactor, "x of the measured from ",
                    benchPct(kEstimateRange[0]), "% down to ", benchPct(kEstimateRange[1]), "%"),
@@ -744,7 +745,8 @@ std::string gnuplotScript(const StillResult& r, const WalkResult& w, const Workl
     }
     gp << "# meshlight: seconds, the image's estimated error %\n$mlest << EOD\n";
     for (const CurvePoint& p : r.meshlight.points)
-        if (p.imageEstimate > 0 && p.imageEstimate < 1) gp << benchNumber(p.seconds) << "," << benchPct(p.imageEstimate) << "\n";
+        if (p.imageEstimate > 0 && p.imageEstimate < 1)
+            gp << benchNumber(p.seconds) << "," << benchPct(p.imageEstimate) << "\n";
     gp << "EOD\n";
     gp << "# the issue's targets: seconds, level %\n$targets << EOD\n";
     for (const TimeTarget& t : kTimeTargets) gp << t.seconds << "," << benchPct(t.level) << "\n";
