@@ -260,7 +260,7 @@ ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scen
             t.point.bounces = s->bounces;
             t.direct = s->direct;
             t.indirect = s->indirect;
-            t.lacksBounces = how.indirect.active() && s->shownBounces() == 0;
+            t.lacksBounces = lacksBounces(*s, how.indirect.active());
             taken.push_back(std::move(t));
         }
         session.stop();
@@ -277,7 +277,7 @@ ImageRgb runMeshlightStill(const BenchRun& run, const Workload& work, const Scen
         p.error = errorAgainst(image, r.reference);
         // Not timed: a user's render makes it only where asked to stop on it.
         p.imageEstimate =
-            t.lacksBounces ? 1.0 : estimateImageError(compositor, scene, camera, t.direct, t.indirect, comp).cache;
+            t.lacksBounces ? 1.0 : estimateCacheError(compositor, scene, camera, t.direct, t.indirect, comp, image);
         t.direct = {};
         t.indirect = {};
         r.meshlight.points.push_back(p);
@@ -687,10 +687,7 @@ std::vector<BenchTarget> targetRows(const StillResult& r, const WalkResult& w, c
         std::vector<EstimatePoint> points;
         for (const CurvePoint& p : r.meshlight.points)
             points.push_back({p.seconds, p.error.corrected, p.imageEstimate});
-        BenchTarget row = estimateTarget(
-            concat("the image's error estimate within ", kEstimateFactor, "x of the measured from ",
-                   benchPct(kEstimateRange[0]), "% down to ", benchPct(kEstimateRange[1]), "%"),
-            estimateAgreement(points, kEstimateRange[0], kEstimateRange[1]), kEstimateFactor);
+        BenchTarget row = issueEstimateTarget("", points);
         row.status = status(row.status);
         rows.push_back(row);
     }

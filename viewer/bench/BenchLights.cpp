@@ -287,7 +287,7 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
             t.point.bounces = s->bounces;
             t.direct = s->direct;
             t.indirect = s->indirect;
-            t.lacksBounces = how.indirect.active() && s->shownBounces() == 0;
+            t.lacksBounces = lacksBounces(*s, how.indirect.active());
             r.storedBytes += meshBytes(t.direct) + meshBytes(t.indirect);
             taken.push_back(std::move(t));
         }
@@ -325,15 +325,9 @@ ImageRgb runMeshlight(const BenchRun& run, const Scene& scene, const Camera& cam
         p.compositeSeconds = secondsSince(c);
         p.seconds += p.compositeSeconds;
         p.error = errorAgainst(image, r.reference);
-        // Not timed (a render makes it only where asked to stop on it), at
-        // one pass: the estimate's own composite is of one pass anyway.
-        if (t.lacksBounces) {
-            p.imageEstimate = 1;
-        } else {
-            CompositorSettings one = comp;
-            one.passes = 1;
-            p.imageEstimate = estimateImageError(compositor, scene, camera, t.direct, t.indirect, one).cache;
-        }
+        // Not timed: a user's render makes it only where asked to stop on it.
+        p.imageEstimate =
+            t.lacksBounces ? 1.0 : estimateCacheError(compositor, scene, camera, t.direct, t.indirect, comp, image);
         t.direct = {};
         t.indirect = {};
         r.meshlight.push_back(p);
@@ -599,11 +593,7 @@ std::vector<BenchTarget> targetRows(const std::vector<SceneResult>& scenes, cons
     for (const SceneResult& s : scenes) {
         std::vector<EstimatePoint> points;
         for (const CurvePoint& p : s.meshlight) points.push_back({p.seconds, p.error.corrected, p.imageEstimate});
-        BenchTarget row = estimateTarget(
-            concat(s.office.lights(), " panels: the image's error estimate within ", kEstimateFactor,
-                   "x of the measured from ", benchPct(kEstimateRange[0]), "% down to ", benchPct(kEstimateRange[1]),
-                   "%"),
-            estimateAgreement(points, kEstimateRange[0], kEstimateRange[1]), kEstimateFactor);
+        BenchTarget row = issueEstimateTarget(concat(s.office.lights(), " panels: "), points);
         if (s.office.lights() != kTargetLights) row.status = concat("reported (", row.status, ")");
         rows.push_back(row);
     }

@@ -26,4 +26,10 @@ BenchTarget estimateTarget(const std::string& name, const EstimateAgreement& a, 
             a.worst <= factor ? "met" : "not met"};
 }
 
+BenchTarget issueEstimateTarget(const std::string& prefix, const std::vector<EstimatePoint>& points) {
+    return estimateTarget(concat(prefix, "the image's error estimate within ", kEstimateFactor, "x of the measured from ",
+                                 benchPct(kEstimateRange[0]), "% down to ", benchPct(kEstimateRange[1]), "%"),
+                          estimateAgreement(points, kEstimateRange[0], kEstimateRange[1]), kEstimateFactor);
+}
+
 }  // namespace ml

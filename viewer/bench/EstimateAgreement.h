@@ -35,4 +35,8 @@ EstimateAgreement estimateAgreement(const std::vector<EstimatePoint>& points, do
 // `factor`; "not measured" when none is.
 BenchTarget estimateTarget(const std::string& name, const EstimateAgreement& a, double factor);
 
+// Issue 14's row over `points`: kEstimateFactor over kEstimateRange, its
+// name after `prefix` (the scene, or empty).
+BenchTarget issueEstimateTarget(const std::string& prefix, const std::vector<EstimatePoint>& points);
+
 }  // namespace ml

@@ -113,12 +113,8 @@ public:
         return e;
     }
     bool expectIndirect = false;  // the session computes indirect light
-    // Indirect light is asked for and `s` shows no bounce yet: the caustics'
-    // mesh alone (CacheSnapshot::shownBounces) is not indirect light. The
-    // McGuire box with a mirror and a glass sphere, asked until 2%, stopped
-    // at 0.7 s on an image of direct light and caustics, its estimate
-    // 1.81%, before any bounce was gathered.
-    bool lacksBounces(const CacheSnapshot& s) const { return expectIndirect && s.shownBounces() == 0; }
+    // ml::lacksBounces (ImageErrorEstimate.h) for this session.
+    bool lacksBounces(const CacheSnapshot& s) const { return ml::lacksBounces(s, expectIndirect); }
     // The composites at the settings' sub-pixel passes that the last image
     // of `s` written to `path` takes: the estimate's beauty, and every
     // layer of a layered EXR (layerComposites).

@@ -71,14 +71,23 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
                                       const std::vector<IrradianceMeshCopy>& direct,
                                       const std::vector<IrradianceMeshCopy>& indirect,
                                       const CompositorSettings& settings) {
-    const size_t lights = scene.lights.size();
     ImageErrorEstimate out;
     ImageRgb spread;
     {
         const GpuCacheMeshes meshes = compositor.upload(direct, indirect);
         compositor.setSpecularCache(direct, indirect);
-        out.image = compositor.composite(camera, meshes, LightWeights::unit(lights), settings, &spread);
+        out.image = compositor.composite(camera, meshes, LightWeights::unit(scene.lights.size()), settings, &spread);
     }
+    out.cache = estimateCacheError(compositor, scene, camera, direct, indirect, settings, out.image);
+    out.sampling = relativeRmsError(spread, out.image);
+    return out;
+}
+
+double estimateCacheError(Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
+                          const ImageRgb& image) {
+    const size_t lights = scene.lights.size();
     // The cache's errors: no emission, no specular pass, one pass (the error
     // varies slowly over a surface, and the silhouettes are the passes').
     CompositorSettings errorSettings = settings;
@@ -102,13 +111,13 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
     const ErrorMeshes directErrors = splitErrors(direct), indirectErrors = splitErrors(indirect);
     const GpuCacheMeshes bias = compositor.upload(directErrors.bias, indirectErrors.bias);
     const ImageRgb directBias = compositor.composite(camera, bias, directOnly, errorSettings);
-    const ImageRgb indirectBias = indirect.empty() ? ImageRgb(out.image.width, out.image.height)
+    const ImageRgb indirectBias = indirect.empty() ? ImageRgb(image.width, image.height)
                                                    : compositor.composite(camera, bias, indirectOnly, errorSettings);
     // The noise: every mesh's vertices draw their own samples, so their
     // noise adds in quadrature across meshes (Σ σ², composited as Kd/π ×
     // Σ σ², then times Kd/π and its root taken per pixel). Added linearly,
     // the office's seven bounces read 3.5% where their noise is 2.0%.
-    ImageRgb noise(out.image.width, out.image.height);
+    ImageRgb noise(image.width, image.height);
     if (directErrors.anyNoise || indirectErrors.anyNoise) {
         const GpuCacheMeshes squares = compositor.upload(directErrors.noiseSquares, indirectErrors.noiseSquares);
         const ImageRgb sum = compositor.composite(camera, squares, all, errorSettings);
@@ -119,14 +128,14 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
             noise.data[i] = float(std::sqrt(std::max(double(sum.data[i]) * double(kd.data[i]) / kPi, 0.0)));
     }
 
-    ImageRgb cache(out.image.width, out.image.height);
+    ImageRgb cache(image.width, image.height);
     for (size_t i = 0; i < cache.data.size(); ++i) {
         const double d = directBias.data[i], b = indirectBias.data[i], n = noise.data[i];
         cache.data[i] = float(std::sqrt(d * d + b * b + n * n));
     }
-    out.cache = relativeRmsError(cache, out.image);
-    out.sampling = relativeRmsError(spread, out.image);
-    return out;
+    return relativeRmsError(cache, image);
 }
+
+bool lacksBounces(const CacheSnapshot& s, bool indirectExpected) { return indirectExpected && s.shownBounces() == 0; }
 
 }  // namespace ml

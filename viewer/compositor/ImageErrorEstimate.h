@@ -35,6 +35,7 @@
 #pragma once
 
 #include "Compositor.h"
+#include "cache/CacheWorker.h"  // CacheSnapshot
 #include "core/Scene.h"
 #include "core/image/Image.h"
 #include "core/image/ImageMetrics.h"  // relativeRmsError
@@ -53,5 +54,21 @@ ImageErrorEstimate estimateImageError(Compositor& compositor, const Scene& scene
                                       const std::vector<IrradianceMeshCopy>& direct,
                                       const std::vector<IrradianceMeshCopy>& indirect,
                                       const CompositorSettings& settings);
+
+// ImageErrorEstimate::cache for `image`, the beauty a caller has already
+// composited from the same meshes, camera and settings (the benches time
+// theirs): only the predicted errors are composited.
+double estimateCacheError(Compositor& compositor, const Scene& scene, const Camera& camera,
+                          const std::vector<IrradianceMeshCopy>& direct,
+                          const std::vector<IrradianceMeshCopy>& indirect, const CompositorSettings& settings,
+                          const ImageRgb& image);
+
+// Indirect light is asked for and `s` shows no bounce yet (the caustics'
+// mesh alone, CacheSnapshot::shownBounces, is not indirect light): the
+// image then lacks light by an amount nothing has measured, and its
+// estimate reads 1 (unknown). The McGuire box with a mirror and a glass
+// sphere, asked until 2%, stopped at 0.7 s on an image of direct light and
+// caustics, its estimate 1.81%, before any bounce was gathered.
+bool lacksBounces(const CacheSnapshot& s, bool indirectExpected);
 
 }  // namespace ml
