@@ -165,6 +165,46 @@ bool clip(std::pair<double, double>& a, std::pair<double, double>& b) {
     return true;
 }
 
+// Where triangle p (bounds b) crosses `plane` inside its region: the
+// segment (a, b3) of the line they share, clipped to the region. False when
+// the triangle lies within `least` of the plane on either side (it touches
+// the plane or barely crosses it) or the line misses the region.
+bool planeCrossing(const Triangle3& p, const Bounds3& b, const CutPlane& plane, double least, Vec3& a, Vec3& b3) {
+    for (int k = 0; k < 3; ++k)
+        if (b.hi[k] < plane.region.lo[k] || b.lo[k] > plane.region.hi[k]) return false;
+    double d[3];
+    for (int k = 0; k < 3; ++k) d[k] = glm::dot(p[size_t(k)] - plane.point, plane.normal);
+    if (!(std::max({d[0], d[1], d[2]}) > least && std::min({d[0], d[1], d[2]}) < -least)) return false;
+    // The line meets two edges whose ends lie on either side (or an edge
+    // and the corner the plane passes through).
+    Vec3 ends[2];
+    int found = 0;
+    for (int k = 0; k < 3 && found < 2; ++k)
+        if (d[k] == 0) ends[found++] = p[size_t(k)];
+    for (int e = 0; e < 3 && found < 2; ++e) {
+        const int i = kEdgeCorners[e][0], j = kEdgeCorners[e][1];
+        if (!((d[i] < 0 && d[j] > 0) || (d[i] > 0 && d[j] < 0))) continue;
+        ends[found++] = p[size_t(i)] + (d[i] / (d[i] - d[j])) * (p[size_t(j)] - p[size_t(i)]);
+    }
+    if (found < 2) return false;
+    // Clipped to the region's slabs.
+    double s0 = 0, s1 = 1;
+    const Vec3 dir = ends[1] - ends[0];
+    for (int k = 0; k < 3; ++k) {
+        if (dir[k] == 0) {
+            if (ends[0][k] < plane.region.lo[k] || ends[0][k] > plane.region.hi[k]) return false;
+            continue;
+        }
+        double u = (plane.region.lo[k] - ends[0][k]) / dir[k], v = (plane.region.hi[k] - ends[0][k]) / dir[k];
+        if (u > v) std::swap(u, v);
+        s0 = std::max(s0, u), s1 = std::min(s1, v);
+        if (!(s0 < s1)) return false;
+    }
+    a = ends[0] + s0 * dir;
+    b3 = ends[0] + s1 * dir;
+    return true;
+}
+
 struct CutMesh {
     std::vector<Vec3> positions, normals;
     std::vector<Vec2> texcoords;
@@ -175,6 +215,34 @@ struct CutMesh {
 };
 
 }  // namespace
+
+std::vector<CutPlane> lightCutPlanes(const Scene& scene) {
+    const double diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
+    std::vector<std::pair<double, CutPlane>> planes;  // (power, plane)
+    for (const Light& l : scene.lights) {
+        if (l.punctual() || !l.planar || !(l.area > 0) || !(glm::length(l.normal) > 0.5) || l.bounds.empty())
+            continue;
+        const Vec3 n = glm::normalize(l.normal);
+        const Vec3 grow(2 * l.bounds.diagonal());
+        Bounds3 region;
+        region.lo = l.bounds.lo - grow, region.hi = l.bounds.hi + grow;
+        const double power = luminance(l.power());
+        bool merged = false;
+        for (auto& [sum, plane] : planes)
+            if (std::abs(glm::dot(plane.normal, n)) >= 1.0 - 1e-9 &&
+                std::abs(glm::dot(l.centroid - plane.point, plane.normal)) <= 1e-6 * diagonal) {
+                plane.region.extend(region);
+                sum += power;
+                merged = true;
+                break;
+            }
+        if (!merged) planes.push_back({power, CutPlane{l.centroid, n, region}});
+    }
+    std::stable_sort(planes.begin(), planes.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    std::vector<CutPlane> out;
+    for (size_t i = 0; i < planes.size() && i < kMaxLightPlanes; ++i) out.push_back(planes[i].second);
+    return out;
+}
 
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
                                    const ContactCutSettings& settings, ContactCutReport* report) {
@@ -271,16 +339,23 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 // unless it misses R or runs along R's boundary.
                 const auto addSegment = [&](const Vec3& a3, const Vec3& b3) {
                     auto a = r.local(a3), bb = r.local(b3);
-                    if (!clip(a, bb)) return;
+                    if (!clip(a, bb)) return false;
                     CutPoint ca = classify(a.first, a.second, tol), cb = classify(bb.first, bb.second, tol);
-                    if (alongBoundary(ca, cb)) return;
+                    if (alongBoundary(ca, cb)) return false;
                     const Vec3 d = (bb.first - a.first) * r.e1 + (bb.second - a.second) * r.e2;
-                    if (glm::length(d) <= touch) return;
+                    if (glm::length(d) <= touch) return false;
                     for (CutPoint* c : {&ca, &cb})
                         if (c->kind == CutPoint::OnEdge) registerOnEdge(cm, m, m.triangles[t], *c);
                     cm.segments[t].emplace_back(ca, cb);
                     ++rep.segments;
+                    return true;
                 };
+                if (pass == 1)
+                    for (const CutPlane& plane : settings.planes) {
+                        Vec3 a, bb;
+                        if (planeCrossing(p, b, plane, kLeastGap * diagonal, a, bb) && addSegment(a, bb))
+                            ++rep.planeSegments;
+                    }
                 if (pass == 1 && innerGrid) {
                     // This mesh's own lines that lie in this triangle's plane.
                     innerGrid->query(b, lines);

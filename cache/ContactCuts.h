@@ -1,5 +1,7 @@
 // Discontinuity meshing where a surface hangs close in front of another: a
-// panel 2 cm under a ceiling, a shelf over a desk, a lining off a wall.
+// panel 2 cm under a ceiling, a shelf over a desk, a lining off a wall (for
+// the bounces' meshes); and where a surface crosses a light's plane (for
+// direct light's: CutPlane below).
 //
 // There the light on the receiver changes over the gap's own length h: the
 // indirect light on a ceiling goes from half its value at a panel's outline
@@ -72,6 +74,36 @@
 
 namespace ml {
 
+// The plane of a one-sided planar light, along which receivers are cut
+// within `region`. Behind that plane the light gives nothing; in front of it
+// a receiver crossing the plane gets light growing linearly from 0 at the
+// crossing (the light seen edge-on): a kink in the irradiance (Heckbert's D1
+// discontinuity) along a line no cache vertex lies on. Linear interpolation
+// from a vertex behind the plane to one in front spreads the light over the
+// part behind it: on the office's walls, 2 cm under the ceiling where the
+// panels hang, the first pixels under the ceiling read their direct light
+// about 3 too bright in pixels of about 35, about a fifth of the squared
+// direct light error of the 48- and 192-panel offices' images; splitting
+// does not find it (the kink lies between vertices whose neighbours fit a
+// plane), and edges a quarter of a pixel long left it as it was. A line on
+// the crossing puts the kink on mesh edges (cache/README.md, "Lights'
+// planes", has the measurements).
+struct CutPlane {
+    Vec3 point{0.0};
+    Vec3 normal{0.0, 1.0, 0.0};  // unit
+    Bounds3 region;              // receivers are cut only inside this box
+};
+
+// The cut planes of the scene's lights: one per plane that planar area
+// lights lie in (coplanar lights merged, their regions joined), a light's
+// region its bounds grown by twice their diagonal each way (where its light
+// may matter against the others'), at most kMaxLightPlanes of them (those
+// of the most powerful lights: a mesh of many small emitters facing every
+// way gets no cuts beyond). Punctual lights have none: a point light has no
+// plane, and a spot's cone is smooth where its falloff is.
+std::vector<CutPlane> lightCutPlanes(const Scene& scene);
+constexpr size_t kMaxLightPlanes = 64;
+
 struct ContactCutSettings {
     // An edge cuts a receiver when both its ends hang in front of the
     // receiver's plane within closeness × the edge's length (typical 0.1).
@@ -79,18 +111,23 @@ struct ContactCutSettings {
     // The base mesh's longest edge (scene units): penumbra lines are laid
     // only for gaps h with 2h below half of it. 0: none.
     double spacing = 0;
+    // Receivers are also cut where they cross these planes (CutPlane), by
+    // more than a thousandth of the scene on either side (the Cornell box's
+    // light, 0.5 mm under its ceiling, cuts nothing, as for contacts).
+    std::vector<CutPlane> planes;
 };
 
 struct ContactCutReport {
     size_t receivers = 0;  // triangles re-triangulated (cut, or given a neighbour's point)
-    size_t segments = 0;   // cut segments after clipping, penumbra lines included
+    size_t segments = 0;   // cut segments after clipping, penumbra lines and plane cuts included
+    size_t planeSegments = 0;  // of those, where a receiver crosses a CutPlane
     size_t triangles = 0;  // triangles those became
     size_t vertices = 0;   // vertices added
     size_t dropped = 0;    // faces thinner than 1e-6 of the scene (float-degenerate on the GPU) left out
 };
 
 // The scene's meshes, each cut along the edges of surfaces hanging close in
-// front of it; skip[i] leaves mesh i as it is (it still cuts others).
+// front of it (settings.closeness; 0: none) and along settings.planes; skip[i] leaves mesh i as it is (it still cuts others).
 // Deterministic: the same scene gives the same meshes to the bit. Cost: a
 // uniform grid of the scene's edges, then per receiver the edges near it.
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,

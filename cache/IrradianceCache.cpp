@@ -94,6 +94,7 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
     f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction), f.f64(s.contactCloseness);
+    f.u64(s.lightPlaneCuts ? 1 : 0);
     return f.h;
 }
 
@@ -226,8 +227,9 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
 // `gridded` meshes are left as they are.
 std::vector<Mesh> cutMeshes(const Scene& scene, const std::vector<bool>& gridded, const CacheSettings& settings,
                             ContactCutReport* report = nullptr) {
-    if (!(settings.contactCloseness > 0)) return scene.meshes;
     ContactCutSettings cut;
+    if (settings.lightPlaneCuts) cut.planes = lightCutPlanes(scene);
+    if (!(settings.contactCloseness > 0) && cut.planes.empty()) return scene.meshes;
     cut.closeness = settings.contactCloseness;
     cut.spacing = settings.maxEdgeFraction * (scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0);
     return cutAlongContacts(scene, gridded, cut, report);

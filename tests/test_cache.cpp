@@ -107,6 +107,68 @@ std::string tempPath(const std::string& name) {
 
 }  // namespace
 
+TEST(CacheLayout, DirectLightBehindALightsPlaneReadsZeroOnAWallCrossingIt) {
+    // A panel 2 cm under a ceiling and a wall from the floor to the ceiling
+    // beside it: the wall's top 2 cm lie behind the panel's plane and get
+    // none of its light, and below the plane the light grows from 0. Direct
+    // light's base mesh is cut along the plane (CacheSettings::
+    // lightPlaneCuts): no triangle spans it, so linear interpolation reads
+    // exactly 0 above it. Uncut, a triangle spans it and spreads the light
+    // below over the strip (what the office's walls showed under the ceiling).
+    const double h = 0.02;
+    const std::vector<Material> materials = {Material::diffuse("light", Rgb(0.5), Rgb(1.0)),
+                                             Material::diffuse("grey", Rgb(0.5))};
+    const Scene scene =
+        test::sceneOf("panel and wall", materials,
+                      {test::quadMesh("ceiling", 1, Vec3(-1, 1, -1), 2.0 * test::kX, 2.0 * test::kZ),
+                       test::quadMesh("panel", 0, Vec3(-0.3, 1 - h, -0.3), 0.6 * test::kX, 0.6 * test::kZ),
+                       test::quadMesh("floor", 1, Vec3(-1, 0, -1), 2.0 * test::kZ, 2.0 * test::kX),
+                       test::quadMesh("wall", 1, Vec3(1, 0, -1), 2.0 * test::kZ, 1.0 * test::kY)});
+    ASSERT_EQ(scene.lights.size(), 1u);
+    // The light as it is near its plane: nothing behind it, growing
+    // linearly in front (the panel seen edge-on from the wall).
+    const double plane = 1 - h;
+    const auto exact = [plane](size_t, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(std::max(0.0, plane - x.y)), 1.0, false};
+    };
+    for (const bool cuts : {true, false}) {
+        CacheSettings settings;
+        settings.lightPlaneCuts = cuts;
+        IrradianceCache cache(scene, settings);
+        test::sampleEveryVertex(cache, exact, 1, 1);
+        const IrradianceMeshCopy m = cache.copyMesh(0);
+        // The most light linear interpolation puts on the wall above the
+        // plane: at a corner above it, or where an edge crosses it.
+        double above = 0, most = 0;
+        bool spans = false;
+        for (const glm::uvec3& t : m.triangles) {
+            bool wall = true;
+            for (int k = 0; k < 3; ++k) wall = wall && std::abs(m.positions[t[k]].x - 1) < 1e-9;
+            if (!wall) continue;
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 &p = m.positions[t[k]], &q = m.positions[t[(k + 1) % 3]];
+                const double ep = luminance(m.irradiance[t[k]]), eq = luminance(m.irradiance[t[(k + 1) % 3]]);
+                most = std::max(most, ep);
+                // Corners on the plane (within rounding) count as above.
+                if (p.y > plane - 1e-9) above = std::max(above, ep);
+                if (std::min(p.y, q.y) < plane - 1e-9 && std::max(p.y, q.y) > plane + 1e-9) {
+                    spans = true;
+                    const double f = (plane - p.y) / (q.y - p.y);
+                    above = std::max(above, (1 - f) * ep + f * eq);
+                }
+            }
+        }
+        ASSERT_GT(most, 0.0);
+        if (cuts) {
+            EXPECT_FALSE(spans);
+            EXPECT_LE(above, 1e-9 * most);
+        } else {
+            EXPECT_TRUE(spans);
+            EXPECT_GT(above, 0.01 * most);
+        }
+    }
+}
+
 TEST(CacheRefinement, ALinearSignalNeedsNoSplit) {
     // The plane fitted to a vertex's neighbours reproduces any linear
     // signal, on any ring and at borders: nothing to split, nothing to

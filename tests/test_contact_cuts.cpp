@@ -209,5 +209,104 @@ TEST(ContactCuts, SkippedMeshesStayButStillCut) {
     EXPECT_GT(cutAlongContacts(scene, {false, true, false}, s)[0].triangles.size(), 2u);
 }
 
+// The panel scene with a wall at x = 1 facing the room, from the floor to
+// the ceiling, `length` long along z (centred).
+Scene panelSceneWithWall(double h, double length) {
+    Scene scene = panelScene(h);
+    scene.meshes.push_back(test::quadMesh("wall", 1, Vec3(1, 0, -0.5 * length), length * kZ, 1.0 * kY));
+    scene.finalize();
+    return scene;
+}
+
+// Whether some triangle of `m` has corners more than 1e-12 above and below
+// the height y: then it straddles the line y = const.
+bool straddles(const Mesh& m, double y) {
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        const Triangle3 p = m.triangle(t);
+        bool above = false, below = false;
+        for (const Vec3& q : p) above = above || q.y > y + 1e-12, below = below || q.y < y - 1e-12;
+        if (above && below) return true;
+    }
+    return false;
+}
+
+TEST(ContactCuts, AWallCrossingALightsPlaneIsCutAlongIt) {
+    // Behind the panel's plane (y = 1 − h) its light is 0 and in front of
+    // it it grows from 0: a wall from the floor to the ceiling gets a line
+    // there, across the region near the light, and nothing else is cut.
+    const double h = 0.02;
+    const Scene scene = panelSceneWithWall(h, 2.0);
+    const std::vector<CutPlane> planes = lightCutPlanes(scene);
+    ASSERT_EQ(planes.size(), 1u);
+    EXPECT_NEAR(std::abs(glm::dot(planes[0].normal, kY)), 1.0, 1e-12);
+    EXPECT_NEAR(planes[0].point.y, 1 - h, 1e-12);
+    ContactCutSettings s;
+    s.closeness = 0;  // no contact cuts: the planes alone
+    s.planes = planes;
+    ContactCutReport report;
+    const std::vector<Mesh> cut = cutAlongContacts(scene, {}, s, &report);
+    const Mesh& wall = cut[3];
+    EXPECT_TRUE(hasVertex(wall, Vec3(1, 1 - h, -1)));
+    EXPECT_TRUE(hasVertex(wall, Vec3(1, 1 - h, 1)));
+    EXPECT_TRUE(straddles(scene.meshes[3], 1 - h));
+    EXPECT_FALSE(straddles(wall, 1 - h));
+    EXPECT_NEAR(totalArea(wall), 2.0, 1e-12);
+    expectConforming(wall, [](const Vec3& p) { return std::abs(p.y) < 1e-12 || std::abs(p.y - 1) < 1e-12 ||
+                                                      std::abs(std::abs(p.z) - 1) < 1e-12; });
+    EXPECT_EQ(report.planeSegments, 2u);  // the wall's two triangles
+    for (size_t i = 0; i < 3; ++i) EXPECT_EQ(cut[i].triangles, scene.meshes[i].triangles) << i;
+}
+
+TEST(ContactCuts, ALightsPlaneCutsOnlyNearTheLight) {
+    // The region is the panel's bounds grown by twice their diagonal (0.6√2):
+    // a 10-m wall is cut from z = −0.3 − 1.2√2 to 0.3 + 1.2√2 only.
+    const double h = 0.02, reach = 0.3 + 1.2 * std::sqrt(2.0);
+    const Scene scene = panelSceneWithWall(h, 10.0);
+    ContactCutSettings s;
+    s.closeness = 0;
+    s.planes = lightCutPlanes(scene);
+    const Mesh wall = cutAlongContacts(scene, {}, s)[3];
+    EXPECT_TRUE(hasVertex(wall, Vec3(1, 1 - h, -reach)));
+    EXPECT_TRUE(hasVertex(wall, Vec3(1, 1 - h, reach)));
+    for (const Vec3& p : wall.positions) EXPECT_LE(std::abs(p.z), 5.0 + 1e-12);
+    size_t onLine = 0;
+    for (const Vec3& p : wall.positions) onLine += std::abs(p.y - (1 - h)) < 1e-12;
+    EXPECT_EQ(onLine, 2u);
+}
+
+TEST(ContactCuts, ALightsPlaneUnderAThousandthOfTheSceneFromAnEdgeCutsNothing) {
+    // The Cornell box's light hangs 0.5 mm under its ceiling: the walls
+    // cross its plane by a hair at their tops, which no pixel shows.
+    const Scene scene = panelSceneWithWall(1e-3, 2.0);
+    ContactCutSettings s;
+    s.closeness = 0;
+    s.planes = lightCutPlanes(scene);
+    ContactCutReport report;
+    const std::vector<Mesh> cut = cutAlongContacts(scene, {}, s, &report);
+    EXPECT_EQ(cut[3].triangles, scene.meshes[3].triangles);
+    EXPECT_EQ(report.planeSegments, 0u);
+}
+
+TEST(ContactCuts, CoplanarLightsShareOnePlane) {
+    // The office's panels all hang in one plane: one cut plane, whose region
+    // spans them all; its walls are cut along it.
+    OfficeSettings o;
+    o.panelsX = 8, o.panelsZ = 6;
+    const Scene scene = makeOfficeScene(o);
+    ASSERT_EQ(scene.lights.size(), 48u);
+    const std::vector<CutPlane> planes = lightCutPlanes(scene);
+    ASSERT_EQ(planes.size(), 1u);
+    for (const Light& l : scene.lights) {
+        EXPECT_LE(planes[0].region.lo.x, l.bounds.lo.x);
+        EXPECT_GE(planes[0].region.hi.z, l.bounds.hi.z);
+    }
+    ContactCutSettings s;
+    s.closeness = 0;
+    s.planes = planes;
+    ContactCutReport report;
+    cutAlongContacts(scene, {}, s, &report);
+    EXPECT_GE(report.planeSegments, 8u);  // four walls, two triangles each at least
+}
+
 }  // namespace
 }  // namespace ml

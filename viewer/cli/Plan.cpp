@@ -44,6 +44,12 @@ void declareCacheOptions(Options& o) {
     o.value("noise-tolerance", "T", "resample vertices while their relative standard error exceeds T",
             concat(d.noiseTolerance));
     o.value("max-vertices", "N", "vertex budget over all cache meshes", concat(d.maxVertices));
+    o.value("light-planes", "on|off",
+            "direct light's base meshes are cut where a surface crosses the plane of a planar light near it (behind "
+            "it the light gives nothing, in front it grows from 0: a kink no split finds); better images once "
+            "refined, darker ones at first where lights hang close to the surfaces crossing their plane "
+            "(cache/README.md)",
+            d.lightPlaneCuts ? std::string("on") : std::string("off"));
 }
 
 CacheSettings readCacheSettings(const Options& o) {
@@ -54,6 +60,10 @@ CacheSettings readCacheSettings(const Options& o) {
     c.splitTolerance = o.number("split-tolerance", 1e-6, 0.999);
     c.lightShare = o.number("light-share", 0, 1);
     c.noiseTolerance = o.number("noise-tolerance", 1e-6, 0.999);
+    const std::string planes = o.str("light-planes");
+    if (planes != "on" && planes != "off")
+        throw InputError(concat("--light-planes: '", planes, "' is neither on nor off"));
+    c.lightPlaneCuts = planes == "on";
     c.maxVertices = size_t(o.number("max-vertices", 3, 1e9));
     c.validate();
     return c;
@@ -76,6 +86,30 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
                     bounces.contactCloseness, r.receivers, r.segments, r.triangles, r.vertices, r.dropped);
     else
         std::printf("  contact cuts: none (no surface hangs close in front of another)\n");
+}
+
+// Where direct light's base meshes are cut along the lights' planes
+// (ContactCuts.h, CutPlane).
+void printLightPlaneCuts(const Scene& scene, const CacheSettings& direct) {
+    if (!direct.lightPlaneCuts) {
+        std::printf("  light planes: not cut (--light-planes on cuts direct light's meshes along them)\n");
+        return;
+    }
+    CacheSettings planesOnly = direct;
+    planesOnly.contactCloseness = 0;
+    ContactCutReport r;
+    cacheSurfaces(scene, planesOnly, &r);
+    const size_t planes = lightCutPlanes(scene).size();
+    if (r.planeSegments)
+        std::printf("  light planes: direct light's meshes are cut where a surface crosses the plane of a planar "
+                    "light near it (behind the plane the light gives nothing, in front it grows from 0: a kink "
+                    "between vertices that no split finds): %zu planes, %zu triangles cut along %zu segments, %zu "
+                    "vertices added (cache/ContactCuts.h)\n",
+                    planes, r.receivers, r.planeSegments, r.vertices);
+    else
+        std::printf("  light planes: no cut (%s)\n",
+                    planes ? "no surface crosses a planar light's plane by more than a thousandth of the scene near it"
+                           : "no planar area light");
 }
 
 // What a light is and how its direct light is sampled, for the plan.
@@ -254,6 +288,7 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 "where irradiance is not linear or visibility is partial; %s\n",
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
+    printLightPlaneCuts(scene, cache);
     if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare, indirect.solver.gatheredLights).describe().c_str());
     const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
