@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -205,6 +206,20 @@ bool planeCrossing(const Triangle3& p, const Bounds3& b, const CutPlane& plane, 
     return true;
 }
 
+// About the distance from segment (a, b) to the nearest of `boxes`: from
+// the point of the segment nearest each box's centre. Infinity with none.
+double nearestLight(const Vec3& a, const Vec3& b, const std::vector<Bounds3>& boxes) {
+    double best = std::numeric_limits<double>::infinity();
+    const Vec3 d = b - a;
+    const double dd = glm::dot(d, d);
+    for (const Bounds3& box : boxes) {
+        const double t = dd > 0 ? std::clamp(glm::dot(box.center() - a, d) / dd, 0.0, 1.0) : 0.0;
+        const Vec3 q = a + t * d;
+        best = std::min(best, glm::length(q - glm::clamp(q, box.lo, box.hi)));
+    }
+    return best;
+}
+
 struct CutMesh {
     std::vector<Vec3> positions, normals;
     std::vector<Vec2> texcoords;
@@ -236,7 +251,13 @@ std::vector<CutPlane> lightCutPlanes(const Scene& scene) {
                 merged = true;
                 break;
             }
-        if (!merged) planes.push_back({power, CutPlane{l.centroid, n, region}});
+        if (!merged) planes.push_back({power, CutPlane{l.centroid, n, region, {}}});
+        for (auto& [sum, plane] : planes)
+            if (std::abs(glm::dot(l.centroid - plane.point, plane.normal)) <= 1e-6 * diagonal &&
+                std::abs(glm::dot(plane.normal, n)) >= 1.0 - 1e-9) {
+                plane.lights.push_back(l.bounds);
+                break;
+            }
     }
     std::stable_sort(planes.begin(), planes.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
     std::vector<CutPlane> out;
@@ -353,7 +374,14 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 if (pass == 1)
                     for (const CutPlane& plane : settings.planes) {
                         Vec3 a, bb;
-                        if (planeCrossing(p, b, plane, kLeastGap * diagonal, a, bb) && addSegment(a, bb))
+                        if (!planeCrossing(p, b, plane, kLeastGap * diagonal, a, bb)) continue;
+                        if (addSegment(a, bb)) ++rep.planeSegments;
+                        // The ramp's bend, δ in front (CutPlane::lights).
+                        const double bend = nearestLight(a, bb, plane.lights);
+                        if (!(bend > kLeastGap * diagonal && bend < 0.5 * settings.spacing)) continue;
+                        CutPlane ahead = plane;
+                        ahead.point += bend * plane.normal;
+                        if (planeCrossing(p, b, ahead, kLeastGap * diagonal, a, bb) && addSegment(a, bb))
                             ++rep.planeSegments;
                     }
                 if (pass == 1 && innerGrid) {

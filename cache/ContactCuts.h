@@ -90,12 +90,21 @@ namespace ml {
 // planes", has the measurements).
 struct CutPlane {
     Vec3 point{0.0};
-    Vec3 normal{0.0, 1.0, 0.0};  // unit
+    Vec3 normal{0.0, 1.0, 0.0};  // unit, towards the side the lights shine on
     Bounds3 region;              // receivers are cut only inside this box
+    // The bounds of the lights in the plane. In front of the plane a
+    // receiver's light grows from 0 and bends over about the distance δ
+    // from the crossing to the nearest light: where δ is under half the
+    // base mesh's spacing, the base's vertices lie beyond the bend and the
+    // interpolation from the line's 0 reads the ramp dark until refinement
+    // reaches it (the 192-panel office's walls, 5 cm from the panels), so a
+    // second line goes δ in front, where the ramp bends.
+    std::vector<Bounds3> lights;
 };
 
 // The cut planes of the scene's lights: one per plane that planar area
-// lights lie in (coplanar lights merged, their regions joined), a light's
+// lights lie in (coplanar lights merged, their regions joined and their
+// bounds listed), a light's
 // region its bounds grown by twice their diagonal each way (where its light
 // may matter against the others'), at most kMaxLightPlanes of them (those
 // of the most powerful lights: a mesh of many small emitters facing every
@@ -113,7 +122,11 @@ struct ContactCutSettings {
     double spacing = 0;
     // Receivers are also cut where they cross these planes (CutPlane), by
     // more than a thousandth of the scene on either side (the Cornell box's
-    // light, 0.5 mm under its ceiling, cuts nothing, as for contacts).
+    // light, 0.5 mm under its ceiling, cuts nothing, as for contacts), and
+    // where they cross the plane moved the distance δ to the nearest light
+    // in front, when δ is under half of `spacing` (CutPlane::lights; δ is
+    // taken from each receiver triangle's own crossing, so the second line
+    // may stop where a triangle's crossing lies far from every light).
     std::vector<CutPlane> planes;
 };
 

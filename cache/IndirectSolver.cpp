@@ -41,6 +41,7 @@ CacheSettings IndirectSettings::defaultCache() {
     // meshes are not cut: the sampler sees a contact's shadow as partial
     // visibility and refinement follows it.
     c.contactCloseness = 0.1;
+    c.lightPlaneCuts = false;
     // One 40×40 jittered slice gather in the Cornell box: 0.5–2% relative
     // spread between seeds; assume 3% until the vertices sampled twice
     // measure it (IrradianceCache::sampleNoise: the ray gather measured

@@ -85,14 +85,11 @@ struct CacheSettings {
     // IndirectSettings::defaultCache).
     double contactCloseness = 0;
     // Base meshes are cut where they cross the plane of a planar light near
-    // it (lightCutPlanes, ContactCuts.h): direct light has a kink there that
-    // no split finds. Off by default: the cut reads the light right in front
-    // of the plane darker until refinement resolves it, and where lights hang
-    // within a small part of a base edge of the surfaces crossing their
-    // plane that costs the first images more than the kink did (the
-    // 192-panel office; cache/README.md, "Lights' planes"). The bounces'
-    // meshes are never cut (their light is smooth there).
-    bool lightPlaneCuts = false;
+    // it, and where that light bends in front of it (lightCutPlanes,
+    // ContactCuts.h): direct light has a kink there that no split finds.
+    // Direct light's default; the bounces' meshes, whose light is smooth
+    // there, are not cut (IndirectSettings::defaultCache).
+    bool lightPlaneCuts = true;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
 

@@ -287,6 +287,35 @@ TEST(ContactCuts, ALightsPlaneUnderAThousandthOfTheSceneFromAnEdgeCutsNothing) {
     EXPECT_EQ(report.planeSegments, 0u);
 }
 
+TEST(ContactCuts, ALightCloseToTheWallAddsALineWhereItsLightBends) {
+    // A wall as wide as the panel, 5 cm from its edge: in front of the plane
+    // its light grows from 0 and bends about 5 cm under it, under half the
+    // base mesh's spacing (0.5 here): a second line goes there (δ is the
+    // distance from each receiver triangle's crossing to the nearest light).
+    // A spacing that resolves 5 cm (0.08) gets the plane's line alone.
+    const double h = 0.02, gap = 0.05;
+    Scene scene = panelScene(h);
+    scene.meshes.push_back(test::quadMesh("wall", 1, Vec3(0.3 + gap, 0, -0.3), 0.6 * kZ, 1.0 * kY));
+    scene.finalize();
+    ContactCutSettings s;
+    s.closeness = 0;
+    s.planes = lightCutPlanes(scene);
+    ASSERT_EQ(s.planes.size(), 1u);
+    ASSERT_EQ(s.planes[0].lights.size(), 1u);
+    s.spacing = 0.5;
+    const Mesh wall = cutAlongContacts(scene, {}, s)[3];
+    for (const double y : {1 - h, 1 - h - gap}) {
+        EXPECT_TRUE(hasVertex(wall, Vec3(0.3 + gap, y, -0.3))) << y;
+        EXPECT_TRUE(hasVertex(wall, Vec3(0.3 + gap, y, 0.3))) << y;
+        EXPECT_FALSE(straddles(wall, y)) << y;
+    }
+    EXPECT_NEAR(totalArea(wall), 0.6, 1e-12);
+    s.spacing = 0.08;
+    const Mesh fine = cutAlongContacts(scene, {}, s)[3];
+    EXPECT_TRUE(hasVertex(fine, Vec3(0.3 + gap, 1 - h, -0.3)));
+    EXPECT_FALSE(hasVertex(fine, Vec3(0.3 + gap, 1 - h - gap, -0.3)));
+}
+
 TEST(ContactCuts, CoplanarLightsShareOnePlane) {
     // The office's panels all hang in one plane: one cut plane, whose region
     // spans them all; its walls are cut along it.

@@ -46,9 +46,8 @@ void declareCacheOptions(Options& o) {
     o.value("max-vertices", "N", "vertex budget over all cache meshes", concat(d.maxVertices));
     o.value("light-planes", "on|off",
             "direct light's base meshes are cut where a surface crosses the plane of a planar light near it (behind "
-            "it the light gives nothing, in front it grows from 0: a kink no split finds); better images once "
-            "refined, darker ones at first where lights hang close to the surfaces crossing their plane "
-            "(cache/README.md)",
+            "it the light gives nothing, in front it grows from 0: a kink no split finds), and where that light "
+            "bends in front of the plane when the nearest light is closer than half a base edge (cache/README.md)",
             d.lightPlaneCuts ? std::string("on") : std::string("off"));
 }
 
@@ -92,7 +91,7 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
 // (ContactCuts.h, CutPlane).
 void printLightPlaneCuts(const Scene& scene, const CacheSettings& direct) {
     if (!direct.lightPlaneCuts) {
-        std::printf("  light planes: not cut (--light-planes on cuts direct light's meshes along them)\n");
+        std::printf("  light planes: not cut (--light-planes off)\n");
         return;
     }
     CacheSettings planesOnly = direct;
@@ -103,8 +102,9 @@ void printLightPlaneCuts(const Scene& scene, const CacheSettings& direct) {
     if (r.planeSegments)
         std::printf("  light planes: direct light's meshes are cut where a surface crosses the plane of a planar "
                     "light near it (behind the plane the light gives nothing, in front it grows from 0: a kink "
-                    "between vertices that no split finds): %zu planes, %zu triangles cut along %zu segments, %zu "
-                    "vertices added (cache/ContactCuts.h)\n",
+                    "between vertices that no split finds), and where that light bends if that is nearer than half "
+                    "a base edge: %zu planes, %zu triangles cut along %zu segments, %zu vertices added "
+                    "(cache/ContactCuts.h)\n",
                     planes, r.receivers, r.planeSegments, r.vertices);
     else
         std::printf("  light planes: no cut (%s)\n",
