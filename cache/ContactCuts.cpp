@@ -241,23 +241,18 @@ std::vector<CutPlane> lightCutPlanes(const Scene& scene) {
         const Vec3 grow(2 * l.bounds.diagonal());
         Bounds3 region;
         region.lo = l.bounds.lo - grow, region.hi = l.bounds.hi + grow;
-        const double power = luminance(l.power());
-        bool merged = false;
-        for (auto& [sum, plane] : planes)
-            if (std::abs(glm::dot(plane.normal, n)) >= 1.0 - 1e-9 &&
-                std::abs(glm::dot(l.centroid - plane.point, plane.normal)) <= 1e-6 * diagonal) {
-                plane.region.extend(region);
-                sum += power;
-                merged = true;
-                break;
-            }
-        if (!merged) planes.push_back({power, CutPlane{l.centroid, n, region, {}}});
-        for (auto& [sum, plane] : planes)
-            if (std::abs(glm::dot(l.centroid - plane.point, plane.normal)) <= 1e-6 * diagonal &&
-                std::abs(glm::dot(plane.normal, n)) >= 1.0 - 1e-9) {
-                plane.lights.push_back(l.bounds);
-                break;
-            }
+        // The plane it lies in, if an earlier light made it (either facing).
+        size_t at = 0;
+        while (at < planes.size() &&
+               !(std::abs(glm::dot(planes[at].second.normal, n)) >= 1.0 - 1e-9 &&
+                 std::abs(glm::dot(l.centroid - planes[at].second.point, planes[at].second.normal)) <=
+                     1e-6 * diagonal))
+            ++at;
+        if (at == planes.size()) planes.push_back({0.0, CutPlane{l.centroid, n, region, {}}});
+        auto& [power, plane] = planes[at];
+        power += luminance(l.power());
+        plane.region.extend(region);
+        plane.lights.push_back(l.bounds);
     }
     std::stable_sort(planes.begin(), planes.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
     std::vector<CutPlane> out;
