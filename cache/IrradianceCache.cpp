@@ -94,7 +94,9 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
     f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction), f.f64(s.contactCloseness);
-    f.u64(s.lightPlaneCuts ? 1 : 0);
+    // Only when on: a cache saved before the option existed (and without
+    // it) still loads.
+    if (s.lightPlaneCuts) f.u64(1);
     return f.h;
 }
 
