@@ -104,12 +104,12 @@ struct CutPlane {
 
 // The cut planes of the scene's lights: one per plane that planar area
 // lights lie in (coplanar lights merged, their regions joined and their
-// bounds listed), a light's
-// region its bounds grown by twice their diagonal each way (where its light
-// may matter against the others'), at most kMaxLightPlanes of them (those
-// of the most powerful lights: a mesh of many small emitters facing every
-// way gets no cuts beyond). Punctual lights have none: a point light has no
-// plane, and a spot's cone is smooth where its falloff is.
+// bounds listed), a light's region its bounds grown by twice their diagonal
+// each way (where its light may matter against the others'), at most
+// kMaxLightPlanes of them (those of the most powerful lights: a mesh of many
+// small emitters facing every way gets no cuts beyond). Punctual lights have
+// none: a point light has no plane, and a spot's cone is smooth where its
+// falloff is.
 std::vector<CutPlane> lightCutPlanes(const Scene& scene);
 constexpr size_t kMaxLightPlanes = 64;
 
@@ -140,7 +140,8 @@ struct ContactCutReport {
 };
 
 // The scene's meshes, each cut along the edges of surfaces hanging close in
-// front of it (settings.closeness; 0: none) and along settings.planes; skip[i] leaves mesh i as it is (it still cuts others).
+// front of it (settings.closeness; 0: none) and along settings.planes;
+// skip[i] leaves mesh i as it is (it still cuts others).
 // Deterministic: the same scene gives the same meshes to the bit. Cost: a
 // uniform grid of the scene's edges, then per receiver the edges near it.
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
