@@ -374,8 +374,8 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         // The ramp's bend, δ in front (CutPlane::lights).
                         const double bend = nearestLight(a, bb, plane.lights);
                         if (!(bend > kLeastGap * diagonal && bend < 0.5 * settings.spacing)) continue;
-                        CutPlane ahead = plane;
-                        ahead.point += bend * plane.normal;
+                        // (The lights' list is not needed to cross it: not copied per triangle.)
+                        const CutPlane ahead{plane.point + bend * plane.normal, plane.normal, plane.region, {}};
                         if (planeCrossing(p, b, ahead, kLeastGap * diagonal, a, bb) && addSegment(a, bb))
                             ++rep.planeSegments;
                     }
