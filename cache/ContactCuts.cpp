@@ -3,6 +3,7 @@
 #include "ContactCuts.h"
 
 #include "core/BoundsGrid.h"
+#include "core/MeshUtil.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Constrained_triangulation_face_base_2.h>
@@ -220,6 +221,37 @@ double nearestLight(const Vec3& a, const Vec3& b, const std::vector<Bounds3>& bo
     return best;
 }
 
+// Whether triangle p reaches the band in front of `plane` where its lines
+// go: within its region, not wholly behind the plane (by more than
+// `least`), and not wholly further in front than `depth`.
+bool inPlaneBand(const Triangle3& p, const CutPlane& plane, double least, double depth) {
+    Bounds3 b;
+    for (const Vec3& q : p) b.extend(q);
+    for (int k = 0; k < 3; ++k)
+        if (b.hi[k] < plane.region.lo[k] || b.lo[k] > plane.region.hi[k]) return false;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3& q : p) {
+        const double d = glm::dot(q - plane.point, plane.normal);
+        lo = std::min(lo, d), hi = std::max(hi, d);
+    }
+    return hi > least && lo < depth;
+}
+
+// The two corners of triangle p farthest apart once projected onto
+// `plane`, projected: the extent of the triangle's shadow on it.
+void shadowOnPlane(const Triangle3& p, const CutPlane& plane, Vec3& a, Vec3& b) {
+    Vec3 q[3];
+    for (int k = 0; k < 3; ++k) q[k] = p[size_t(k)] - glm::dot(p[size_t(k)] - plane.point, plane.normal) * plane.normal;
+    int best = 0;
+    double longest = -1;
+    for (int e = 0; e < 3; ++e) {
+        const double l = glm::length(q[kEdgeCorners[e][1]] - q[kEdgeCorners[e][0]]);
+        if (l > longest) longest = l, best = e;
+    }
+    a = q[kEdgeCorners[best][0]];
+    b = q[kEdgeCorners[best][1]];
+}
+
 struct CutMesh {
     std::vector<Vec3> positions, normals;
     std::vector<Vec2> texcoords;
@@ -263,16 +295,32 @@ std::vector<CutPlane> lightCutPlanes(const Scene& scene) {
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
                                    const ContactCutSettings& settings, ContactCutReport* report) {
     ContactCutReport rep;
-    std::vector<Mesh> out = scene.meshes;
     const double diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     const double touch = 1e-7 * diagonal;
+    // The receivers near a light's plane are bisected to the base's spacing
+    // first, and cut after (ContactCutSettings::planes).
+    std::vector<Mesh> bisected;
+    if (!settings.planes.empty() && settings.spacing > 0) {
+        bisected = scene.meshes;
+        for (size_t mi = 0; mi < bisected.size(); ++mi) {
+            const Mesh& m = scene.meshes[mi];
+            if (mi < skip.size() && skip[mi]) continue;
+            bool nearPlane = false;
+            for (size_t t = 0; t < m.triangles.size() && !nearPlane; ++t)
+                for (const CutPlane& plane : settings.planes)
+                    nearPlane = nearPlane || inPlaneBand(m.triangle(t), plane, kLeastGap * diagonal, 0.5 * settings.spacing);
+            if (nearPlane) bisectLongEdges(bisected[mi], settings.spacing);
+        }
+    }
+    const std::vector<Mesh>& meshes = bisected.empty() ? scene.meshes : bisected;
+    std::vector<Mesh> out = meshes;
 
     // Every edge of the scene, welded by position, with the faces beside it.
     std::vector<SceneEdge> edges;
     {
         std::map<PositionPair, uint32_t> index;
-        for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
-            const Mesh& m = scene.meshes[mi];
+        for (size_t mi = 0; mi < meshes.size(); ++mi) {
+            const Mesh& m = meshes[mi];
             for (size_t t = 0; t < m.triangles.size(); ++t) {
                 if (!(m.area(t) > 0)) continue;
                 const Triangle3 p = m.triangle(t);
@@ -291,13 +339,13 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     for (size_t e = 0; e < edges.size(); ++e) {
         const auto& f = edges[e].faces;
         if (f.size() != 2) continue;
-        const double c = glm::dot(unitNormal(scene.meshes[f[0].first], f[0].second),
-                                  unitNormal(scene.meshes[f[1].first], f[1].second));
+        const double c = glm::dot(unitNormal(meshes[f[0].first], f[0].second),
+                                  unitNormal(meshes[f[1].first], f[1].second));
         flat[e] = c > 1.0 - 1e-6;
     }
     const BoundsGrid grid = edgeGrid(scene.bounds, edges, settings.closeness);
 
-    std::vector<CutMesh> cuts(scene.meshes.size());
+    std::vector<CutMesh> cuts(meshes.size());
     std::vector<uint32_t> near, lines;  // scratch: the edges and the hanging faces' lines near a receiver
     // Registers an end on the receiver's edge, once: a new vertex there.
     const auto registerOnEdge = [&](CutMesh& cm, const Mesh& m, const glm::uvec3& tri, CutPoint& p) {
@@ -330,11 +378,11 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     std::unique_ptr<BoundsGrid> innerGrid;
     for (int pass = 0; pass < 2; ++pass) {
         if (pass == 1 && !inner.empty()) innerGrid = std::make_unique<BoundsGrid>(edgeGrid(scene.bounds, inner, 0.0));
-        for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+        for (size_t mi = 0; mi < meshes.size(); ++mi) {
             // A skipped receiver is not cut, but what hangs over it still
             // gets its own lines.
             if (pass == 1 && mi < skip.size() && skip[mi]) continue;
-            const Mesh& m = scene.meshes[mi];
+            const Mesh& m = meshes[mi];
             CutMesh& cm = cuts[mi];
             if (pass == 1) cm.segments.resize(m.triangles.size());
             for (size_t t = 0; t < m.triangles.size(); ++t) {
@@ -369,9 +417,13 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                 if (pass == 1)
                     for (const CutPlane& plane : settings.planes) {
                         Vec3 a, bb;
-                        if (!planeCrossing(p, b, plane, kLeastGap * diagonal, a, bb)) continue;
-                        if (addSegment(a, bb)) ++rep.planeSegments;
-                        // The ramp's bend, δ in front (CutPlane::lights).
+                        if (planeCrossing(p, b, plane, kLeastGap * diagonal, a, bb) && addSegment(a, bb))
+                            ++rep.planeSegments;
+                        // The ramp's bend, δ in front (CutPlane::lights), from
+                        // the triangle's shadow on the plane: a triangle that
+                        // the bend's line crosses need not cross the plane.
+                        if (!inPlaneBand(p, plane, kLeastGap * diagonal, 0.5 * settings.spacing)) continue;
+                        shadowOnPlane(p, plane, a, bb);
                         const double bend = nearestLight(a, bb, plane.lights);
                         if (!(bend > kLeastGap * diagonal && bend < 0.5 * settings.spacing)) continue;
                         // (The lights' list is not needed to cross it: not copied per triangle.)
@@ -416,7 +468,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
                         for (const auto& f : edge.faces) {
                             if (f.first < skip.size() && skip[f.first]) continue;
-                            const Mesh& hanging = scene.meshes[f.first];
+                            const Mesh& hanging = meshes[f.first];
                             if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
                             if (!innerDone.insert({e, f}).second) continue;
                             const auto away = [&](const Vec3& c) {
@@ -452,9 +504,9 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
     }
 
     // Re-triangulate every triangle with a cut or a point on its edges.
-    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    for (size_t mi = 0; mi < meshes.size(); ++mi) {
         if (mi < skip.size() && skip[mi]) continue;
-        const Mesh& m = scene.meshes[mi];
+        const Mesh& m = meshes[mi];
         CutMesh& cm = cuts[mi];
         if (cm.onEdges.empty() &&
             std::all_of(cm.segments.begin(), cm.segments.end(), [](const auto& s) { return s.empty(); }))

@@ -94,8 +94,8 @@ uint64_t settingsFingerprint(const CacheSettings& s) {
     f.f64(s.splitTolerance), f.f64(s.noiseTolerance);
     f.u64(s.maxSamplesPerVertex), f.u64(s.maxVertices), f.u64(s.maxMemoryBytes), f.f64(s.singleSampleNoise);
     f.f64(s.sampleNoise), f.f64(s.lightShare), f.f64(s.uniformEdgeFraction), f.f64(s.contactCloseness);
-    // Only when on: a cache saved before the option existed (and without
-    // it) still loads.
+    // Only when on: a cache saved before the option existed (and with it
+    // off) still loads with --light-planes off.
     if (s.lightPlaneCuts) f.u64(1);
     return f.h;
 }
@@ -175,7 +175,10 @@ size_t buildBaseMesh(const Scene& scene, const std::vector<Mesh>& meshes, const 
         const Mesh& m = meshes[mi];
         // Surfaces lit from both sides (open objects with a light behind)
         // get a reversed copy, facing the other way, with vertices of its own.
-        if (!isClosedMesh(m)) {
+        // Closed or open as the object is: cutting it (ContactCuts.h) may
+        // leave out faces too thin to draw, or put points on one side of a
+        // seam's edge alone, and its inside is no more seen for that.
+        if (!isClosedMesh(scene.meshes[mi])) {
             object = Bounds3();
             for (const Vec3& p : scene.meshes[mi].positions) object.extend(p);
             std::map<uint32_t, CacheTriMesh::VertexHandle> back;

@@ -87,11 +87,11 @@ struct CacheSettings {
     // Base meshes are cut where they cross the plane of a planar light near
     // it, and where that light bends in front of it (lightCutPlanes,
     // ContactCuts.h): direct light has a kink there that no split finds.
-    // Off by default: it helps the office at every panel count, but the back
-    // rooms of ../shared/scenes (glowing walls) came out faceted after 15 s,
-    // their first pass not done (cache/README.md, "Lights' planes"). The
-    // bounces' meshes are never cut (IndirectSettings::defaultCache).
-    bool lightPlaneCuts = false;
+    // The surfaces near a plane are bisected to the base's edges before the
+    // cut, so it adds the line's vertices alone (cache/README.md, "Lights'
+    // planes"). The bounces' meshes are never cut
+    // (IndirectSettings::defaultCache).
+    bool lightPlaneCuts = true;
     size_t maxVertices = 4'000'000;
     size_t maxMemoryBytes = size_t(1) << 30;
 

@@ -4,8 +4,9 @@
 
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstring>
+#include <map>
+#include <queue>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -192,6 +193,79 @@ bool isClosedMesh(const Mesh& m) {
     for (const auto& [edge, n] : uses)
         if (n % 2) return false;
     return true;
+}
+
+size_t bisectLongEdges(Mesh& m, double maxLength) {
+    if (!(maxLength > 0) || !std::isfinite(maxLength))
+        throw std::invalid_argument(concat("bisectLongEdges: maxLength ", maxLength, " is not positive and finite"));
+    checkPerTriangle(m, m.materials.size(), "materials");
+    checkPerTriangle(m, m.sourceLines.size(), "source lines");
+    checkPerTriangle(m, m.albedo.size(), "albedo values");
+    const size_t before = m.positions.size();
+    // Positions welded: an edge is the pair of its ends' ids.
+    std::map<std::array<double, 3>, uint32_t> weld;
+    std::vector<uint32_t> id;
+    const auto addId = [&](const Vec3& p) {
+        id.push_back(weld.emplace(std::array<double, 3>{p.x, p.y, p.z}, uint32_t(weld.size())).first->second);
+    };
+    for (const Vec3& p : m.positions) addId(p);
+    const auto key = [&](uint32_t a, uint32_t b) {
+        const uint64_t x = id[a], y = id[b];
+        return x < y ? x << 32 | y : y << 32 | x;
+    };
+    std::unordered_map<uint64_t, std::vector<uint32_t>> faces;  // edge -> triangles beside it
+    std::priority_queue<std::pair<double, uint64_t>> queue;     // (length, edge), longest first
+    const auto addEdge = [&](uint32_t a, uint32_t b, uint32_t t) {
+        std::vector<uint32_t>& list = faces[key(a, b)];
+        if (list.empty()) {
+            const double length = glm::length(m.positions[b] - m.positions[a]);
+            if (length > maxLength) queue.push({length, key(a, b)});
+        }
+        list.push_back(t);
+    };
+    for (uint32_t t = 0; t < m.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) addEdge(m.triangles[t][k], m.triangles[t][(k + 1) % 3], t);
+    while (!queue.empty()) {
+        const uint64_t edge = queue.top().second;
+        queue.pop();
+        const auto it = faces.find(edge);
+        if (it == faces.end()) continue;  // split already
+        const std::vector<uint32_t> beside = std::move(it->second);
+        faces.erase(it);
+        std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;  // per (a, b) as a triangle holds them
+        for (const uint32_t t : beside) {
+            const glm::uvec3 tri = m.triangles[t];
+            int k = 0;
+            while (k < 3 && key(tri[k], tri[(k + 1) % 3]) != edge) ++k;
+            ML_ASSERT(k < 3, "bisectLongEdges: triangle ", t, " listed beside an edge it lacks");
+            const uint32_t a = tri[k], b = tri[(k + 1) % 3], c = tri[(k + 2) % 3];
+            const auto [mid, added] = midpoints.emplace(std::minmax(a, b), uint32_t(m.positions.size()));
+            const uint32_t v = mid->second;
+            if (added) {
+                m.positions.push_back(0.5 * (m.positions[a] + m.positions[b]));
+                const Vec3 n = m.normals[a] + m.normals[b];
+                m.normals.push_back(glm::length(n) > 1e-12 ? glm::normalize(n) : m.normals[a]);
+                if (!m.texcoords.empty()) m.texcoords.push_back(0.5 * (m.texcoords[a] + m.texcoords[b]));
+                addId(m.positions.back());
+            }
+            // (a, b, c) becomes (a, v, c) in place and (v, b, c) at the end;
+            // the edges (b, c) and (v, c) move to or join the new triangle.
+            const uint32_t u = uint32_t(m.triangles.size());
+            m.triangles[t] = glm::uvec3(a, v, c);
+            m.triangles.push_back(glm::uvec3(v, b, c));
+            if (!m.materials.empty()) m.materials.push_back(m.materials[t]);
+            if (!m.sourceLines.empty()) m.sourceLines.push_back(m.sourceLines[t]);
+            if (!m.albedo.empty()) m.albedo.push_back(m.albedo[t]);
+            std::vector<uint32_t>& bc = faces[key(b, c)];
+            for (uint32_t& f : bc)
+                if (f == t) f = u;
+            addEdge(a, v, t);
+            addEdge(v, c, t);
+            addEdge(v, b, u);
+            faces[key(v, c)].push_back(u);
+        }
+    }
+    return m.positions.size() - before;
 }
 
 }  // namespace ml

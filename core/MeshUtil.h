@@ -47,4 +47,17 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees);
 // triangles. The inside of a closed object is never seen nor lit.
 bool isClosedMesh(const Mesh& mesh);
 
+// Longest-edge bisection (Rivara's) until no edge is longer than
+// maxLength: the longest edge left is split at its midpoint, in every
+// triangle beside it, so the mesh stays conforming (no T-vertex), also
+// across edges whose vertices are repeated at a seam (positions welded by
+// exact equality: each side gets a midpoint of its own, with its own normal
+// and texture coordinate). New vertices interpolate their edge's normal
+// (renormalised) and texcoords; a split triangle's halves keep its
+// material, source line and albedo. The cache's base meshes are bisected
+// this way; cutting large triangles first and bisecting the pieces after
+// shapes them worse (ContactCuts.h). Returns the number of vertices added.
+// Throws std::invalid_argument unless maxLength is positive and finite.
+size_t bisectLongEdges(Mesh& mesh, double maxLength);
+
 }  // namespace ml

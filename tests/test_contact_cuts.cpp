@@ -6,6 +6,7 @@
 #include "TestScenes.h"
 
 #include "cache/ContactCuts.h"
+#include "core/MeshUtil.h"
 #include "core/scenes/OfficeScene.h"
 
 #include <gtest/gtest.h>
@@ -314,6 +315,35 @@ TEST(ContactCuts, ALightCloseToTheWallAddsALineWhereItsLightBends) {
     const Mesh fine = cutAlongContacts(scene, {}, s)[3];
     EXPECT_TRUE(hasVertex(fine, Vec3(0.3 + gap, 1 - h, -0.3)));
     EXPECT_FALSE(hasVertex(fine, Vec3(0.3 + gap, 1 - h - gap, -0.3)));
+}
+
+TEST(ContactCuts, ALightsPlaneAddsItsLinesVerticesAlone) {
+    // The receivers near a plane are bisected to the base's spacing before
+    // they are cut, so the cut adds the line's points and the bisection
+    // after it nothing: a 2-m wall under a panel 2 cm below the ceiling,
+    // spacing 0.1, bisected the same way cut or not, differs by the points
+    // on the line: at most four per 0.1 of its 2 m (the bisected faces are
+    // 0.1/√2 wide, and the line crosses a side and one or two diagonals of
+    // each), and its ends. Cut first (its two triangles: a strip 2 cm high
+    // and the pieces beside it) and bisected after, the wall had 283
+    // vertices more than uncut, for a line of two points.
+    const Scene scene = panelSceneWithWall(0.02, 2.0);
+    ContactCutSettings s;
+    s.closeness = 0;
+    s.planes = lightCutPlanes(scene);
+    s.spacing = 0.1;
+    ContactCutReport report;
+    Mesh cut = cutAlongContacts(scene, {}, s, &report)[3];
+    EXPECT_FALSE(straddles(cut, 0.98));
+    EXPECT_NEAR(totalArea(cut), 2.0, 1e-12);
+    EXPECT_EQ(bisectLongEdges(cut, 0.1), 0u);
+    Mesh uncut = scene.meshes[3];
+    bisectLongEdges(uncut, 0.1);
+    size_t onLine = 0;
+    for (const Vec3& p : cut.positions) onLine += std::abs(p.y - 0.98) < 1e-12;
+    EXPECT_GE(onLine, 21u);  // a point every 0.1 at least
+    EXPECT_LE(cut.positions.size(), uncut.positions.size() + 4 * 20 + 2);
+    EXPECT_EQ(cut.positions.size() - uncut.positions.size(), onLine);
 }
 
 TEST(ContactCuts, CoplanarLightsShareOnePlane) {

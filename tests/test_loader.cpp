@@ -783,6 +783,60 @@ TEST(MeshUtil, ShadingNormalsWeldByPosition) {
     EXPECT_THROW(computeShadingNormals(m, -1), std::invalid_argument);
 }
 
+TEST(MeshUtil, BisectLongEdgesStaysConformingAcrossSeams) {
+    // A unit cube whose six faces have corners of their own (a seam along
+    // every edge, as flat-shaded files give): bisected to edges of at most
+    // 0.3, it stays closed (a T-vertex on a seam would leave an edge used
+    // once), keeps its area to rounding (1e-12), each half keeps its face's
+    // material, source line and winding, and the new vertices their face's
+    // normal and texture coordinates between their edge's ends.
+    Mesh m;
+    const Vec3 n[6] = {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1)};
+    for (uint32_t f = 0; f < 6; ++f) {
+        // Two axes u, v with u × v = n, and the face's corner at the origin's side.
+        const Vec3 u = std::abs(n[f].x) > 0 ? Vec3(0, 1, 0) : Vec3(1, 0, 0);
+        const Vec3 v = glm::cross(n[f], u);
+        const Vec3 c = 0.5 * (Vec3(1) + n[f] - u - v);
+        const uint32_t b = uint32_t(m.positions.size());
+        for (const Vec2& t : {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)}) {
+            m.positions.push_back(c + t.x * u + t.y * v);
+            m.normals.push_back(n[f]);
+            m.texcoords.push_back(t);
+        }
+        m.triangles.push_back({b, b + 1, b + 2});
+        m.triangles.push_back({b, b + 2, b + 3});
+        m.materials.insert(m.materials.end(), {f, f});
+        m.sourceLines.insert(m.sourceLines.end(), {int(f) + 1, int(f) + 1});
+    }
+    ASSERT_TRUE(isClosedMesh(m));
+    const size_t before = m.positions.size();
+    const size_t added = bisectLongEdges(m, 0.3);
+    EXPECT_EQ(added, m.positions.size() - before);
+    EXPECT_GT(added, 0u);
+    EXPECT_TRUE(isClosedMesh(m));
+    ASSERT_EQ(m.materials.size(), m.triangles.size());
+    ASSERT_EQ(m.sourceLines.size(), m.triangles.size());
+    ASSERT_EQ(m.texcoords.size(), m.positions.size());
+    double area = 0;
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        area += m.area(t);
+        const Vec3 face = n[m.materials[t]];
+        EXPECT_GT(glm::dot(glm::normalize(m.areaNormal(t)), face), 1 - 1e-12) << t;
+        EXPECT_EQ(m.sourceLines[t], int(m.materials[t]) + 1);
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+            EXPECT_LE(glm::length(m.positions[b] - m.positions[a]), 0.3 + 1e-12);
+            EXPECT_EQ(m.normals[a], face);
+            // A corner's texture coordinate is where it lies in its face.
+            const Vec3 off = m.positions[a] - 0.5 * (Vec3(1) + face);
+            EXPECT_NEAR(glm::length(off), glm::length(m.texcoords[a] - Vec2(0.5)), 1e-12);
+        }
+    }
+    EXPECT_NEAR(area, 6.0, 1e-12);
+    EXPECT_THROW(bisectLongEdges(m, 0), std::invalid_argument);
+    EXPECT_THROW(bisectLongEdges(m, std::nan("")), std::invalid_argument);
+}
+
 // --- Built-in Cornell box ----------------------------------------------------
 
 TEST(CornellBox, Geometry) {

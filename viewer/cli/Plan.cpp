@@ -91,8 +91,8 @@ void printContactCuts(const Scene& scene, const CacheSettings& bounces) {
 // (ContactCuts.h, CutPlane).
 void printLightPlaneCuts(const Scene& scene, const CacheSettings& direct) {
     if (!direct.lightPlaneCuts) {
-        std::printf("  light planes: not cut (--light-planes on cuts direct light's meshes along them: "
-                    "cache/README.md)\n");
+        std::printf("  light planes: not cut (--light-planes off; on, the default, cuts direct light's meshes "
+                    "along them: cache/README.md)\n");
         return;
     }
     CacheSettings planesOnly = direct;
