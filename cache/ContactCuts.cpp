@@ -167,13 +167,19 @@ bool clip(std::pair<double, double>& a, std::pair<double, double>& b) {
     return true;
 }
 
+// Whether boxes x and y share a point.
+bool overlaps(const Bounds3& x, const Bounds3& y) {
+    for (int k = 0; k < 3; ++k)
+        if (x.hi[k] < y.lo[k] || x.lo[k] > y.hi[k]) return false;
+    return true;
+}
+
 // Where triangle p (bounds b) crosses `plane` inside its region: the
 // segment (a, b3) of the line they share, clipped to the region. False when
 // the triangle lies within `least` of the plane on either side (it touches
 // the plane or barely crosses it) or the line misses the region.
 bool planeCrossing(const Triangle3& p, const Bounds3& b, const CutPlane& plane, double least, Vec3& a, Vec3& b3) {
-    for (int k = 0; k < 3; ++k)
-        if (b.hi[k] < plane.region.lo[k] || b.lo[k] > plane.region.hi[k]) return false;
+    if (!overlaps(b, plane.region)) return false;
     double d[3];
     for (int k = 0; k < 3; ++k) d[k] = glm::dot(p[size_t(k)] - plane.point, plane.normal);
     if (!(std::max({d[0], d[1], d[2]}) > least && std::min({d[0], d[1], d[2]}) < -least)) return false;
@@ -221,14 +227,11 @@ double nearestLight(const Vec3& a, const Vec3& b, const std::vector<Bounds3>& bo
     return best;
 }
 
-// Whether triangle p reaches the band in front of `plane` where its lines
-// go: within its region, not wholly behind the plane (by more than
-// `least`), and not wholly further in front than `depth`.
-bool inPlaneBand(const Triangle3& p, const CutPlane& plane, double least, double depth) {
-    Bounds3 b;
-    for (const Vec3& q : p) b.extend(q);
-    for (int k = 0; k < 3; ++k)
-        if (b.hi[k] < plane.region.lo[k] || b.lo[k] > plane.region.hi[k]) return false;
+// Whether triangle p (bounds b) reaches the band in front of `plane` where
+// its lines go: within its region, not wholly behind the plane (by more
+// than `least`), and not wholly further in front than `depth`.
+bool inPlaneBand(const Triangle3& p, const Bounds3& b, const CutPlane& plane, double least, double depth) {
+    if (!overlaps(b, plane.region)) return false;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const Vec3& q : p) {
         const double d = glm::dot(q - plane.point, plane.normal);
@@ -306,9 +309,13 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
             const Mesh& m = scene.meshes[mi];
             if (mi < skip.size() && skip[mi]) continue;
             bool nearPlane = false;
-            for (size_t t = 0; t < m.triangles.size() && !nearPlane; ++t)
+            for (size_t t = 0; t < m.triangles.size() && !nearPlane; ++t) {
+                const Triangle3 p = m.triangle(t);
+                Bounds3 b;
+                for (const Vec3& q : p) b.extend(q);
                 for (const CutPlane& plane : settings.planes)
-                    nearPlane = nearPlane || inPlaneBand(m.triangle(t), plane, kLeastGap * diagonal, 0.5 * settings.spacing);
+                    nearPlane = nearPlane || inPlaneBand(p, b, plane, kLeastGap * diagonal, 0.5 * settings.spacing);
+            }
             if (nearPlane) bisectLongEdges(bisected[mi], settings.spacing);
         }
     }
@@ -422,7 +429,7 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         // The ramp's bend, δ in front (CutPlane::lights), from
                         // the triangle's shadow on the plane: a triangle that
                         // the bend's line crosses need not cross the plane.
-                        if (!inPlaneBand(p, plane, kLeastGap * diagonal, 0.5 * settings.spacing)) continue;
+                        if (!inPlaneBand(p, b, plane, kLeastGap * diagonal, 0.5 * settings.spacing)) continue;
                         shadowOnPlane(p, plane, a, bb);
                         const double bend = nearestLight(a, bb, plane.lights);
                         if (!(bend > kLeastGap * diagonal && bend < 0.5 * settings.spacing)) continue;
