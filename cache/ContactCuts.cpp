@@ -298,6 +298,7 @@ std::vector<CutPlane> lightCutPlanes(const Scene& scene) {
 std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& skip,
                                    const ContactCutSettings& settings, ContactCutReport* report) {
     ContactCutReport rep;
+    rep.planes = settings.planes.size();
     const double diagonal = scene.bounds.diagonal() > 0 ? scene.bounds.diagonal() : 1.0;
     const double touch = 1e-7 * diagonal;
     // The receivers near a light's plane are bisected to the base's spacing

@@ -139,6 +139,7 @@ struct ContactCutSettings {
 struct ContactCutReport {
     size_t receivers = 0;  // triangles re-triangulated (cut, or given a neighbour's point)
     size_t segments = 0;   // cut segments after clipping, penumbra lines and plane cuts included
+    size_t planes = 0;         // settings.planes cut along
     size_t planeSegments = 0;  // of those, where a receiver crosses a CutPlane
     size_t triangles = 0;  // triangles those became
     size_t vertices = 0;   // vertices added

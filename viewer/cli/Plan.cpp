@@ -99,7 +99,7 @@ void printLightPlaneCuts(const Scene& scene, const CacheSettings& direct) {
     planesOnly.contactCloseness = 0;
     ContactCutReport r;
     cacheSurfaces(scene, planesOnly, &r);
-    const size_t planes = lightCutPlanes(scene).size();
+    const size_t planes = r.planes;
     if (r.planeSegments)
         std::printf("  light planes: direct light's meshes are cut where a surface crosses the plane of a planar "
                     "light near it (behind the plane the light gives nothing, in front it grows from 0: a kink "
