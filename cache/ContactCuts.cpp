@@ -55,11 +55,30 @@ constexpr double kCoplanar = 1e-7;
 // face (its base mesh's); a panel's back, none but its corners.
 constexpr double kInside[] = {2, 6};
 
+// The depths (in units of h) of the receiver's lines under such a face,
+// where the light through the gap is convex (ContactCuts.h says why).
+constexpr double kUnder[] = {1, 3};
+
 // An edge of some surface, welded by position, with the triangles beside it.
 struct SceneEdge {
     Vec3 a, b;
     std::vector<std::pair<uint32_t, uint32_t>> faces;  // (mesh, triangle)
 };
+
+// The unit vector, in face `face` of `hanging` and square to `edge`, from
+// the edge into the face; false where the face is too thin to say.
+bool inwardInto(const SceneEdge& edge, const Mesh& hanging, uint32_t face, double touch, Vec3& inward) {
+    const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
+    const auto away = [&](const Vec3& c) { return glm::length(glm::cross(c - edge.a, edgeDir)); };
+    const Triangle3 q = hanging.triangle(face);
+    Vec3 off = q[0];
+    for (const Vec3& c : q)
+        if (away(c) > away(off)) off = c;
+    const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
+    if (!(glm::length(in) > touch)) return false;
+    inward = glm::normalize(in);
+    return true;
+}
 
 using PositionPair = std::array<double, 6>;
 
@@ -479,16 +498,8 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                             const Mesh& hanging = meshes[f.first];
                             if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
                             if (!innerDone.insert({e, f}).second) continue;
-                            const auto away = [&](const Vec3& c) {
-                                return glm::length(glm::cross(c - edge.a, edgeDir));
-                            };
-                            const Triangle3 q = hanging.triangle(f.second);
-                            Vec3 off = q[0];
-                            for (const Vec3& c : q)
-                                if (away(c) > away(off)) off = c;
-                            const Vec3 in = (off - edge.a) - glm::dot(off - edge.a, edgeDir) * edgeDir;
-                            if (!(glm::length(in) > touch)) continue;
-                            const Vec3 inward = glm::normalize(in);
+                            Vec3 inward;
+                            if (!inwardInto(edge, hanging, f.second, touch, inward)) continue;
                             for (const double depth : kInside)
                                 inner.push_back({edge.a + depth * h * inward - 3 * h * edgeDir,
                                                  edge.b + depth * h * inward + 3 * h * edgeDir, {f}});
@@ -506,6 +517,16 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     const Vec3 side = glm::cross(r.n, dir);
                     for (double sign : {1.0, -1.0})
                         addSegment(a + 2 * sign * h * side - 3 * h * dir, bp + 2 * sign * h * side + 3 * h * dir);
+                    // Under a hanging face parallel to R, where the profile is
+                    // convex (kUnder).
+                    for (const auto& f : edge.faces) {
+                        const Mesh& hanging = meshes[f.first];
+                        if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
+                        Vec3 inward;
+                        if (!inwardInto(edge, hanging, f.second, touch, inward)) continue;
+                        for (const double depth : kUnder)
+                            addSegment(a + depth * h * inward + 0.5 * h * dir, bp + depth * h * inward - 0.5 * h * dir);
+                    }
                 }
             }
         }

@@ -70,6 +70,18 @@ bool hasVertex(const Mesh& m, const Vec3& p) {
     return false;
 }
 
+// The square of lines x = ±half, z = ±half at height y, each from −half to
+// +half: cut along, with vertices at its corners and no face straddling it.
+void expectSquareOfLines(const Mesh& m, double y, double half) {
+    for (int k = 0; k < 4; ++k) {
+        const double sx = (k & 1) ? 1 : -1;
+        const Vec3 a = (k & 2) ? Vec3(sx * half, y, -half) : Vec3(-half, y, sx * half);
+        const Vec3 b = (k & 2) ? Vec3(sx * half, y, half) : Vec3(half, y, sx * half);
+        EXPECT_TRUE(hasVertex(m, a)) << "corner of line " << half << " side " << k;
+        EXPECT_FALSE(segmentCrossesAFace(m, a, b)) << "line " << half << " side " << k;
+    }
+}
+
 // Every edge is used by two faces, or lies on the mesh's border `onBorder`:
 // no T-vertex, no hole (by vertex index, as the cache's mesh joins faces).
 template <class Border>
@@ -116,15 +128,14 @@ TEST(ContactCuts, APanelUnderACeilingCutsItsOutlineAndPenumbraLines) {
     EXPECT_NEAR(totalArea(ceiling), 4.0, 1e-12);
     // The outline, and lines 2h inside and outside it (the penumbra's
     // bend), which cross at their corners: no face straddles any of them.
-    for (const double half : {0.3, 0.3 - 2 * h, 0.3 + 2 * h})
-        for (int k = 0; k < 4; ++k) {
-            const double sx = (k & 1) ? 1 : -1;
-            // A line x = ±half (k & 2) or z = ±half from −half to +half.
-            const Vec3 a = (k & 2) ? Vec3(sx * half, 1, -half) : Vec3(-half, 1, sx * half);
-            const Vec3 b = (k & 2) ? Vec3(sx * half, 1, half) : Vec3(half, 1, sx * half);
-            EXPECT_TRUE(hasVertex(ceiling, a)) << "corner of line " << half << " side " << k;
-            EXPECT_FALSE(segmentCrossesAFace(ceiling, a, b)) << "line " << half << " side " << k;
-        }
+    for (const double half : {0.3, 0.3 - 2 * h, 0.3 + 2 * h}) expectSquareOfLines(ceiling, 1, half);
+    // Under the panel, where the light through the gap is convex in the
+    // depth, lines at h and 3h too (kUnder), crossing at their corners; they
+    // stay under the panel: none reaches the line 2h outside.
+    for (const double d : {h, 3 * h}) {
+        expectSquareOfLines(ceiling, 1, 0.3 - d);
+        EXPECT_FALSE(hasVertex(ceiling, Vec3(-0.3 - 2 * h, 1, -(0.3 - d)))) << d;
+    }
     expectConforming(ceiling, [](const Vec3& p) { return std::abs(std::abs(p.x) - 1) < 1e-12 ||
                                                           std::abs(std::abs(p.z) - 1) < 1e-12; });
     // The panel's back sees the same gap from below: lines 2h and 6h inside
