@@ -28,8 +28,8 @@
 // it), where 2h is under half the base mesh's spacing.
 //
 // Under a hanging face parallel to the receiver, two more lines, at depths h
-// and 3h (where the profile is 0.25 and 0.05), drawn from h/2 past one end
-// of the edge to h/2 before the other so that they cross the lines under
+// and 3h (where the profile is 0.25 and 0.05), each from h/2 inside one end
+// of the edge to h/2 inside the other, so that they cross the lines under
 // the face alone. There the profile is convex and falls to a tenth of the
 // open value at 2h: read linearly from the outline's 0.5 to 2h's 0.1 it
 // was 20% bright at h, and from 0.1 to the base's next vertex inside
