@@ -65,9 +65,23 @@ struct SceneEdge {
     std::vector<std::pair<uint32_t, uint32_t>> faces;  // (mesh, triangle)
 };
 
+using PositionPair = std::array<double, 6>;
+
+PositionPair keyOf(const Vec3& p, const Vec3& q) {
+    const bool swap = std::tie(q.x, q.y, q.z) < std::tie(p.x, p.y, p.z);
+    const Vec3& a = swap ? q : p;
+    const Vec3& b = swap ? p : q;
+    return {a.x, a.y, a.z, b.x, b.y, b.z};
+}
+
+Vec3 unitNormal(const Mesh& m, size_t t) { return glm::normalize(m.areaNormal(t)); }
+
 // The unit vector, in face `face` of `hanging` and square to `edge`, from
-// the edge into the face; false where the face is too thin to say.
-bool inwardInto(const SceneEdge& edge, const Mesh& hanging, uint32_t face, double touch, Vec3& inward) {
+// the edge into the face, where that face is parallel to a receiver of
+// normal n (kParallel); false where it is not, or too thin to say.
+bool inwardInto(const SceneEdge& edge, const Mesh& hanging, uint32_t face, const Vec3& n, double touch,
+                Vec3& inward) {
+    if (std::abs(glm::dot(unitNormal(hanging, face), n)) < kParallel) return false;
     const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
     const auto away = [&](const Vec3& c) { return glm::length(glm::cross(c - edge.a, edgeDir)); };
     const Triangle3 q = hanging.triangle(face);
@@ -79,17 +93,6 @@ bool inwardInto(const SceneEdge& edge, const Mesh& hanging, uint32_t face, doubl
     inward = glm::normalize(in);
     return true;
 }
-
-using PositionPair = std::array<double, 6>;
-
-PositionPair keyOf(const Vec3& p, const Vec3& q) {
-    const bool swap = std::tie(q.x, q.y, q.z) < std::tie(p.x, p.y, p.z);
-    const Vec3& a = swap ? q : p;
-    const Vec3& b = swap ? p : q;
-    return {a.x, a.y, a.z, b.x, b.y, b.z};
-}
-
-Vec3 unitNormal(const Mesh& m, size_t t) { return glm::normalize(m.areaNormal(t)); }
 
 // The edges' bounds, padded by how far in front of a receiver an edge may
 // hang, in a grid: the edges near a receiver.
@@ -495,11 +498,9 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                         const Vec3 edgeDir = glm::normalize(edge.b - edge.a);
                         for (const auto& f : edge.faces) {
                             if (f.first < skip.size() && skip[f.first]) continue;
-                            const Mesh& hanging = meshes[f.first];
-                            if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
-                            if (!innerDone.insert({e, f}).second) continue;
                             Vec3 inward;
-                            if (!inwardInto(edge, hanging, f.second, touch, inward)) continue;
+                            if (!inwardInto(edge, meshes[f.first], f.second, r.n, touch, inward)) continue;
+                            if (!innerDone.insert({e, f}).second) continue;
                             for (const double depth : kInside)
                                 inner.push_back({edge.a + depth * h * inward - 3 * h * edgeDir,
                                                  edge.b + depth * h * inward + 3 * h * edgeDir, {f}});
@@ -520,10 +521,8 @@ std::vector<Mesh> cutAlongContacts(const Scene& scene, const std::vector<bool>& 
                     // Under a hanging face parallel to R, where the profile is
                     // convex (kUnder).
                     for (const auto& f : edge.faces) {
-                        const Mesh& hanging = meshes[f.first];
-                        if (std::abs(glm::dot(unitNormal(hanging, f.second), r.n)) < kParallel) continue;
                         Vec3 inward;
-                        if (!inwardInto(edge, hanging, f.second, touch, inward)) continue;
+                        if (!inwardInto(edge, meshes[f.first], f.second, r.n, touch, inward)) continue;
                         for (const double depth : kUnder)
                             addSegment(a + depth * h * inward + 0.5 * h * dir, bp + depth * h * inward - 0.5 * h * dir);
                     }
