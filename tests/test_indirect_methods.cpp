@@ -729,3 +729,69 @@ TEST(MeshIrradianceLookup, AgreesWithTheNearestFaceByBruteForce) {
         EXPECT_EQ(empty, 1600) << "scale " << scale;
     }
 }
+
+// Several meshes in one lookup (as a bounce-1 gather reads every light's
+// direct mesh) against one lookup per mesh, summed in the meshes' order:
+// three floors of different resolutions, jitters and extents (one covers a
+// corner only, as a light's own mesh covers the surfaces near it), one
+// wall, and a mesh with no faces. Points on the floor everywhere (where one,
+// two or three floor meshes hold them), on the wall, and seen from the
+// wrong side. The same faces are found and their values added in the same
+// order, so the sums agree to rounding: 1e-12 of the largest value (30) is
+// asked; a mesh left out or read twice misses by at least 1.
+TEST(MeshIrradianceLookup, SeveralMeshesInOneGridSumEachOnesValue) {
+    std::mt19937 engine(11);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    // An n × n grid over [lo, hi]² of the floor (z = 0, up) or the wall
+    // (x = 0, facing +x), interior corners jittered, values in [1, 10].
+    const auto grid = [&](int n, double lo, double hi, bool wall) {
+        IrradianceMeshCopy mesh;
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; j <= n; ++j) {
+                const bool inside = i > 0 && j > 0 && i < n && j < n;
+                const double s = lo + (hi - lo) * (i + (inside ? 0.6 * (uniform(engine) - 0.5) : 0.0)) / n;
+                const double t = lo + (hi - lo) * (j + (inside ? 0.6 * (uniform(engine) - 0.5) : 0.0)) / n;
+                mesh.positions.push_back(wall ? Vec3(0, s, t) : Vec3(s, t, 0));
+                mesh.normals.push_back(wall ? Vec3(1, 0, 0) : Vec3(0, 0, 1));
+                mesh.irradiance.push_back(Rgb(1 + 9 * uniform(engine), 1 + 9 * uniform(engine), 1 + 9 * uniform(engine)));
+            }
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                const uint32_t a = uint32_t(i * (n + 1) + j), b = a + uint32_t(n + 1);
+                mesh.triangles.emplace_back(a, b, b + 1);
+                mesh.triangles.emplace_back(a, b + 1, a + 1);
+            }
+        return mesh;
+    };
+    const std::vector<IrradianceMeshCopy> meshes{grid(9, 0, 1, false), IrradianceMeshCopy{}, grid(23, 0, 1, false),
+                                                 grid(5, 0.0, 0.4, false), grid(7, 0, 1, true)};
+    const double diagonal = std::sqrt(3.0), tolerance = 1e-5 * diagonal;
+    std::vector<const IrradianceMeshCopy*> all;
+    std::vector<std::unique_ptr<MeshIrradianceLookup>> each;
+    for (const IrradianceMeshCopy& m : meshes) {
+        all.push_back(&m);
+        each.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, tolerance,
+                                                              MeshIrradianceLookup::Interpolation::CurvatureCorrected));
+    }
+    const MeshIrradianceLookup together(all, diagonal / 64, tolerance,
+                                        MeshIrradianceLookup::Interpolation::CurvatureCorrected);
+    int three = 0, two = 0, wall = 0, none = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const double s = uniform(engine), t = uniform(engine);
+        Vec3 p(s, t, 0), n(0, 0, 1);
+        if (k % 3 == 1) p = Vec3(0, s, t), n = Vec3(1, 0, 0);
+        if (k % 15 == 2) n = -n;  // the wrong side: nothing
+        Rgb sum(0.0);
+        for (const auto& l : each) sum += l->at(p, n);
+        const Rgb got = together.at(p, n);
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[c], sum[c], 30e-12) << "point " << k;
+        if (luminance(sum) == 0) ++none;
+        else if (n.x > 0) ++wall;
+        else (s < 0.4 && t < 0.4 ? three : two) += 1;
+    }
+    // Every kind of point was met (a lookup of a sum of 0 only would pass).
+    EXPECT_GT(three, 100);
+    EXPECT_GT(two, 500);
+    EXPECT_GT(wall, 500);
+    EXPECT_GT(none, 100);
+}

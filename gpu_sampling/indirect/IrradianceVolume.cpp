@@ -142,9 +142,9 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
     // The cache's radiance read where each ray lands, as the ray gather
     // reads it (gatherCachedRadiance): lookup cells of 1/64 of the scene.
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
-    std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
-    for (const IrradianceMeshCopy& m : irradiance)
-        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+    std::vector<const IrradianceMeshCopy*> meshes;
+    for (const IrradianceMeshCopy& m : irradiance) meshes.push_back(&m);
+    const MeshIrradianceLookup lookup(meshes, diagonal / 64, 1e-5 * diagonal);
     source->fields.resize(grid_.count());
     source->residual.assign(grid_.count(), {});
     source->inside.assign(grid_.count(), 0);
@@ -159,7 +159,7 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
         const int i = int(index % size_t(grid_.dims[0]));
         const int j = int(index / size_t(grid_.dims[0]) % size_t(grid_.dims[1]));
         const int k = int(index / (size_t(grid_.dims[0]) * size_t(grid_.dims[1])));
-        const Capture c = capture(grid_.position(i, j, k), directions, lookups);
+        const Capture c = capture(grid_.position(i, j, k), directions, lookup);
         source->fields[index] = c.field;
         if (settings_.axisCorrection)
             for (int a = 0; a < 6; ++a) {
@@ -185,7 +185,7 @@ void IrradianceVolume::setSource(size_t slot, const std::vector<IrradianceMeshCo
 }
 
 IrradianceVolume::Capture IrradianceVolume::capture(const Vec3& p, const CubeMapDirections& directions,
-                                                    const std::vector<std::unique_ptr<MeshIrradianceLookup>>& lookups) const {
+                                                    const MeshIrradianceLookup& lookup) const {
     Capture c;
     for (size_t r = 0; r < directions.direction.size(); ++r) {
         const Vec3& d = directions.direction[r];
@@ -203,9 +203,7 @@ IrradianceVolume::Capture IrradianceVolume::capture(const Vec3& p, const CubeMap
             }
             side = -side;
         }
-        Rgb e(0.0);
-        for (const auto& lookup : lookups) e += lookup->at(y.position, side);
-        const Rgb radiance = y.kd(scene_) / kPi * e;
+        const Rgb radiance = y.kd(scene_) / kPi * lookup.at(y.position, side);
         c.field.add(d, radiance, w);
         for (size_t a = 0; a < 6; ++a) c.axisIrradiance[a] += directions.axisCosine[r][a] * radiance;
     }

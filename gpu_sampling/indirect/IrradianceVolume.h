@@ -168,7 +168,7 @@ private:
         double closedBackSolidAngle = 0;      // of those, the insides of closed meshes
     };
     Capture capture(const Vec3& p, const CubeMapDirections& directions,
-                    const std::vector<std::unique_ptr<MeshIrradianceLookup>>& lookups) const;
+                    const MeshIrradianceLookup& lookup) const;
 
     struct Source {
         std::vector<ShRgb> fields;  // one per probe, ProbeGrid::index order

@@ -334,13 +334,12 @@ Rgb PropagationVolume::absorbed(size_t slot, size_t cell, int side) const {
 std::vector<ShRgb> PropagationVolume::inject(const std::vector<IrradianceMeshCopy>& irradiance) const {
     // The cache's irradiance at each sample, as the ray gather reads it.
     const double diagonal = scene_.bounds.diagonal() > 0 ? scene_.bounds.diagonal() : 1.0;
-    std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
-    for (const IrradianceMeshCopy& m : irradiance)
-        lookups.push_back(std::make_unique<MeshIrradianceLookup>(m, diagonal / 64, 1e-5 * diagonal));
+    std::vector<const IrradianceMeshCopy*> meshes;
+    for (const IrradianceMeshCopy& m : irradiance) meshes.push_back(&m);
+    const MeshIrradianceLookup lookup(meshes, diagonal / 64, 1e-5 * diagonal);
     std::vector<ShRgb> injected(grid_.count());
     auto inject = [&](const SurfaceSample& s, const Vec3& n) {
-        Rgb e(0.0);
-        for (const auto& l : lookups) e += l->at(s.position, n);
+        const Rgb e = lookup.at(s.position, n);
         if (!(luminance(e) > 0)) return;
         // Half a cell in front of the surface, in the cell that holds it.
         const std::array<int, 3> c = grid_.cellOf(s.position + 0.5 * n * grid_.cell);

@@ -86,57 +86,90 @@ std::vector<Rgb> vertexCurvature(const IrradianceMeshCopy& mesh) {
 
 MeshIrradianceLookup::MeshIrradianceLookup(const IrradianceMeshCopy& mesh, double cellSize, double tolerance,
                                            Interpolation interpolation)
-    : mesh_(mesh), cell_(cellSize), tolerance_(tolerance) {
-    if (interpolation == Interpolation::CurvatureCorrected) curvature_ = vertexCurvature(mesh);
+    : MeshIrradianceLookup(std::vector<const IrradianceMeshCopy*>{&mesh}, cellSize, tolerance, interpolation) {}
+
+MeshIrradianceLookup::MeshIrradianceLookup(const std::vector<const IrradianceMeshCopy*>& meshes, double cellSize,
+                                           double tolerance, Interpolation interpolation)
+    : meshes_(meshes), cell_(cellSize), tolerance_(tolerance) {
+    ML_ASSERT(meshes_.size() < (size_t(1) << 32), "a lookup of ", meshes_.size(), " meshes");
+    if (interpolation == Interpolation::CurvatureCorrected)
+        for (const IrradianceMeshCopy* m : meshes_) curvature_.push_back(vertexCurvature(*m));
     Bounds3 b;
-    for (const Vec3& p : mesh.positions) b.extend(p);
+    for (const IrradianceMeshCopy* m : meshes_)
+        for (const Vec3& p : m->positions) b.extend(p);
     if (b.empty()) return;
     origin_ = b.lo - tolerance;
     for (int a = 0; a < 3; ++a)
         dims_[size_t(a)] = std::clamp(int(std::ceil((b.hi[a] - b.lo[a] + 2 * tolerance) / cell_)) + 1, 1, 1024);
     const size_t binCount = size_t(dims_[0]) * dims_[1] * dims_[2];
-    // Each face's range of bins (its bounding box grown by the tolerance).
-    std::vector<std::array<int, 6>> ranges(mesh.triangles.size());
-    binStart_.assign(binCount + 1, 0);
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-        const glm::uvec3 i = mesh.triangles[t];
-        const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
-        std::array<int, 6>& r = ranges[t];
-        for (int a = 0; a < 3; ++a) {
-            const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance, mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
-            r[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
-            r[size_t(a) + 3] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+    // Each face's range of bins (its bounding box grown by the tolerance),
+    // and its record's place: mesh by mesh, then by the bin of the range's
+    // lowest corner, then as the mesh orders its faces.
+    struct Placed {
+        std::array<int, 6> range;
+        size_t home;
+        uint32_t mesh, triangle;
+    };
+    std::vector<Placed> placed;
+    for (uint32_t m = 0; m < uint32_t(meshes_.size()); ++m) {
+        const IrradianceMeshCopy& mesh = *meshes_[m];
+        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const glm::uvec3 i = mesh.triangles[t];
+            const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
+            Placed f{{}, 0, m, uint32_t(t)};
+            for (int a = 0; a < 3; ++a) {
+                const double mn = std::min({p0[a], p1[a], p2[a]}) - tolerance,
+                             mx = std::max({p0[a], p1[a], p2[a]}) + tolerance;
+                f.range[size_t(a)] = std::clamp(int((mn - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+                f.range[size_t(a) + 3] = std::clamp(int((mx - origin_[a]) / cell_), 0, dims_[size_t(a)] - 1);
+            }
+            f.home = (size_t(f.range[2]) * dims_[1] + f.range[1]) * dims_[0] + f.range[0];
+            placed.push_back(f);
         }
     }
-    // Counted, then filled in face order.
+    std::stable_sort(placed.begin(), placed.end(), [](const Placed& x, const Placed& y) {
+        return x.mesh != y.mesh ? x.mesh < y.mesh : x.home < y.home;
+    });
+    // Counted, then filled in the records' order.
     auto eachBin = [&](const std::array<int, 6>& r, auto&& f) {
         for (int z = r[2]; z <= r[5]; ++z)
             for (int y = r[1]; y <= r[4]; ++y)
                 for (int x = r[0]; x <= r[3]; ++x) f((size_t(z) * dims_[1] + y) * dims_[0] + x);
     };
-    for (const auto& r : ranges) eachBin(r, [&](size_t bin) { ++binStart_[bin + 1]; });
+    binStart_.assign(binCount + 1, 0);
+    for (const Placed& f : placed) eachBin(f.range, [&](size_t bin) { ++binStart_[bin + 1]; });
     for (size_t k = 0; k < binCount; ++k) binStart_[k + 1] += binStart_[k];
+    ML_ASSERT(binStart_[binCount] < (size_t(1) << 32), "a lookup's bins list ", binStart_[binCount], " faces");
     binFaces_.resize(binStart_[binCount]);
     std::vector<uint32_t> next(binStart_.begin(), binStart_.end() - 1);
-    for (size_t t = 0; t < ranges.size(); ++t) eachBin(ranges[t], [&](size_t bin) { binFaces_[next[bin]++] = uint32_t(t); });
-    faces_.resize(mesh.triangles.size());
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-        const glm::uvec3 i = mesh.triangles[t];
+    for (size_t k = 0; k < placed.size(); ++k)
+        eachBin(placed[k].range, [&](size_t bin) { binFaces_[next[bin]++] = uint32_t(k); });
+    faces_.resize(placed.size());
+    for (size_t k = 0; k < placed.size(); ++k) {
+        const IrradianceMeshCopy& mesh = *meshes_[placed[k].mesh];
+        const glm::uvec3 i = mesh.triangles[placed[k].triangle];
         const Vec3& p0 = mesh.positions[i.x];
         const Vec3 e1 = mesh.positions[i.y] - p0, e2 = mesh.positions[i.z] - p0, n = glm::cross(e1, e2);
         const double nn = glm::dot(n, n);
         // A degenerate face gets a zero normal: the side test skips it.
         const Vec3 unit = nn > 0 ? n / std::sqrt(nn) : Vec3(0.0);
         const Vec3 u = nn > 0 ? glm::cross(e2, n) / nn : Vec3(0.0), v = nn > 0 ? glm::cross(n, e1) / nn : Vec3(0.0);
-        Face& f = faces_[t];
+        Face& f = faces_[k];
         f.a = p0;
-        for (int k = 0; k < 3; ++k) {
-            f.n[k] = float(unit[k]);
-            f.u[k] = float(u[k]);
-            f.t[k] = float(v[k]);
-            f.corners[k] = i[k];
+        for (int c = 0; c < 3; ++c) {
+            f.n[c] = float(unit[c]);
+            f.u[c] = float(u[c]);
+            f.t[c] = float(v[c]);
+            f.corners[c] = i[c];
         }
+        f.mesh = placed[k].mesh;
     }
+}
+
+size_t MeshIrradianceLookup::memoryBytes() const {
+    size_t bytes = faces_.size() * sizeof(Face) + (binStart_.size() + binFaces_.size()) * sizeof(uint32_t);
+    for (const std::vector<Rgb>& c : curvature_) bytes += c.size() * sizeof(Rgb);
+    return bytes;
 }
 
 Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
@@ -147,15 +180,28 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         if (i < 0 || i >= dims_[size_t(a)]) return Rgb(0.0);
         c[size_t(a)] = i;
     }
-    double best = tolerance_ * tolerance_;
+    const double none = tolerance_ * tolerance_;
     // A face this near p's plane holds p: the float normal's rounding is
     // about 1e-7 of a bin, so nothing else is nearer by more than that.
-    const double onFace = std::min(1e-4 * best, 1e-10 * cell_ * cell_);
-    Rgb result(0.0);
+    const double onFace = std::min(1e-4 * none, 1e-10 * cell_ * cell_);
     const size_t bin = (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
     const auto dot = [](const float* f, const Vec3& v) { return double(f[0]) * v.x + double(f[1]) * v.y + double(f[2]) * v.z; };
+    // Each mesh's nearest face in turn (the bin lists them mesh by mesh),
+    // its value added to the sum when the next mesh's faces begin.
+    Rgb sum(0.0), result(0.0);
+    double best = none;
+    uint32_t mesh = 0;
+    bool found = false;  // the current mesh has a face holding p: its other faces are passed over
     for (uint32_t k = binStart_[bin]; k < binStart_[bin + 1]; ++k) {
         const Face& f = faces_[binFaces_[k]];
+        if (f.mesh != mesh) {
+            sum += result;
+            result = Rgb(0.0);
+            best = none;
+            mesh = f.mesh;
+            found = false;
+        }
+        if (found) continue;
         // The other side, or a crease beyond 60°.
         if (dot(f.n, n) < 0.5) continue;
         const Vec3 ap = p - f.a;
@@ -168,8 +214,8 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         constexpr double kSlack = 1e-6;
         if (bv >= -kSlack && bw >= -kSlack && bv + bw <= 1 + kSlack) {
             best = plane * plane;
-            result = interpolate(i, Vec3(1 - bv - bw, bv, bw));
-            if (best <= onFace) break;
+            result = interpolate(mesh, i, Vec3(1 - bv - bw, bv, bw));
+            found = best <= onFace;
             continue;
         }
         // Outside it: at least the violated barycentric over its gradient's
@@ -180,22 +226,25 @@ Rgb MeshIrradianceLookup::at(const Vec3& p, const Vec3& n) const {
         const double inPlane = std::max({outside(bv, glm::dot(gu, gu)), outside(bw, glm::dot(gt, gt)),
                                          outside(1 - bv - bw, glm::dot(gu + gt, gu + gt))});
         if (plane * plane + inPlane > best) continue;
-        const Vec3 w = closestBarycentric(p, mesh_.positions[i.x], mesh_.positions[i.y], mesh_.positions[i.z]);
-        const Vec3 q = w.x * mesh_.positions[i.x] + w.y * mesh_.positions[i.y] + w.z * mesh_.positions[i.z];
+        const std::vector<Vec3>& positions = meshes_[mesh]->positions;
+        const Vec3 w = closestBarycentric(p, positions[i.x], positions[i.y], positions[i.z]);
+        const Vec3 q = w.x * positions[i.x] + w.y * positions[i.y] + w.z * positions[i.z];
         const double d2 = glm::dot(q - p, q - p);
         if (d2 > best) continue;
         best = d2;
-        result = interpolate(i, w);
+        result = interpolate(mesh, i, w);
     }
-    return result;
+    return sum + result;
 }
 
-Rgb MeshIrradianceLookup::interpolate(const glm::uvec3& i, const Vec3& b) const {
-    const Rgb &e0 = mesh_.irradiance[i.x], &e1 = mesh_.irradiance[i.y], &e2 = mesh_.irradiance[i.z];
+Rgb MeshIrradianceLookup::interpolate(uint32_t m, const glm::uvec3& i, const Vec3& b) const {
+    const IrradianceMeshCopy& mesh = *meshes_[m];
+    const Rgb &e0 = mesh.irradiance[i.x], &e1 = mesh.irradiance[i.y], &e2 = mesh.irradiance[i.z];
     const Rgb linear = b.x * e0 + b.y * e1 + b.z * e2;
     if (curvature_.empty()) return linear;
-    const Vec3 &p0 = mesh_.positions[i.x], &p1 = mesh_.positions[i.y], &p2 = mesh_.positions[i.z];
-    const Rgb &k0 = curvature_[i.x], &k1 = curvature_[i.y], &k2 = curvature_[i.z];
+    const Vec3 &p0 = mesh.positions[i.x], &p1 = mesh.positions[i.y], &p2 = mesh.positions[i.z];
+    const std::vector<Rgb>& curvature = curvature_[m];
+    const Rgb &k0 = curvature[i.x], &k1 = curvature[i.y], &k2 = curvature[i.z];
     // Σ 4·bi·bj·δij, δij = ¼|eij|²·(κi + κj)/2.
     const auto edge = [](const Vec3& a, const Vec3& c) { return glm::dot(a - c, a - c); };
     const Rgb correction = b.x * b.y * edge(p0, p1) * 0.5 * (k0 + k1) + b.y * b.z * edge(p1, p2) * 0.5 * (k1 + k2) +

@@ -114,7 +114,7 @@ private:
 
     struct Source {
         std::vector<IrradianceMeshCopy> meshes;
-        std::vector<std::unique_ptr<MeshIrradianceLookup>> lookups;
+        std::unique_ptr<MeshIrradianceLookup> lookup;        // every mesh's, in one grid
         std::vector<const MeshIrradianceLookup*> pointers;  // the same, as gatherCachedRadiance takes them
         int strata = 16;  // per side
         size_t bytes = 0;

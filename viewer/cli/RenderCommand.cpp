@@ -655,7 +655,7 @@ int runRender(const std::vector<std::string>& args) {
                 cachePath.empty() ? "" : concat("; saved to ", cachePath).c_str());
     if (session.indirect()) {
         const IndirectStats& st = final->indirectStats;
-        std::printf("indirect: %d of %d bounces converged, %zu vertices, %llu gathers (%.2f ms each), sources built in "
+        std::printf("indirect: %d of %d bounces converged, %zu vertices, %llu gathers (%.3f ms each), sources built in "
                     "%.2f s, %.1f MB held; last source: %s\n",
                     final->bouncesFinished, final->bounces, final->indirectVertices,
                     static_cast<unsigned long long>(final->indirectSamples),
