@@ -604,7 +604,8 @@ TEST(IndirectConsistency, RayGatherSuccessiveGathersStratifyTogether) {
 // the point's side (normals within 60°), zero beyond the tolerance. Two
 // jittered grids meeting in a corner (a floor and a wall: the side test
 // must keep them apart), at three scales and far from the origin (the
-// records hold corners as floats relative to their bin). Points on the faces
+// records hold a corner in double, the normal and dual edge vectors as
+// floats, which place a point relative to that corner). Points on the faces
 // (a ray's end), off them and beyond the mesh's border by half the
 // tolerance (found), by twice the tolerance (zero), and seen from the wrong
 // side (zero). Equal within 1e-6 of the largest irradiance (10): the
