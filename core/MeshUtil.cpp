@@ -2,7 +2,6 @@
 
 #include "Error.h"
 
-#include <array>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -42,6 +41,17 @@ struct PositionHash {
         }
         return h;
     }
+};
+
+// Positions welded by exact equality: each distinct position gets the next
+// id, in the order they are first met.
+class WeldedIds {
+public:
+    uint32_t operator()(const Vec3& p) { return ids_.emplace(p, uint32_t(ids_.size())).first->second; }
+    size_t size() const { return ids_.size(); }
+
+private:
+    std::unordered_map<Vec3, uint32_t, PositionHash> ids_;
 };
 
 }  // namespace
@@ -119,12 +129,9 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
 
     // Corners grouped by welded position, as a compressed list: the corners of
     // group g are groupCorners[groupStart[g] .. groupStart[g + 1]).
-    std::unordered_map<Vec3, uint32_t, PositionHash> groupOf;
+    WeldedIds groupOf;
     std::vector<uint32_t> cornerGroup(cornerCount);
-    for (size_t c = 0; c < cornerCount; ++c) {
-        const Vec3& p = mesh.positions[mesh.triangles[c / 3][c % 3]];
-        cornerGroup[c] = groupOf.emplace(p, uint32_t(groupOf.size())).first->second;
-    }
+    for (size_t c = 0; c < cornerCount; ++c) cornerGroup[c] = groupOf(mesh.positions[mesh.triangles[c / 3][c % 3]]);
     std::vector<size_t> groupStart(groupOf.size() + 1, 0);
     for (uint32_t g : cornerGroup) ++groupStart[g + 1];
     for (size_t g = 0; g < groupOf.size(); ++g) groupStart[g + 1] += groupStart[g];
@@ -178,12 +185,9 @@ void computeShadingNormals(Mesh& mesh, double creaseAngleDegrees) {
 }
 
 bool isClosedMesh(const Mesh& m) {
-    std::map<std::array<double, 3>, uint32_t> weld;
+    WeldedIds weld;
     std::vector<uint32_t> id(m.positions.size());
-    for (size_t v = 0; v < m.positions.size(); ++v)
-        id[v] = weld.emplace(std::array<double, 3>{m.positions[v].x, m.positions[v].y, m.positions[v].z},
-                             uint32_t(weld.size()))
-                    .first->second;
+    for (size_t v = 0; v < m.positions.size(); ++v) id[v] = weld(m.positions[v]);
     std::map<std::pair<uint32_t, uint32_t>, int> uses;
     for (const glm::uvec3& t : m.triangles)
         for (int k = 0; k < 3; ++k) {
@@ -203,12 +207,9 @@ size_t bisectLongEdges(Mesh& m, double maxLength) {
     checkPerTriangle(m, m.albedo.size(), "albedo values");
     const size_t before = m.positions.size();
     // Positions welded: an edge is the pair of its ends' ids.
-    std::map<std::array<double, 3>, uint32_t> weld;
+    WeldedIds weld;
     std::vector<uint32_t> id;
-    const auto addId = [&](const Vec3& p) {
-        id.push_back(weld.emplace(std::array<double, 3>{p.x, p.y, p.z}, uint32_t(weld.size())).first->second);
-    };
-    for (const Vec3& p : m.positions) addId(p);
+    for (const Vec3& p : m.positions) id.push_back(weld(p));
     const auto key = [&](uint32_t a, uint32_t b) {
         const uint64_t x = id[a], y = id[b];
         return x < y ? x << 32 | y : y << 32 | x;
@@ -246,7 +247,7 @@ size_t bisectLongEdges(Mesh& m, double maxLength) {
                 const Vec3 n = m.normals[a] + m.normals[b];
                 m.normals.push_back(glm::length(n) > 1e-12 ? glm::normalize(n) : m.normals[a]);
                 if (!m.texcoords.empty()) m.texcoords.push_back(0.5 * (m.texcoords[a] + m.texcoords[b]));
-                addId(m.positions.back());
+                id.push_back(weld(m.positions.back()));
             }
             // (a, b, c) becomes (a, v, c) in place and (v, b, c) at the end;
             // the edges (b, c) and (v, c) move to or join the new triangle.
