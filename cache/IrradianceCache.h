@@ -317,6 +317,8 @@ public:
     // much light the cache holds, to weigh one cache's error against
     // another's (CacheWorker: indirect light against direct light).
     double integratedLuminance() const;
+    // The shared mesh's part of it (hasSharedMesh); 0 without one.
+    double sharedLuminance() const;
 
     // --- A scene that changed (CacheInvalidation.h) ---
     // Forgets the samples of mesh `mesh`'s vertices (and grid samples) at

@@ -400,6 +400,13 @@ double IrradianceCache::integratedLuminance() const {
     return total;
 }
 
+double IrradianceCache::sharedLuminance() const {
+    const CacheState& s = impl_->state;
+    if (!s.sharedMesh || s.meshes.empty()) return 0;
+    const size_t l = s.meshes.size() - 1;
+    return integrated(s, l, vertexAreas(s.meshes[l].mesh)).first;
+}
+
 double IrradianceCache::estimatedError(const std::optional<RefinementCamera>& view) const {
     if (detail::unsampledCount(impl_->state) > 0) return 1;  // not every vertex sampled yet: unknown
     return score(impl_->state, view, false).error;
