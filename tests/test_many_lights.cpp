@@ -337,6 +337,45 @@ TEST(SharedLights, TheSharedMeshsScatteredEstimatesAreResampled) {
     EXPECT_EQ(resampled, shared / 2);
 }
 
+TEST(SharedLights, TheSharedMeshsLightIsItsOwnIntegral) {
+    // What the worker discounts direct light's weight by (CacheWorker: the
+    // share φ of direct light the shared mesh holds): the shared mesh's
+    // integral alone, as integratedLuminance sums every mesh's (each
+    // vertex's mean times a third of its faces' area, the linear meshes'
+    // exact integral). Lights' own meshes at 1 W/m², the shared one at
+    // 1 + x²/10: only the order of the sums differs. Without a shared mesh, 0.
+    const Scene scene = emptyOffice(8, 6, 0.4);
+    const size_t lights = scene.lights.size();
+    CacheSettings cs;
+    cs.lightShare = 0.05;
+    CacheLayout layout;
+    layout.coverage = std::make_shared<const LightCoverage>(scene, cs.lightShare);
+    IrradianceCache cache(scene, cs, layout);
+    ASSERT_TRUE(cache.hasSharedMesh());
+    EXPECT_EQ(cache.sharedLuminance(), 0.0);  // nothing sampled yet
+    auto sampler = samplerOf([&](size_t mesh, const Vec3& x, const Vec3&, uint32_t) {
+        return VertexSample{Rgb(mesh == lights ? 1 + 0.1 * x.x * x.x : 1.0), 1.0, false};
+    });
+    cache.refine(sampler, 1 << 22, 1);
+    const std::vector<IrradianceMeshCopy> meshes = cache.copyMeshes();
+    ASSERT_EQ(meshes.size(), lights + 1);
+    const double shared = luminance(test::integrate(meshes[lights]));
+    double total = 0;
+    for (const IrradianceMeshCopy& m : meshes) total += luminance(test::integrate(m));
+    ASSERT_GT(shared, 0.0);
+    ASSERT_GT(total, shared);
+    EXPECT_NEAR(cache.sharedLuminance(), shared, 1e-9 * shared);
+    EXPECT_NEAR(cache.integratedLuminance(), total, 1e-9 * total);
+
+    CacheSettings none = cs;
+    none.lightShare = 0;
+    IrradianceCache perLight(scene, none);
+    ASSERT_FALSE(perLight.hasSharedMesh());
+    perLight.refine(sampler, 1 << 22, 1);
+    EXPECT_GT(perLight.integratedLuminance(), 0.0);
+    EXPECT_EQ(perLight.sharedLuminance(), 0.0);
+}
+
 TEST(SharedLights, ARoomOfAHundredSmallLightsKeepsTheirPower) {
     // A closed room: every watt the lights emit lands on its surfaces, so
     // ∫ E dA over all the cache meshes equals the lights' power. The meshes
