@@ -288,18 +288,19 @@ void CacheWorker::run() {
             // Where the lights share a mesh (LightCoverage.h), w shrinks
             // with the share φ of direct light that mesh holds, w = ½ (1 −
             // kSharedDiscount·φ): its estimates, K lights drawn among
-            // hundreds, err by more than the cache's estimate says (the noise
-            // hides structure from the residuals, which count only beyond
-            // twice it). Under 192 panels (φ = 0.91) at 16 s direct light
-            // estimated 2.0% against indirect light's 6.6%, and so took a
-            // quarter of the time, while the image's error was half direct
-            // light's (2.5 %² of 6.1); the 12-panel office (φ = 0.25) read
-            // 1.9% against 4.0% for 0.6 %² of 3.0. Measured (render office:
-            // panels=16x12,panelsize=0.4 --width 320 --height 180 --time 20,
-            // four runs each): 2.47, 2.48, 2.45, 2.53% relative RMSE with
-            // w = ½, 2.32, 2.33, 2.33, 2.44% with this; the 12 panels at
-            // 10 s 2.17, 2.17% against 2.24, 2.13%; the back rooms (φ =
-            // 0.003) and the Cornell box (no shared mesh) keep w = ½.
+            // hundreds, err by more than the cache's estimate says (most
+            // likely as their noise hides structure from the residuals,
+            // which count only beyond twice it). Under 192 panels (φ =
+            // 0.91) at 16 s direct light estimated 2.0% against indirect
+            // light's 6.6%, and so took a quarter of the time, while the
+            // image's error was half direct light's (2.5 %² of 6.1); the
+            // 12-panel office (φ = 0.25) read 1.9% against 4.0% for 0.6 %²
+            // of 3.0. Measured (render office:panels=16x12,panelsize=0.4
+            // --width 320 --height 180 --time 20): 2.48% relative RMSE on
+            // average over four runs with w = ½, 2.40% over seven with this
+            // (each run within ±0.1%); the 12 panels at 10 s 2.17, 2.17%
+            // against 2.24, 2.13%; the back rooms (φ = 0.003) and the
+            // Cornell box (no shared mesh) keep w = ½.
             // Bounce 1's first pass, once started, runs without direct
             // rounds between: until it is gathered the image lacks all
             // indirect light (a room's ceiling is black), which is more than
@@ -437,7 +438,8 @@ void CacheWorker::run() {
                             const double d = cache_.integratedLuminance();
                             const double b = indirect_->cache(1).integratedLuminance();
                             indirectWeight = d > 0 && b > 0 ? b / d : indirect_->settings().albedo;
-                            directWeight = kDirectWeight * (1 - kSharedDiscount * (d > 0 ? cache_.sharedLuminance() / d : 0.0));
+                            const double phi = d > 0 ? std::clamp(cache_.sharedLuminance() / d, 0.0, 1.0) : 0.0;
+                            directWeight = kDirectWeight * (1 - kSharedDiscount * phi);
                         }
                         lastIndirectError = r.estimatedError * indirectWeight;
                     }
