@@ -26,6 +26,8 @@ using detail::toOm;
 using detail::toVec3;
 
 void CacheSettings::validate() const {
+    if (sharedRays < 0 || sharedRays > 65536)
+        throw InputError(concat("shared rays ", sharedRays, ": must be 0..65536"));
     if (!(maxEdgeFraction > 1e-5 && maxEdgeFraction <= 1.0))
         throw InputError(concat("cache maximum edge fraction ", maxEdgeFraction, " is not in (1e-5, 1]"));
     if (!(minEdgeFraction > 1e-7 && minEdgeFraction <= maxEdgeFraction))

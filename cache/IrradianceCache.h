@@ -78,6 +78,11 @@ struct CacheSettings {
     // its light goes to one shared mesh. 0: every light's mesh everywhere.
     // Used when the layout asks for it (CacheLayout::coverage).
     double lightShare = 0.1;
+    // The shared mesh's occluded light is estimated from this many shadow
+    // rays, each to a point on a light drawn by its share (SharedLightSampler),
+    // where more lights are left to draw than the light sampler's pairs
+    // would take; 0: always by the light sampler's pairs (--method).
+    int sharedRays = 256;
     // Base meshes are cut along the edges of surfaces hanging close in
     // front of them (ContactCuts.h): an edge within this fraction of its
     // length of a surface, typical 0.1 (a panel 2 cm under a ceiling, 0.6 m

@@ -62,9 +62,11 @@ ProgressiveSession::ProgressiveSession(const Scene& scene, const SessionSettings
     // A gathered light's mesh has no faces, but grid caches sample every
     // light: the wrapper answers its zero weight with zero there too.
     if (cache_.hasSharedMesh() || !gatheredLightsOf(settings).empty())
-        factory_ = [&scene, coverage = coverage_, inner = factory_] {
+        factory_ = [&scene, coverage = coverage_, inner = factory_, rays = settings.cache.sharedRays] {
             WorkerSamplers s = inner();
-            s.direct = std::make_unique<SharedLightSampler>(scene, coverage, std::move(s.direct));
+            s.direct = std::make_unique<SharedLightSampler>(scene, coverage, std::move(s.direct),
+                                                            SharedLightSampler::kDraws,
+                                                            SharedLightSampler::kFirstDraws, rays);
             return s;
         };
     settings_.worker.maxSamples = stop.samples;

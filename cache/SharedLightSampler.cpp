@@ -3,6 +3,7 @@
 #include "core/EmitterTexture.h"
 #include "core/Error.h"
 #include "core/Random.h"
+#include "core/raytrace/PunctualShadow.h"
 #include "core/reference/Lambert.h"
 
 #include <algorithm>
@@ -16,19 +17,31 @@ Rgb unoccludedIrradiance(const Light& light, const Vec3& x, const Vec3& n) {
 }
 
 SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const LightCoverage> coverage,
-                                       std::unique_ptr<DirectSampler> perLight, int lights, int firstLights)
+                                       std::unique_ptr<DirectSampler> perLight, int lights, int firstLights,
+                                       int rayDraws)
     : scene_(scene), coverage_(std::move(coverage)), perLight_(std::move(perLight)), draws_(lights),
-      firstDraws_(firstLights) {
+      firstDraws_(firstLights), rayDraws_(rayDraws) {
     ML_ASSERT(coverage_ && perLight_ && draws_ >= 1 && firstDraws_ >= 1,
               "a shared-light sampler needs its coverage and sampler, and a light to draw");
     for (const Light& l : scene_.lights) textured_.push_back(EmitterTexture(scene_, l).textured());
+    for (const Light& l : scene_.lights) {
+        std::vector<double> cdf;
+        double area = 0;
+        for (const Triangle3& t : l.geometry)
+            cdf.push_back(area += 0.5 * glm::length(glm::cross(t[1] - t[0], t[2] - t[0])));
+        areaCdf_.push_back(std::move(cdf));
+    }
 }
 
+SharedLightSampler::~SharedLightSampler() = default;
+
 std::string SharedLightSampler::name() const {
+    const std::string rays =
+        rayDraws_ > 0 ? concat(", or ", rayDraws_, " shadow rays to points on them where more are left") : "";
     return concat(perLight_->name(), "; lights share a mesh where they give under ", 100 * coverage_->share(),
                   "% of the light, ", draws_, " lights drawn per shared estimate (", firstDraws_,
                   " in the first pass) from those of the ", kAskedLights,
-                  " brightest the sampler cannot answer without the GPU, and the rest");
+                  " brightest the sampler cannot answer without the GPU, and the rest", rays);
 }
 
 template <class Take>
@@ -118,6 +131,47 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
     return k;
 }
 
+// A shadow ray from x to a point y drawn on light l, uniform over its area:
+// whether it is blocked, and g(y) = A·cos θx·cos θy / r², whose mean over
+// the light is U_l / L_l (0 where y is below x's horizon or x behind the
+// light). To a punctual light, its one ray (exact) and g = 1.
+bool SharedLightSampler::shadowRay(uint32_t l, const Vec3& x, const Vec3& n, uint32_t seed, double& g) const {
+    const Light& light = scene_.lights[l];
+    if (light.punctual()) {
+        g = 1;
+        return !punctualIrradiance(*rays_, l, x, n).visible;
+    }
+    const std::vector<double>& cdf = areaCdf_[l];
+    const double u = double(hash32(seed) >> 8) / 16777216.0 * cdf.back();
+    const size_t t = std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()), cdf.size() - 1);
+    const Triangle3& tri = light.geometry[t];
+    double a = double(hash32(seed ^ 0x9e3779b9u) >> 8) / 16777216.0,
+           b = double(hash32(seed + 0x7f4a7c15u) >> 8) / 16777216.0;
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    const Vec3 y = tri[0] + a * (tri[1] - tri[0]) + b * (tri[2] - tri[0]);
+    const Vec3 d = y - x;
+    const double r2 = glm::dot(d, d);
+    const Vec3 normal = glm::cross(tri[1] - tri[0], tri[2] - tri[0]);
+    const double nl = glm::length(normal), cosX = glm::dot(n, d), cosY = -glm::dot(normal, d);
+    g = 0;
+    if (!(r2 > 0 && nl > 0 && cosX > 0 && cosY > 0)) return false;  // gives nothing: its weight is 0
+    g = cdf.back() * (cosX / std::sqrt(r2)) * (cosY / (nl * std::sqrt(r2))) / r2;
+    // From x lifted off its surface to y, less the offset at the light's
+    // end, nearer hits (what x touches) ignored: as punctualIrradiance.
+    const Vec3 origin = rays_->spawnPoint(x, n, d);
+    const Vec3 to = y - origin;
+    const double length = glm::length(to);
+    const double tNear = rays_->rayOffset(x) / length, tFar = 1 - rays_->rayOffset(y) / length;
+    RayFilter filter;
+    filter.skipLight = int(l);
+    return tFar > tNear && rays_->occluded(origin, to, tNear, tFar, filter);
+}
+
+bool SharedLightSampler::rayDrawn(uint32_t l) const {
+    const Light& light = scene_.lights[l];
+    return rayDraws_ > 0 && !textured_[l] && (light.punctual() || (light.planar && !light.geometry.empty()));
+}
+
 template <class Take>
 bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
     // Every light's (1 − w_l) U_l, the total exactly; the draws' CDF, by
@@ -135,34 +189,68 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         out.work = double(draws);
         return true;
     }
-    cdf_.clear();
-    drawable_.clear();
-    double sum = 0;
+    // The lights left to draw (the known ones were asked among these):
+    // where more than K, those rays can reach (rayDrawn) are drawn by rays,
+    // the rest by the wrapped sampler's pairs.
+    const bool byRays = reaching_.size() - k.lights.size() > draws && rayDraws_ > 0;
+    if (byRays && !rays_) rays_ = std::make_unique<EmbreeScene>(scene_);
+    cdf_.clear(), drawable_.clear(), rayCdf_.clear(), rayDrawable_.clear();
+    double sum = 0, raySum = 0;
     size_t next = 0;
     for (size_t i = 0; i < reaching_.size(); ++i) {
         while (next < k.lights.size() && k.lights[next] < reaching_[i].light) ++next;
         if (next < k.lights.size() && k.lights[next] == reaching_[i].light) continue;
-        sum += reaching_[i].y;
-        cdf_.push_back(sum);
-        drawable_.push_back(i);
+        if (byRays && rayDrawn(reaching_[i].light)) {
+            raySum += reaching_[i].y;
+            rayCdf_.push_back(raySum);
+            rayDrawable_.push_back(i);
+        } else {
+            sum += reaching_[i].y;
+            cdf_.push_back(sum);
+            drawable_.push_back(i);
+        }
     }
     Rgb occluded = k.occluded;
     double drawnShare = 0;  // Σ (1 − w_l) Y(U_l) · visibility over the drawn, weighted as they are
     bool partial = false;
-    double drawSum = 0, drawSquares = 0;  // Σ and Σ² of the draws' luminance, for ownVariance
-    // K draws, or each light once (weight 1, exact) where no more than K
-    // are left to draw.
+    double variance = 0;
+    // Stratified over [0, 1) of a CDF: draw d of `count` in [d/count, (d+1)/count).
+    const auto pick = [](const std::vector<double>& cdf, double total, uint32_t s, size_t d, size_t count) {
+        const double u = (double(d) + double(hash32(s) >> 8) / 16777216.0) / double(count) * total;
+        return std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()), cdf.size() - 1);
+    };
+    // R rays, each to a light drawn by (1 − w_l) Y(U_l) and a point on it:
+    // (1 − w_l) L_l g(y) (1 − V) / (R p_l), whose mean over the light is
+    // (1 − w_l) O_l / (R p_l): unbiased, and 0 for a light in full view.
+    if (!rayDrawable_.empty() && raySum > 0) {
+        const size_t count = size_t(rayDraws_);
+        double drawSum = 0, drawSquares = 0;
+        size_t blocked = 0;
+        for (size_t d = 0; d < count; ++d) {
+            const size_t j = pick(rayCdf_, raySum, seedFor(seed, 0x4a75u, uint32_t(d)), d, count);
+            const Reaching& r = reaching_[rayDrawable_[j]];
+            const double weight = raySum / ((rayCdf_[j] - (j ? rayCdf_[j - 1] : 0.0)) * double(count));
+            double g = 0;
+            const bool hidden = shadowRay(r.light, x, n, seedFor(seed, 0x5e7u + uint32_t(d), r.light), g);
+            const Light& light = scene_.lights[r.light];
+            const Rgb o = hidden ? (light.punctual() ? r.unoccluded : light.radiance * g) * r.shared * weight
+                                 : Rgb(0.0);
+            occluded += o;
+            blocked += hidden;
+            const double y = luminance(o) * double(count);
+            drawSum += y, drawSquares += y * y;
+            if (!hidden) drawnShare += weight * r.y;
+        }
+        partial = blocked > 0 && blocked < count;
+        variance += varianceOfMean(drawSum, drawSquares, double(count));
+    }
+    // K pair draws, or each light once (weight 1, exact) where no more than
+    // K are left to draw.
     const bool every = drawable_.size() <= draws;
     const size_t count = every ? drawable_.size() : draws;
+    double drawSum = 0, drawSquares = 0;  // Σ and Σ² of the draws' luminance, for ownVariance
     for (size_t d = 0; d < count && sum > 0; ++d) {
-        size_t j = d;
-        if (!every) {
-            // Stratified over [0, 1): draw d in [d/K, (d+1)/K).
-            const double u =
-                (double(d) + double(hash32(seedFor(seed, 0x5a1e5u, uint32_t(d))) >> 8) / 16777216.0) /
-                double(draws) * sum;
-            j = std::min(size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()), cdf_.size() - 1);
-        }
+        const size_t j = every ? d : pick(cdf_, sum, seedFor(seed, 0x5a1e5u, uint32_t(d)), d, draws);
         const Reaching& r = reaching_[drawable_[j]];
         const uint32_t l = r.light;
         // 1/(K p_l) for a draw, p_l its share of the CDF.
@@ -179,24 +267,23 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         drawnShare += weight * r.y * e.visibility;
         partial = partial || e.partial;
     }
+    // The draws as independent: their scatter over K(K − 1) is the variance
+    // of their mean, the estimate's only noise but the wrapped sampler's own
+    // (small: its jittered tests). Stratified draws scatter less than that;
+    // the cache measures by how much where it resamples (detail::NoiseModel).
+    // Each light taken once is exact.
+    if (!every && count >= 2) variance += varianceOfMean(drawSum, drawSquares, double(count));
     out.irradiance = glm::max(total - occluded, Rgb(0.0));
     // The visible share of the shared light: exact for the lights answered
     // without the GPU and for lights taken each once, the draws' estimate
     // for the rest.
     out.visibility = std::clamp((k.visible + drawnShare) / all, 0.0, 1.0);
     out.partial = partial;
-    // Its work, the draws it had: a first pass's few weigh less in a
-    // vertex's mean than a later estimate's many (VertexStats), and an
-    // exact one (each light taken once, or none left to draw) as a full one.
-    out.work = double(draws);
-    // The draws as independent: their scatter over K(K − 1) is the variance
-    // of their mean, the estimate's only noise but the wrapped sampler's own
-    // (small: its jittered tests). Stratified draws scatter less than that;
-    // the cache measures by how much where it resamples (detail::NoiseModel).
-    // With nothing to draw, or each light taken once, the estimate is exact.
-    if (every || !(sum > 0)) out.ownVariance = 0;
-    else if (count >= 2)
-        out.ownVariance = varianceOfMean(drawSum, drawSquares, double(count));
+    // Its work: a first pass's few pair draws weigh less in a vertex's mean
+    // than a later estimate's many (VertexStats); an exact estimate, or one
+    // by rays, as a full one.
+    out.work = byRays ? double(draws_) : double(draws);
+    out.ownVariance = variance;
     return true;
 }
 

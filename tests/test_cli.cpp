@@ -54,6 +54,13 @@ TEST_F(Cli, UnknownCommandAndBadValues) {
     EXPECT_EQ(outlines.status, 2);
     EXPECT_NE(outlines.output.find("option --outline-passes: '-1' is not an integer in [0, 1024]"), std::string::npos)
         << outlines.output;
+    const CommandResult rays = runMeshlight("render cornell --shared-rays 2.5 --out " + path("x.png"));
+    EXPECT_EQ(rays.status, 2);
+    EXPECT_NE(rays.output.find("--shared-rays: '2.5' is not a whole number"), std::string::npos) << rays.output;
+    const CommandResult negative = runMeshlight("render cornell --shared-rays -1 --out " + path("x.png"));
+    EXPECT_EQ(negative.status, 2);
+    EXPECT_NE(negative.output.find("option --shared-rays: -1 is not in [0, 65536]"), std::string::npos)
+        << negative.output;
     EXPECT_EQ(files(), 0u);
 }
 

@@ -7,6 +7,9 @@
 #include "TestScenes.h"
 #include "cache/IndirectSolver.h"
 #include "cache/IrradianceCache.h"
+#include "cache/LightCoverage.h"
+#include "cache/SharedLightSampler.h"
+#include "core/Random.h"
 #include "core/CandelaTable.h"
 #include "core/image/Photometry.h"
 #include "core/loaders/LuminaireLayout.h"
@@ -536,5 +539,60 @@ TEST(PunctualLight, SpotAimedEdgeOnAtTheFloor) {
         const double expected = x > 0 ? (1000 / kRadianceEfficacy) * (0.001 / d) / (d * d) : 0.0;
         EXPECT_NEAR(e.g, expected, 1e-9 * std::max(1.0, expected)) << "x " << x;
         EXPECT_NEAR(tracer.irradiance(p, kY, 2, 0).direct.g, e.g, 1e-9 * std::max(1.0, e.g)) << "x " << x;
+    }
+}
+
+TEST(PunctualLights, ManySharedPointLightsAreDrawnWithOneExactShadowRayEach) {
+    // 48 bulbs 2 m over a floor, a 2 × 2 m table top at 1 m hiding some of
+    // them from the points under its edge. The lights share a mesh where each
+    // gives under 10%, and the shared estimate draws 256 shadow rays among
+    // them (more are left than its 16 pairs would take): one ray is a point
+    // light's exact visibility, so the estimate's only noise is which lights
+    // were drawn. Over 1024 seeds its mean is within 4 of its standard errors
+    // (measured from the same estimates) of the exact sum, that standard
+    // error under 0.5% of it; where nothing is in the way it is exact for
+    // every seed.
+    std::vector<Light> bulbs;
+    for (int i = 0; i < 8; ++i)
+        for (int k = 0; k < 6; ++k)
+            bulbs.push_back(pointLight(concat("bulb", i, "_", k), Vec3(-3.5 + i, 2.0, -2.5 + k), 200));
+    Scene scene;
+    scene.name = "bulbs over a table";
+    scene.materials = {Material::diffuse("grey", Rgb(0.5))};
+    scene.meshes = {quadMesh("floor", 0, Vec3(-5, 0, -5), 10.0 * kZ, 10.0 * kX),
+                    quadMesh("table", 0, Vec3(-1, 1, -1), 2.0 * kZ, 2.0 * kX)};
+    scene.lights = std::move(bulbs);
+    scene.finalize();
+    const EmbreeScene rays(scene);
+    const auto exact = [&](size_t l, const Vec3& x, const Vec3& n, uint32_t) {
+        const PunctualSample s = punctualIrradiance(rays, l, x, n);
+        return VertexSample{s.irradiance, s.visible ? 1.0 : 0.0, false};
+    };
+    auto coverage = std::make_shared<const LightCoverage>(scene, 0.1);
+    ASSERT_TRUE(coverage->sharing());
+    SharedLightSampler sampler(scene, coverage, std::make_unique<FunctionDirectSampler<decltype(exact)>>(exact));
+    const size_t lights = scene.lights.size();
+    for (const Vec3& p : {Vec3(0.9, 0.0, 0.3), Vec3(-1.2, 0.0, 0.8), Vec3(4.8, 0.0, 4.8)}) {
+        Rgb truth(0.0), open(0.0);
+        for (size_t l = 0; l < lights; ++l) {
+            const double w = coverage->weight(l, p);
+            truth += (1 - w) * punctualIrradiance(rays, l, p, kY).irradiance;
+            open += (1 - w) * punctualIncidence(scene.lights[l], p, kY).irradiance;
+        }
+        ASSERT_GT(truth.g, 0.0);
+        const bool shaded = truth.g < 0.99 * open.g;
+        EXPECT_EQ(shaded, p.x < 2) << "the table hides some bulbs from the points under its edges, none from a "
+                                      "corner of the floor";
+        constexpr int kSeeds = 1024;
+        double sum = 0, squares = 0;
+        for (int k = 0; k < kSeeds; ++k) {
+            const double e = sampler.sample(lights, p, kY, seedFor(3, uint32_t(k))).irradiance.g;
+            sum += e, squares += e * e;
+            if (!shaded) EXPECT_NEAR(e, truth.g, 1e-12 * truth.g);
+        }
+        const double mean = sum / kSeeds;
+        const double standardError = std::sqrt((squares - sum * sum / kSeeds) / (kSeeds - 1) / kSeeds);
+        EXPECT_NEAR(mean, truth.g, 4 * standardError + 1e-12 * truth.g) << "at " << p.x << ", " << p.z;
+        EXPECT_LT(standardError, 0.005 * truth.g) << "at " << p.x << ", " << p.z;
     }
 }

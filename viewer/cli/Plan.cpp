@@ -3,6 +3,7 @@
 #include "core/image/Photometry.h"
 
 #include "cache/LightCoverage.h"
+#include "cache/SharedLightSampler.h"
 
 #include "Commands.h"
 #include "cache/CausticCache.h"
@@ -12,6 +13,7 @@
 #include "gpu_sampling/indirect/VoxelGrid.h"
 #include "core/Error.h"
 
+#include <cmath>
 #include <algorithm>
 #include <cstdio>
 
@@ -41,6 +43,11 @@ void declareCacheOptions(Options& o) {
                                 "light (by a bound from power, distance, orientation); elsewhere one mesh shared by "
                                 "the lights carries it; 0: a mesh per light everywhere",
             concat(d.lightShare));
+    o.value("shared-rays", "N",
+            "the shared mesh's occluded light from N shadow rays to points on lights drawn by their share, where "
+            "more lights are left than the light sampler's pairs would take; 0: the light sampler's pairs always "
+            "(--method exact sets 0)",
+            concat(d.sharedRays));
     o.value("noise-tolerance", "T", "resample vertices while their relative standard error exceeds T",
             concat(d.noiseTolerance));
     o.value("max-vertices", "N", "vertex budget over all cache meshes", concat(d.maxVertices));
@@ -58,6 +65,12 @@ CacheSettings readCacheSettings(const Options& o) {
     c.minEdgePixels = o.number("min-edge-pixels", 0, 1e4);
     c.splitTolerance = o.number("split-tolerance", 1e-6, 0.999);
     c.lightShare = o.number("light-share", 0, 1);
+    const double rays = o.number("shared-rays", 0, 65536);
+    if (rays != std::floor(rays))
+        throw InputError(concat("--shared-rays: '", o.str("shared-rays"), "' is not a whole number"));
+    // The exact reference stays exact where lights share (every command
+    // that reads these declares the direct sampler's options).
+    c.sharedRays = o.str("method") == "exact" ? 0 : int(rays);
     c.noiseTolerance = o.number("noise-tolerance", 1e-6, 0.999);
     const std::string planes = o.str("light-planes");
     if (planes != "on" && planes != "off")
@@ -290,7 +303,20 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 scene.meshes.size() - grids, maxEdge, 1 / cache.maxEdgeFraction,
                 grids ? "grid caches for the objects above" : "no object is tessellated finely enough for a grid cache");
     printLightPlaneCuts(scene, cache);
-    if (scene.lights.size() > 1) std::printf("  lights: %s\n", LightCoverage(scene, cache.lightShare, indirect.solver.gatheredLights).describe().c_str());
+    if (scene.lights.size() > 1) {
+        const LightCoverage coverage(scene, cache.lightShare, indirect.solver.gatheredLights);
+        const std::string rays =
+            !coverage.sharing() ? ""
+            : cache.sharedRays > 0
+                ? concat("; the shared mesh's shadows from ", cache.sharedRays,
+                         " shadow rays an estimate, to points on its lights drawn by their share, where over ",
+                         SharedLightSampler::kDraws,
+                         " lights are left to draw (below that each light's pair is sampled, exact; textured and "
+                         "curved lights always by pairs)")
+                : concat("; the shared mesh's shadows from ", SharedLightSampler::kDraws,
+                         " lights' pairs an estimate (--shared-rays 0)");
+        std::printf("  lights: %s%s\n", coverage.describe().c_str(), rays.c_str());
+    }
     const BounceCount& b = indirect.bounceCount;
     std::printf("  albedo that direct light meets: %.3f %.3f %.3f (area- and irradiance-weighted), %.3f in its "
                 "largest channel; bounce 2 carries %.3f of bounce 1's light (by rays; area-weighted albedo %.3f): "
