@@ -23,7 +23,7 @@ SharedLightSampler::SharedLightSampler(const Scene& scene, std::shared_ptr<const
       firstDraws_(firstLights), rayDraws_(rayDraws) {
     ML_ASSERT(coverage_ && perLight_ && draws_ >= 1 && firstDraws_ >= 1,
               "a shared-light sampler needs its coverage and sampler, and a light to draw");
-    for (const Light& l : scene_.lights) textured_.push_back(EmitterTexture(scene_, l).textured());
+    emitters_ = EmitterTexture::forLights(scene_);
     for (const Light& l : scene_.lights) {
         std::vector<double> cdf;
         double area = 0;
@@ -122,7 +122,8 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
         ++asked;
         VertexSample e;
         // A uniform light answered without the GPU is exact whatever the seed.
-        if (textured_[r.light] || !perLight_->sampleWithoutGpu(r.light, x, n, seedFor(seed, 0xc1a55u, r.light), e))
+        if (emitters_[r.light].textured() ||
+            !perLight_->sampleWithoutGpu(r.light, x, n, seedFor(seed, 0xc1a55u, r.light), e))
             continue;
         k.lights.push_back(r.light);
         k.occluded += r.shared * glm::max(r.unoccluded - e.irradiance, Rgb(0.0));
@@ -132,11 +133,14 @@ const SharedLightSampler::Known& SharedLightSampler::known(const Vec3& x, const 
 }
 
 // A shadow ray from x to a point y drawn on light l, uniform over its area:
-// whether it is blocked, and g(y) = A·cos θx·cos θy / r², whose mean over
-// the light is U_l / L_l (0 where y is below x's horizon or x behind the
-// light). To a punctual light, its one ray (exact) and g = 1.
-bool SharedLightSampler::shadowRay(uint32_t l, const Vec3& x, const Vec3& n, uint32_t seed, double& g) const {
+// whether it is blocked, g(y) = A·cos θx·cos θy / r², whose mean over the
+// light is U_l / L̄_l (0 where y is below x's horizon or x behind the
+// light), and τ(y) = L(y) / L̄_l (EmitterTexture; 1 untextured). To a
+// punctual light, its one ray (exact), g = 1 and τ = 1.
+bool SharedLightSampler::shadowRay(uint32_t l, const Vec3& x, const Vec3& n, uint32_t seed, double& g,
+                                   Rgb& tau) const {
     const Light& light = scene_.lights[l];
+    tau = Rgb(1.0);
     if (light.punctual()) {
         g = 1;
         return !punctualIrradiance(*rays_, l, x, n).visible;
@@ -156,6 +160,7 @@ bool SharedLightSampler::shadowRay(uint32_t l, const Vec3& x, const Vec3& n, uin
     g = 0;
     if (!(r2 > 0 && nl > 0 && cosX > 0 && cosY > 0)) return false;  // gives nothing: its weight is 0
     g = cdf.back() * (cosX / std::sqrt(r2)) * (cosY / (nl * std::sqrt(r2))) / r2;
+    if (emitters_[l].textured()) tau = emitters_[l].weight(t, a, b);
     // From x lifted off its surface to y, less the offset at the light's
     // end, nearer hits (what x touches) ignored: as punctualIrradiance.
     const Vec3 origin = rays_->spawnPoint(x, n, d);
@@ -169,7 +174,7 @@ bool SharedLightSampler::shadowRay(uint32_t l, const Vec3& x, const Vec3& n, uin
 
 bool SharedLightSampler::rayDrawn(uint32_t l) const {
     const Light& light = scene_.lights[l];
-    return rayDraws_ > 0 && !textured_[l] && (light.punctual() || (light.planar && !light.geometry.empty()));
+    return rayDraws_ > 0 && (light.punctual() || (light.planar && !light.geometry.empty()));
 }
 
 template <class Take>
@@ -231,10 +236,13 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
             const Reaching& r = reaching_[rayDrawable_[j]];
             const double weight = raySum / ((rayCdf_[j] - (j ? rayCdf_[j - 1] : 0.0)) * double(count));
             double g = 0;
-            const bool hidden = shadowRay(r.light, x, n, seedFor(seed, 0x5e7u + uint32_t(d), r.light), g);
+            Rgb tau;
+            const bool hidden = shadowRay(r.light, x, n, seedFor(seed, 0x5e7u + uint32_t(d), r.light), g, tau);
             const Light& light = scene_.lights[r.light];
-            const Rgb o = hidden ? (light.punctual() ? r.unoccluded : light.radiance * g) * r.shared * weight
-                                 : Rgb(0.0);
+            // L̄ g − L(y) g V: U_l − E_l at y. A textured light's may be
+            // negative where y is brighter than the mean and in view.
+            const Rgb part = hidden ? Rgb(1.0) : Rgb(1.0) - tau;
+            const Rgb o = (light.punctual() ? r.unoccluded : light.radiance * g) * part * r.shared * weight;
             occluded += o;
             blocked += hidden;
             const double y = luminance(o) * double(count);
@@ -260,7 +268,7 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
         // (1 − w_l) O_l / (K p_l), O_l = U_l − E_l, never negative for a
         // uniform light; a textured one's may be (see the header).
         const Rgb difference = r.unoccluded - e.irradiance;
-        const Rgb o = (textured_[l] ? difference : glm::max(difference, Rgb(0.0))) * r.shared * weight;
+        const Rgb o = (emitters_[l].textured() ? difference : glm::max(difference, Rgb(0.0))) * r.shared * weight;
         occluded += o;
         const double y = luminance(o) * double(count);  // this draw's estimate of the drawn lights' Σ
         drawSum += y, drawSquares += y * y;

@@ -26,9 +26,12 @@
 // (R p_l), g(y) = A cos θx cos θy / r²: unbiased, and zero for every light
 // in full view. A drawn pair was all or nothing for one light where the
 // desks hide some; a ray is as much so, but 256 of them took half the time
-// of up to 16 pairs (227 µs an estimate against 449 µs, 192 panels). Punctual lights take their one exact ray; textured
-// and curved lights are still drawn as pairs. The rays are Embree's, made
-// for each sampler at its first such estimate, as the ray gather's.
+// of up to 16 pairs (227 µs an estimate against 449 µs, 192 panels).
+// Punctual lights take their one exact ray; a textured light's ray adds
+// (1 − w_l) L̄_l g(y) (1 − τ(y) V) / (R p_l), τ = L(y) / L̄_l (nonzero in
+// view too, as the pairs' O_l); curved lights are still drawn as pairs.
+// The rays are Embree's, made for each sampler at its first such
+// estimate, as the ray gather's.
 // Measured on the 192-panel office (render office:panels=16x12,panelsize=0.4
 // --width 320 --height 180 --time 20, direct light's share of the image's
 // error against depth-1 and full references): 2.23-2.24 %² with 16 pairs,
@@ -59,6 +62,7 @@
 
 #include "DirectSampler.h"
 #include "LightCoverage.h"
+#include "core/EmitterTexture.h"
 #include "core/raytrace/EmbreeScene.h"
 
 #include <array>
@@ -160,14 +164,14 @@ private:
     std::vector<double> rayCdf_;         // scratch: the rays' CDF
     std::vector<size_t> rayDrawable_;    // scratch: the reaching_ entry of each of its steps
     bool rayDrawn(uint32_t light) const;
-    bool shadowRay(uint32_t light, const Vec3& x, const Vec3& n, uint32_t seed, double& g) const;
+    bool shadowRay(uint32_t light, const Vec3& x, const Vec3& n, uint32_t seed, double& g, Rgb& tau) const;
     bool firstSamples_ = false;
     std::vector<std::pair<uint32_t, double>> weights_;  // scratch
     std::vector<Reaching> reaching_;  // scratch
     std::vector<double> order_;       // scratch
     std::vector<double> cdf_;         // scratch: the draws' CDF
     std::vector<size_t> drawable_;    // scratch: the reaching_ entry of each CDF step
-    std::vector<bool> textured_;   // per light: its emission has a texture (EmitterTexture)
+    std::vector<EmitterTexture> emitters_;  // per light, its emission texture (untextured: weight 1)
 };
 
 // U_l at x: light l's irradiance with nothing in the way, from the light's

@@ -13,8 +13,8 @@
 #include "gpu_sampling/indirect/VoxelGrid.h"
 #include "core/Error.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace ml {
@@ -311,8 +311,8 @@ void printPlan(const Scene& scene, const DirectChoice& choice, const CacheSettin
                 ? concat("; the shared mesh's shadows from ", cache.sharedRays,
                          " shadow rays an estimate, to points on its lights drawn by their share, where over ",
                          SharedLightSampler::kDraws,
-                         " lights are left to draw (below that each light's pair is sampled, exact; textured and "
-                         "curved lights always by pairs)")
+                         " lights are left to draw (below that each light's pair is sampled, exact; curved lights "
+                         "always by pairs)")
                 : concat("; the shared mesh's shadows from ", SharedLightSampler::kDraws,
                          " lights' pairs an estimate (--shared-rays 0)");
         std::printf("  lights: %s%s\n", coverage.describe().c_str(), rays.c_str());
