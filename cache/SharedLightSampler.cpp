@@ -177,6 +177,12 @@ bool SharedLightSampler::rayDrawn(uint32_t l) const {
     return rayDraws_ > 0 && (light.punctual() || (light.planar && !light.geometry.empty()));
 }
 
+std::pair<size_t, double> SharedLightSampler::DrawCdf::pick(uint32_t s, size_t d, size_t count) const {
+    const double u = (double(d) + double(hash32(s) >> 8) / 16777216.0) / double(count) * total();
+    const size_t j = std::min(size_t(std::upper_bound(steps.begin(), steps.end(), u) - steps.begin()), size() - 1);
+    return {j, total() / ((steps[j] - (j ? steps[j - 1] : 0.0)) * double(count))};
+}
+
 template <class Take>
 bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t seed, Take take, VertexSample& out) {
     // Every light's (1 − w_l) U_l, the total exactly; the draws' CDF, by
@@ -199,42 +205,27 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     // the rest by the wrapped sampler's pairs.
     const bool byRays = reaching_.size() - k.lights.size() > draws && rayDraws_ > 0;
     if (byRays && !rays_) rays_ = std::make_unique<EmbreeScene>(scene_);
-    cdf_.clear(), drawable_.clear(), rayCdf_.clear(), rayDrawable_.clear();
-    double sum = 0, raySum = 0;
+    pairCdf_.clear(), rayCdf_.clear();
     size_t next = 0;
     for (size_t i = 0; i < reaching_.size(); ++i) {
         while (next < k.lights.size() && k.lights[next] < reaching_[i].light) ++next;
         if (next < k.lights.size() && k.lights[next] == reaching_[i].light) continue;
-        if (byRays && rayDrawn(reaching_[i].light)) {
-            raySum += reaching_[i].y;
-            rayCdf_.push_back(raySum);
-            rayDrawable_.push_back(i);
-        } else {
-            sum += reaching_[i].y;
-            cdf_.push_back(sum);
-            drawable_.push_back(i);
-        }
+        (byRays && rayDrawn(reaching_[i].light) ? rayCdf_ : pairCdf_).add(i, reaching_[i].y);
     }
     Rgb occluded = k.occluded;
     double drawnShare = 0;  // Σ (1 − w_l) Y(U_l) · visibility over the drawn, weighted as they are
     bool partial = false;
     double variance = 0;
-    // Stratified over [0, 1) of a CDF: draw d of `count` in [d/count, (d+1)/count).
-    const auto pick = [](const std::vector<double>& cdf, double total, uint32_t s, size_t d, size_t count) {
-        const double u = (double(d) + double(hash32(s) >> 8) / 16777216.0) / double(count) * total;
-        return std::min(size_t(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()), cdf.size() - 1);
-    };
     // R rays, each to a light drawn by (1 − w_l) Y(U_l) and a point on it:
     // (1 − w_l) L_l g(y) (1 − V) / (R p_l), whose mean over the light is
     // (1 − w_l) O_l / (R p_l): unbiased, and 0 for a light in full view.
-    if (!rayDrawable_.empty() && raySum > 0) {
+    if (rayCdf_.total() > 0) {
         const size_t count = size_t(rayDraws_);
         double drawSum = 0, drawSquares = 0;
         size_t blocked = 0;
         for (size_t d = 0; d < count; ++d) {
-            const size_t j = pick(rayCdf_, raySum, seedFor(seed, 0x4a75u, uint32_t(d)), d, count);
-            const Reaching& r = reaching_[rayDrawable_[j]];
-            const double weight = raySum / ((rayCdf_[j] - (j ? rayCdf_[j - 1] : 0.0)) * double(count));
+            const auto [j, weight] = rayCdf_.pick(seedFor(seed, 0x4a75u, uint32_t(d)), d, count);
+            const Reaching& r = reaching_[rayCdf_.entries[j]];
             double g = 0;
             Rgb tau;
             const bool hidden = shadowRay(r.light, x, n, seedFor(seed, 0x5e7u + uint32_t(d), r.light), g, tau);
@@ -254,15 +245,15 @@ bool SharedLightSampler::estimateShared(const Vec3& x, const Vec3& n, uint32_t s
     }
     // K pair draws, or each light once (weight 1, exact) where no more than
     // K are left to draw.
-    const bool every = drawable_.size() <= draws;
-    const size_t count = every ? drawable_.size() : draws;
+    const bool every = pairCdf_.size() <= draws;
+    const size_t count = every ? pairCdf_.size() : draws;
     double drawSum = 0, drawSquares = 0;  // Σ and Σ² of the draws' luminance, for ownVariance
-    for (size_t d = 0; d < count && sum > 0; ++d) {
-        const size_t j = every ? d : pick(cdf_, sum, seedFor(seed, 0x5a1e5u, uint32_t(d)), d, draws);
-        const Reaching& r = reaching_[drawable_[j]];
-        const uint32_t l = r.light;
+    for (size_t d = 0; d < count && pairCdf_.total() > 0; ++d) {
         // 1/(K p_l) for a draw, p_l its share of the CDF.
-        const double weight = every ? 1.0 : sum / ((cdf_[j] - (j ? cdf_[j - 1] : 0.0)) * double(draws));
+        const auto [j, weight] =
+            every ? std::pair<size_t, double>(d, 1.0) : pairCdf_.pick(seedFor(seed, 0x5a1e5u, uint32_t(d)), d, draws);
+        const Reaching& r = reaching_[pairCdf_.entries[j]];
+        const uint32_t l = r.light;
         VertexSample e;
         if (!take(l, seedFor(seed, uint32_t(d), l), e)) return false;
         // (1 − w_l) O_l / (K p_l), O_l = U_l − E_l, never negative for a

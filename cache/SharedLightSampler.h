@@ -161,16 +161,29 @@ private:
     // Per light, its triangles' cumulative areas (rays' points are drawn by area).
     std::vector<std::vector<double>> areaCdf_;
     std::unique_ptr<EmbreeScene> rays_;  // made at the first estimate drawn by rays
-    std::vector<double> rayCdf_;         // scratch: the rays' CDF
-    std::vector<size_t> rayDrawable_;    // scratch: the reaching_ entry of each of its steps
     bool rayDrawn(uint32_t light) const;
     bool shadowRay(uint32_t light, const Vec3& x, const Vec3& n, uint32_t seed, double& g, Rgb& tau) const;
     bool firstSamples_ = false;
     std::vector<std::pair<uint32_t, double>> weights_;  // scratch
     std::vector<Reaching> reaching_;  // scratch
     std::vector<double> order_;       // scratch
-    std::vector<double> cdf_;         // scratch: the draws' CDF
-    std::vector<size_t> drawable_;    // scratch: the reaching_ entry of each CDF step
+    // A CDF over reaching_ entries, by their draw weights y.
+    struct DrawCdf {
+        std::vector<double> steps;    // cumulative y
+        std::vector<size_t> entries;  // the reaching_ entry of each step
+        void clear() { steps.clear(), entries.clear(); }
+        void add(size_t entry, double y) {
+            steps.push_back((steps.empty() ? 0.0 : steps.back()) + y);
+            entries.push_back(entry);
+        }
+        size_t size() const { return steps.size(); }
+        double total() const { return steps.empty() ? 0.0 : steps.back(); }
+        // Draw d of `count`, stratified: u in [d/count, (d+1)/count) of the
+        // total, its offset from the hash of `s`. The step drawn, and its
+        // weight 1/(count p), p the step's share of the total.
+        std::pair<size_t, double> pick(uint32_t s, size_t d, size_t count) const;
+    };
+    DrawCdf pairCdf_, rayCdf_;  // scratch: the lights drawn by pairs and by rays
     std::vector<EmitterTexture> emitters_;  // per light, its emission texture (untextured: weight 1)
 };
 

@@ -588,7 +588,9 @@ TEST(PunctualLights, ManySharedPointLightsAreDrawnWithOneExactShadowRayEach) {
         for (int k = 0; k < kSeeds; ++k) {
             const double e = sampler.sample(lights, p, kY, seedFor(3, uint32_t(k))).irradiance.g;
             sum += e, squares += e * e;
-            if (!shaded) EXPECT_NEAR(e, truth.g, 1e-12 * truth.g);
+            if (!shaded) {
+                EXPECT_NEAR(e, truth.g, 1e-12 * truth.g);
+            }
         }
         const double mean = sum / kSeeds;
         const double standardError = std::sqrt((squares - sum * sum / kSeeds) / (kSeeds - 1) / kSeeds);
